@@ -1,0 +1,57 @@
+// The brick grid on the GPU: bindings and voxel lookup. Mirrors src/world/grid.rs.
+#define_import_path glowbrick::world
+
+// Top cell encoding and brick size come from Rust as shader defs (render::shader_defs), never as second literals.
+const POOLED_FLAG: u32 = #{POOLED_FLAG}u;
+const BRICK_SIZE: i32 = #{BRICK_SIZE};
+const BRICK_WORDS: u32 = #{BRICK_WORDS}u;
+
+struct WorldInfo {
+    // World size in voxels (xyz) and bricks (xyz); w unused.
+    size: vec4<i32>,
+    bricks: vec4<i32>,
+}
+
+struct Material {
+    // Linear albedo (rgb).
+    albedo: vec4<f32>,
+    // Emitted radiance (rgb) = emission colour x strength.
+    radiance: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> world_info: WorldInfo;
+@group(0) @binding(1) var<storage, read> top_cells: array<u32>;
+// Pooled bricks, two u16 voxels per word, little-endian: voxel i of a slot is in word i / 2, low half when even.
+@group(0) @binding(2) var<storage, read> brick_pool: array<u32>;
+@group(0) @binding(3) var<storage, read> materials: array<Material>;
+
+fn brick_cell(brick: vec3<i32>) -> u32 {
+    let b = world_info.bricks.xyz;
+    if any(brick < vec3(0)) || any(brick >= b) {
+        return 0u;
+    }
+    return top_cells[u32(brick.x + b.x * (brick.y + b.y * brick.z))];
+}
+
+// The voxel id inside a pooled brick slot.
+fn pooled_voxel(slot: u32, local: vec3<i32>) -> u32 {
+    let index = u32(local.x + BRICK_SIZE * (local.y + BRICK_SIZE * local.z));
+    let word = brick_pool[slot * BRICK_WORDS + index / 2u];
+    return (word >> (16u * (index & 1u))) & 0xFFFFu;
+}
+
+fn in_world(p: vec3<i32>) -> bool {
+    return all(p >= vec3(0)) && all(p < world_info.size.xyz);
+}
+
+// The voxel id at p; 0 (air) outside the world.
+fn voxel_at(p: vec3<i32>) -> u32 {
+    if !in_world(p) {
+        return 0u;
+    }
+    let cell = brick_cell(p >> vec3(3u));
+    if (cell & POOLED_FLAG) != 0u {
+        return pooled_voxel(cell & ~POOLED_FLAG, p & vec3(7));
+    }
+    return cell;
+}

@@ -1,0 +1,56 @@
+//! Linear float images: writing EXR (linear values kept) and PNG (tonemapped and sRGB-encoded).
+
+use image::{ImageBuffer, Rgb, Rgba32FImage};
+use std::path::Path;
+
+/// A linear RGBA float image, rows top to bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinearImage {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 4]>,
+}
+
+impl LinearImage {
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    /// Count of pixels with a NaN or infinite channel.
+    pub fn non_finite_pixels(&self) -> usize {
+        self.pixels.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count()
+    }
+}
+
+/// ACES filmic fit (Narkowicz 2015): maps linear HDR radiance to [0, 1].
+pub fn tonemap_aces(x: f32) -> f32 {
+    let x = x.max(0.0);
+    ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+}
+
+/// Linear [0, 1] to the sRGB transfer curve.
+pub fn linear_to_srgb(x: f32) -> f32 {
+    if x <= 0.003_130_8 { x * 12.92 } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
+}
+
+/// Writes `.exr` (linear float) or `.png` (tonemapped 8-bit sRGB), by the file's extension.
+pub fn write_image(image: &LinearImage, path: &Path) -> Result<(), String> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let result = match ext.as_deref() {
+        Some("exr") => {
+            let flat: Vec<f32> = image.pixels.iter().flatten().copied().collect();
+            let buffer = Rgba32FImage::from_raw(image.width, image.height, flat).ok_or("image size mismatch")?;
+            buffer.save(path)
+        }
+        Some("png") => {
+            let mut buffer = ImageBuffer::<Rgb<u8>, Vec<u8>>::new(image.width, image.height);
+            for (x, y, px) in buffer.enumerate_pixels_mut() {
+                let p = image.pixel(x, y);
+                *px = Rgb([0, 1, 2].map(|c| (linear_to_srgb(tonemap_aces(p[c])) * 255.0 + 0.5) as u8));
+            }
+            buffer.save(path)
+        }
+        _ => return Err(format!("{}: output must end in .png or .exr", path.display())),
+    };
+    result.map_err(|e| format!("{}: cannot write image: {e}", path.display()))
+}

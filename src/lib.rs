@@ -1,0 +1,11 @@
+//! glowbrick: a voxel sandbox lit by Voxel ReSTIR direct lighting and a per-voxel-face GI cache.
+//!
+//! Layers, bottom up: `world` (the brick grid and its files), `render` (GPU upload and passes as Bevy systems),
+//! `game` (the playable app), `headless` (rendering to files without a window).
+
+pub mod game;
+pub mod headless;
+pub mod image_io;
+pub mod render;
+pub mod settings;
+pub mod world;

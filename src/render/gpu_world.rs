@@ -1,0 +1,168 @@
+//! Render-world copy of the brick grid: storage buffers for the top grid, brick pool and materials, and the
+//! bind group (group 0 of every voxel pass) over them. Updated from `PendingUploads` in `RenderSystems::
+//! PrepareResources`: partial uploads write only the changed ranges.
+
+use super::upload::{FullWorld, GpuMaterial, PendingUploads};
+use crate::world::grid::BRICK_VOXELS;
+use bevy::prelude::*;
+use bevy::render::render_resource::binding_types::{storage_buffer_read_only_sized, uniform_buffer_sized};
+use bevy::render::render_resource::*;
+use bevy::render::renderer::{RenderDevice, RenderQueue};
+use std::num::NonZeroU64;
+
+/// Layout of group 0 (`shaders/world.wgsl`).
+pub fn world_bind_group_layout() -> BindGroupLayoutDescriptor {
+    BindGroupLayoutDescriptor::new(
+        "glowbrick_world_layout",
+        &BindGroupLayoutEntries::sequential(
+            ShaderStages::COMPUTE,
+            (
+                uniform_buffer_sized(false, NonZeroU64::new(32)),
+                storage_buffer_read_only_sized(false, None),
+                storage_buffer_read_only_sized(false, None),
+                storage_buffer_read_only_sized(false, None),
+            ),
+        ),
+    )
+}
+
+/// The GPU world, once the first full upload arrived.
+#[derive(Resource)]
+pub struct GpuWorld {
+    pub info: Buffer,
+    pub top_cells: Buffer,
+    pub brick_pool: Buffer,
+    pub materials: Buffer,
+    pub material_capacity: u32,
+    pub bind_group: BindGroup,
+    /// Bytes written to GPU buffers last frame (0 when nothing changed).
+    pub uploaded_bytes: u64,
+}
+
+/// Layout of group 0, resolved once.
+#[derive(Resource)]
+pub struct WorldLayout(pub BindGroupLayoutDescriptor);
+
+fn storage(device: &RenderDevice, label: &str, contents: &[u8]) -> Buffer {
+    device.create_buffer_with_data(&BufferInitDescriptor {
+        label: Some(label),
+        contents,
+        usage: BufferUsages::STORAGE | BufferUsages::COPY_DST,
+    })
+}
+
+fn info_bytes(full: &FullWorld) -> Vec<u8> {
+    let s = full.size.as_ivec3();
+    let b = full.brick_dims.as_ivec3();
+    bytemuck::cast_slice(&[s.x, s.y, s.z, 0, b.x, b.y, b.z, 0]).to_vec()
+}
+
+/// Voxels as the shader reads them: pairs of u16 packed little-endian into u32 words.
+fn voxel_bytes(voxels: &[u16]) -> &[u8] {
+    bytemuck::cast_slice(voxels)
+}
+
+fn material_buffer(device: &RenderDevice, materials: &[GpuMaterial]) -> Buffer {
+    storage(device, "glowbrick_materials", bytemuck::cast_slice(materials))
+}
+
+/// Applies the queued uploads to the GPU buffers (creating them on the first full upload).
+pub fn prepare_gpu_world(
+    mut commands: Commands,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    pipeline_cache: Res<PipelineCache>,
+    layout: Res<WorldLayout>,
+    mut pending: ResMut<PendingUploads>,
+    gpu: Option<ResMut<GpuWorld>>,
+) {
+    let mut gpu = gpu;
+    if let Some(gpu) = gpu.as_deref_mut() {
+        gpu.uploaded_bytes = 0;
+    }
+    for upload in pending.0.drain(..) {
+        let mut rebuild = false;
+        if let Some(full) = &upload.full {
+            let materials = upload.materials.as_deref().cloned().unwrap_or_else(|| vec![GpuMaterial::default()]);
+            let info = device.create_buffer_with_data(&BufferInitDescriptor {
+                label: Some("glowbrick_world_info"),
+                contents: &info_bytes(full),
+                usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+            });
+            let top_cells = storage(&device, "glowbrick_top_cells", bytemuck::cast_slice(&full.top_cells));
+            let brick_pool = storage(&device, "glowbrick_brick_pool", voxel_bytes(&full.pool));
+            let material_capacity = materials.len() as u32;
+            let materials = material_buffer(&device, &materials);
+            let bind_group =
+                world_bind_group(&device, &pipeline_cache, &layout.0, &info, &top_cells, &brick_pool, &materials);
+            let bytes = upload.bytes();
+            let new_gpu = GpuWorld {
+                info,
+                top_cells,
+                brick_pool,
+                materials,
+                material_capacity,
+                bind_group,
+                uploaded_bytes: bytes,
+            };
+            match gpu.as_deref_mut() {
+                Some(existing) => *existing = new_gpu,
+                None => {
+                    commands.insert_resource(new_gpu);
+                }
+            }
+            continue;
+        }
+        // Partial uploads need the buffers of an earlier full upload; the main world always sends one first.
+        let Some(gpu) = gpu.as_deref_mut() else { continue };
+        for &(index, raw) in &upload.top_cells {
+            queue.write_buffer(&gpu.top_cells, index as u64 * 4, bytemuck::bytes_of(&raw));
+        }
+        for (slot, voxels) in &upload.bricks {
+            let offset = *slot as u64 * BRICK_VOXELS as u64 * 2;
+            queue.write_buffer(&gpu.brick_pool, offset, voxel_bytes(voxels));
+        }
+        if let Some(materials) = &upload.materials {
+            if materials.len() as u32 > gpu.material_capacity {
+                gpu.materials = material_buffer(&device, materials);
+                gpu.material_capacity = materials.len() as u32;
+                rebuild = true;
+            } else {
+                queue.write_buffer(&gpu.materials, 0, bytemuck::cast_slice(materials));
+            }
+        }
+        if rebuild {
+            gpu.bind_group = world_bind_group(
+                &device,
+                &pipeline_cache,
+                &layout.0,
+                &gpu.info,
+                &gpu.top_cells,
+                &gpu.brick_pool,
+                &gpu.materials,
+            );
+        }
+        gpu.uploaded_bytes += upload.bytes();
+    }
+}
+
+fn world_bind_group(
+    device: &RenderDevice,
+    pipeline_cache: &PipelineCache,
+    layout: &BindGroupLayoutDescriptor,
+    info: &Buffer,
+    top_cells: &Buffer,
+    brick_pool: &Buffer,
+    materials: &Buffer,
+) -> BindGroup {
+    device.create_bind_group(
+        "glowbrick_world",
+        &pipeline_cache.get_bind_group_layout(layout),
+        &BindGroupEntries::sequential((
+            info.as_entire_binding(),
+            top_cells.as_entire_binding(),
+            brick_pool.as_entire_binding(),
+            materials.as_entire_binding(),
+        )),
+    )
+}

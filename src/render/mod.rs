@@ -1,0 +1,88 @@
+//! The render plugin: GPU copy of the world, and the voxel passes as systems in Bevy's `Core3d` schedule.
+//!
+//! The frame, in order:
+//! 1. main world, PostUpdate: `upload::stage_world_upload` turns the world's dirty bricks into an upload;
+//! 2. extract: `upload::extract_world_upload` copies it to the render world;
+//! 3. Render / PrepareResources: `gpu_world::prepare_gpu_world` writes it to GPU buffers,
+//!    `primary::prepare_frame_params` writes this frame's settings;
+//! 4. Core3d / MainPass, per camera with `VoxelCamera`: `primary::primary_pass`; then Bevy's tonemapping.
+
+pub mod camera;
+pub mod gpu_world;
+pub mod primary;
+pub mod upload;
+
+pub use camera::{VoxelCamera, camera_ray};
+
+use crate::settings::RenderSettings;
+use crate::world::grid::{BRICK_SIZE, BRICK_VOXELS, POOLED_FLAG};
+use bevy::core_pipeline::core_3d::main_transparent_pass_3d;
+use bevy::core_pipeline::{Core3d, Core3dSystems};
+use bevy::prelude::*;
+use bevy::render::extract_component::ExtractComponentPlugin;
+use bevy::render::extract_resource::ExtractResourcePlugin;
+use bevy::render::{ExtractSchedule, Render, RenderApp, RenderStartup, RenderSystems};
+use bevy::shader::{Shader, ShaderDefVal};
+use std::sync::Arc;
+use std::sync::atomic::AtomicU32;
+
+/// Handles of the embedded WGSL (the files in the top-level `shaders/` folder, compiled into the binary).
+#[derive(Resource, Clone)]
+pub struct GlowbrickShaders {
+    pub world: Handle<Shader>,
+    pub traversal: Handle<Shader>,
+    pub primary: Handle<Shader>,
+}
+
+/// Frames the primary pass has dispatched, shared by both worlds (headless capture waits on it).
+#[derive(Resource, Clone, Default)]
+pub struct FramesRendered(pub Arc<AtomicU32>);
+
+/// Constants the WGSL shares with Rust, passed as shader defs so there is one source of truth.
+pub fn shader_defs() -> Vec<ShaderDefVal> {
+    vec![
+        ShaderDefVal::UInt("POOLED_FLAG".into(), POOLED_FLAG),
+        ShaderDefVal::Int("BRICK_SIZE".into(), BRICK_SIZE),
+        ShaderDefVal::UInt("BRICK_WORDS".into(), (BRICK_VOXELS / 2) as u32),
+    ]
+}
+
+/// Adds the voxel renderer. Needs `VoxelWorld` and `RenderSettings` resources in the main world.
+pub struct VoxelRenderPlugin;
+
+impl Plugin for VoxelRenderPlugin {
+    fn build(&self, app: &mut App) {
+        let mut shaders = app.world_mut().resource_mut::<Assets<Shader>>();
+        let mut add = |source: &'static str, path: &str| shaders.add(Shader::from_wgsl(source, path.to_string()));
+        let handles = GlowbrickShaders {
+            world: add(include_str!("../../shaders/world.wgsl"), "glowbrick/world.wgsl"),
+            traversal: add(include_str!("../../shaders/traversal.wgsl"), "glowbrick/traversal.wgsl"),
+            primary: add(include_str!("../../shaders/primary.wgsl"), "glowbrick/primary.wgsl"),
+        };
+        let frames = app.world().get_resource::<FramesRendered>().cloned().unwrap_or_default();
+        app.insert_resource(handles.clone())
+            .insert_resource(frames.clone())
+            .init_resource::<RenderSettings>()
+            .init_resource::<upload::UploadState>()
+            .init_resource::<upload::WorldUpload>()
+            .add_plugins((
+                ExtractComponentPlugin::<VoxelCamera>::default(),
+                ExtractResourcePlugin::<RenderSettings>::default(),
+            ))
+            .add_systems(PostUpdate, upload::stage_world_upload.run_if(resource_exists::<crate::world::VoxelWorld>));
+
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
+        render_app
+            .insert_resource(handles)
+            .insert_resource(frames)
+            .insert_resource(gpu_world::WorldLayout(gpu_world::world_bind_group_layout()))
+            .init_resource::<upload::PendingUploads>()
+            .add_systems(RenderStartup, primary::init_primary_pipeline)
+            .add_systems(ExtractSchedule, upload::extract_world_upload)
+            .add_systems(
+                Render,
+                (gpu_world::prepare_gpu_world, primary::prepare_frame_params).in_set(RenderSystems::PrepareResources),
+            )
+            .add_systems(Core3d, primary::primary_pass.after(main_transparent_pass_3d).in_set(Core3dSystems::MainPass));
+    }
+}

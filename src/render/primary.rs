@@ -1,0 +1,130 @@
+//! The primary-ray pass: a compute shader per camera that traces the brick grid and writes the HDR view target.
+//! Runs in Bevy's `Core3d` schedule after the (empty) main passes and before tonemapping.
+
+use super::gpu_world::{GpuWorld, WorldLayout};
+use super::{FramesRendered, GlowbrickShaders, VoxelCamera, shader_defs};
+use crate::settings::RenderSettings;
+use bevy::prelude::*;
+use bevy::render::render_resource::binding_types::{texture_storage_2d, uniform_buffer, uniform_buffer_sized};
+use bevy::render::render_resource::*;
+use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
+use bevy::render::view::{ViewTarget, ViewUniform, ViewUniformOffset, ViewUniforms};
+use std::num::NonZeroU64;
+use std::sync::atomic::Ordering;
+
+/// Per-frame parameters (`FrameParams` in `shaders/primary.wgsl`).
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct FrameParams {
+    pub sun: [f32; 4],
+    pub sun_radiance: [f32; 4],
+    pub sky_zenith: [f32; 4],
+    pub sky_horizon: [f32; 4],
+    pub debug_view: u32,
+    pub shadows: u32,
+    pub exposure: f32,
+    pub frame: u32,
+}
+
+impl FrameParams {
+    pub fn from_settings(settings: &RenderSettings, frame: u32) -> Self {
+        let sun = Vec3::new(0.45, 0.8, 0.3).normalize();
+        FrameParams {
+            sun: [sun.x, sun.y, sun.z, if settings.sun { 1.0 } else { 0.0 }],
+            sun_radiance: [2.6, 2.4, 2.1, 0.0],
+            sky_zenith: [0.35, 0.55, 0.95, 0.0],
+            sky_horizon: [0.75, 0.82, 0.9, 0.0],
+            debug_view: settings.debug.shader_index(),
+            shadows: settings.shadows as u32,
+            exposure: settings.exposure,
+            frame,
+        }
+    }
+}
+
+/// The pipeline and its per-view layout.
+#[derive(Resource)]
+pub struct PrimaryPipeline {
+    view_layout: BindGroupLayoutDescriptor,
+    pipeline: CachedComputePipelineId,
+    frame_params: Buffer,
+}
+
+pub fn init_primary_pipeline(
+    mut commands: Commands,
+    pipeline_cache: Res<PipelineCache>,
+    device: Res<RenderDevice>,
+    shaders: Res<GlowbrickShaders>,
+    world_layout: Res<WorldLayout>,
+) {
+    let view_layout = BindGroupLayoutDescriptor::new(
+        "glowbrick_primary_view_layout",
+        &BindGroupLayoutEntries::sequential(
+            ShaderStages::COMPUTE,
+            (
+                texture_storage_2d(TextureFormat::Rgba16Float, StorageTextureAccess::WriteOnly),
+                uniform_buffer::<ViewUniform>(true),
+                uniform_buffer_sized(false, NonZeroU64::new(size_of::<FrameParams>() as u64)),
+            ),
+        ),
+    );
+    let pipeline = pipeline_cache.queue_compute_pipeline(ComputePipelineDescriptor {
+        label: Some("glowbrick_primary".into()),
+        layout: vec![world_layout.0.clone(), view_layout.clone()],
+        shader: shaders.primary.clone(),
+        shader_defs: shader_defs(),
+        entry_point: Some("main".into()),
+        ..default()
+    });
+    let frame_params = device.create_buffer(&BufferDescriptor {
+        label: Some("glowbrick_frame_params"),
+        size: size_of::<FrameParams>() as u64,
+        usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    commands.insert_resource(PrimaryPipeline { view_layout, pipeline, frame_params });
+}
+
+/// Writes this frame's parameters (Render schedule, PrepareResources).
+pub fn prepare_frame_params(
+    pipeline: Option<Res<PrimaryPipeline>>,
+    settings: Option<Res<RenderSettings>>,
+    frames: Res<FramesRendered>,
+    queue: Res<RenderQueue>,
+) {
+    let Some(pipeline) = pipeline else { return };
+    let settings = settings.map(|s| s.clone()).unwrap_or_default();
+    let params = FrameParams::from_settings(&settings, frames.0.load(Ordering::Relaxed));
+    queue.write_buffer(&pipeline.frame_params, 0, bytemuck::bytes_of(&params));
+}
+
+/// Dispatches the primary-ray shader for the current camera.
+pub fn primary_pass(
+    view: ViewQuery<(&ViewTarget, &ViewUniformOffset), With<VoxelCamera>>,
+    pipeline: Option<Res<PrimaryPipeline>>,
+    pipeline_cache: Res<PipelineCache>,
+    view_uniforms: Res<ViewUniforms>,
+    gpu_world: Option<Res<GpuWorld>>,
+    frames: Res<FramesRendered>,
+    mut ctx: RenderContext,
+) {
+    let (target, view_offset) = view.into_inner();
+    let (Some(pipeline), Some(gpu_world)) = (pipeline, gpu_world) else { return };
+    let Some(compute) = pipeline_cache.get_compute_pipeline(pipeline.pipeline) else { return };
+    let Some(view_binding) = view_uniforms.uniforms.binding() else { return };
+    let output = target.get_unsampled_color_attachment();
+    let size = target.main_texture().size();
+    let view_group = ctx.render_device().create_bind_group(
+        "glowbrick_primary_view",
+        &pipeline_cache.get_bind_group_layout(&pipeline.view_layout),
+        &BindGroupEntries::sequential((output.view, view_binding, pipeline.frame_params.as_entire_binding())),
+    );
+    let mut pass = ctx
+        .command_encoder()
+        .begin_compute_pass(&ComputePassDescriptor { label: Some("glowbrick_primary"), timestamp_writes: None });
+    pass.set_pipeline(compute);
+    pass.set_bind_group(0, &gpu_world.bind_group, &[]);
+    pass.set_bind_group(1, &view_group, &[view_offset.offset]);
+    pass.dispatch_workgroups(size.width.div_ceil(8), size.height.div_ceil(8), 1);
+    frames.0.fetch_add(1, Ordering::Relaxed);
+}

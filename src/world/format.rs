@@ -1,0 +1,273 @@
+//! RON world files: a versioned, validated, compact encoding of a `VoxelWorld`.
+//!
+//! ```ron
+//! (
+//!     format: "glowbrick-world",
+//!     version: 1,
+//!     size: (64, 32, 64),
+//!     palette: [(name: "stone", albedo: (0.45, 0.45, 0.47), emission: (0, 0, 0), strength: 0)],
+//!     views: [(name: "overview", origin: (-16, 46, -16), direction: (0.6, -0.5, 0.6), fov_deg: 60)],
+//!     bricks: [
+//!         (at: (0, 0, 0), fill: Uniform(1)),
+//!         (at: (1, 0, 0), fill: Runs([(64, 1), (448, 0)])),
+//!     ],
+//! )
+//! ```
+//! Voxel id `k > 0` is `palette[k - 1]`; 0 is air. Bricks not listed are air. `Runs` are `(count, id)` pairs in
+//! the brick's local order `x + 8 * (y + 8 * z)` and must cover exactly 512 voxels.
+//!
+//! Loading never modifies the file and reports the first problem as one line with its location; saving writes a
+//! temporary file next to the target and renames it over the target, so a failed save leaves the old file intact.
+
+use super::grid::{BRICK_VOXELS, BrickCell, MAX_WORLD_EDGE, Voxel};
+use super::palette::{MAX_MATERIALS, Palette};
+use super::{CameraView, VoxelWorld};
+use bevy::math::{IVec3, UVec3};
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::Path;
+
+/// The `format` tag every world file carries.
+pub const FORMAT_TAG: &str = "glowbrick-world";
+/// The version this build writes and reads.
+pub const FORMAT_VERSION: u32 = 1;
+/// Files larger than this are refused before reading (a full 1024x1024x1024 world of noise is far smaller in RLE
+/// than its dense size, and a hostile file must not exhaust memory).
+pub const MAX_FILE_BYTES: u64 = 512 * 1024 * 1024;
+/// Most camera views a file may hold.
+pub const MAX_VIEWS: usize = 1024;
+
+/// How one brick's voxels are stored.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum BrickFill {
+    /// All 512 voxels are this id.
+    Uniform(Voxel),
+    /// Run-length encoded `(count, id)` pairs covering 512 voxels.
+    Runs(Vec<(u16, Voxel)>),
+}
+
+/// One non-empty brick.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BrickRecord {
+    /// Brick coordinate (voxel position / 8).
+    pub at: (u32, u32, u32),
+    pub fill: BrickFill,
+}
+
+/// The file as serialised.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldFile {
+    pub format: String,
+    pub version: u32,
+    pub size: (u32, u32, u32),
+    pub palette: Palette,
+    #[serde(default)]
+    pub views: Vec<CameraView>,
+    pub bricks: Vec<BrickRecord>,
+}
+
+/// A world file that could not be read, with where the problem is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LoadError {
+    /// Where: `path` or `path:line:col`.
+    pub location: String,
+    pub message: String,
+}
+
+impl std::fmt::Display for LoadError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.location, self.message)
+    }
+}
+
+impl std::error::Error for LoadError {}
+
+/// Encodes one brick's voxels compactly.
+pub fn encode_brick(voxels: &[Voxel; BRICK_VOXELS]) -> BrickFill {
+    let mut runs: Vec<(u16, Voxel)> = Vec::new();
+    for &v in voxels {
+        match runs.last_mut() {
+            Some((count, id)) if *id == v => *count += 1,
+            _ => runs.push((1, v)),
+        }
+    }
+    if runs.len() == 1 { BrickFill::Uniform(runs[0].1) } else { BrickFill::Runs(runs) }
+}
+
+impl WorldFile {
+    /// Captures a world (non-empty bricks only).
+    pub fn from_world(world: &VoxelWorld) -> Self {
+        let grid = &world.grid;
+        let mut bricks = Vec::new();
+        for (index, &raw) in grid.top_cells().iter().enumerate() {
+            let cell = BrickCell::decode(raw);
+            if cell == BrickCell::Empty {
+                continue;
+            }
+            let b = grid.brick_coord(index as u32);
+            let fill = match cell {
+                BrickCell::Homogeneous(m) => BrickFill::Uniform(m),
+                _ => encode_brick(&grid.brick_voxels(b)),
+            };
+            bricks.push(BrickRecord { at: (b.x as u32, b.y as u32, b.z as u32), fill });
+        }
+        let size = grid.size();
+        WorldFile {
+            format: FORMAT_TAG.to_string(),
+            version: FORMAT_VERSION,
+            size: (size.x, size.y, size.z),
+            palette: world.palette.clone(),
+            views: world.views.clone(),
+            bricks,
+        }
+    }
+
+    /// Validates everything and builds the world. `location` names the source in messages.
+    pub fn into_world(self, location: &str) -> Result<VoxelWorld, LoadError> {
+        let fail = |message: String| LoadError { location: location.to_string(), message };
+        if self.format != FORMAT_TAG {
+            return Err(fail(format!("format is '{}', expected '{FORMAT_TAG}'", self.format)));
+        }
+        if self.version != FORMAT_VERSION {
+            return Err(fail(format!("version {} is not supported (this build reads {FORMAT_VERSION})", self.version)));
+        }
+        let (sx, sy, sz) = self.size;
+        for (axis, v) in [("x", sx), ("y", sy), ("z", sz)] {
+            if v == 0 || v > MAX_WORLD_EDGE {
+                return Err(fail(format!("size.{axis} = {v} must be within 1..={MAX_WORLD_EDGE}")));
+            }
+        }
+        if self.palette.materials.len() > MAX_MATERIALS {
+            return Err(fail(format!(
+                "palette has {} materials, at most {MAX_MATERIALS} allowed",
+                self.palette.materials.len()
+            )));
+        }
+        for (i, m) in self.palette.materials.iter().enumerate() {
+            if let Some(problem) = m.problem() {
+                return Err(fail(format!("palette[{i}]: {problem}")));
+            }
+        }
+        if self.views.len() > MAX_VIEWS {
+            return Err(fail(format!("{} views, at most {MAX_VIEWS} allowed", self.views.len())));
+        }
+        for (i, v) in self.views.iter().enumerate() {
+            if let Some(problem) = v.problem() {
+                return Err(fail(format!("views[{i}]: {problem}")));
+            }
+        }
+        let mut world = VoxelWorld::new(UVec3::new(sx, sy, sz), self.palette);
+        world.views = self.views;
+        let dims = world.grid.brick_dims();
+        let ids = world.palette.id_count();
+        let mut seen = vec![false; (dims.x * dims.y * dims.z) as usize];
+        for (i, record) in self.bricks.iter().enumerate() {
+            let (bx, by, bz) = record.at;
+            let here = |message: String| fail(format!("bricks[{i}] at ({bx}, {by}, {bz}): {message}"));
+            if bx >= dims.x || by >= dims.y || bz >= dims.z {
+                return Err(here(format!("outside the world's {}x{}x{} bricks", dims.x, dims.y, dims.z)));
+            }
+            let b = IVec3::new(bx as i32, by as i32, bz as i32);
+            let index = world.grid.brick_index(b);
+            if std::mem::replace(&mut seen[index], true) {
+                return Err(here("listed twice".to_string()));
+            }
+            match &record.fill {
+                BrickFill::Uniform(id) => {
+                    if *id as usize >= ids {
+                        return Err(here(format!("material id {id} out of range (palette ids 0..{})", ids - 1)));
+                    }
+                    world.grid.set_brick(b, &[*id; BRICK_VOXELS]);
+                }
+                BrickFill::Runs(runs) => {
+                    let mut voxels = [0 as Voxel; BRICK_VOXELS];
+                    let mut filled = 0usize;
+                    for (r, &(count, id)) in runs.iter().enumerate() {
+                        if id as usize >= ids {
+                            return Err(here(format!(
+                                "run {r}: material id {id} out of range (palette ids 0..{})",
+                                ids - 1
+                            )));
+                        }
+                        let end = filled + count as usize;
+                        if end > BRICK_VOXELS {
+                            return Err(here(format!("runs cover more than {BRICK_VOXELS} voxels")));
+                        }
+                        voxels[filled..end].fill(id);
+                        filled = end;
+                    }
+                    if filled != BRICK_VOXELS {
+                        return Err(here(format!("runs cover {filled} voxels, expected {BRICK_VOXELS}")));
+                    }
+                    world.grid.set_brick(b, &voxels);
+                }
+            }
+        }
+        Ok(world)
+    }
+}
+
+/// Parses world-file text (already read) into a world. `location` names the source in messages.
+pub fn parse_world(text: &str, location: &str) -> Result<VoxelWorld, LoadError> {
+    let file: WorldFile = ron::Options::default()
+        .with_recursion_limit(32)
+        .from_str(text)
+        .map_err(|e| LoadError { location: format!("{location}:{}", e.span.start), message: e.code.to_string() })?;
+    file.into_world(location)
+}
+
+/// Reads text from a file with a size limit, never modifying it.
+pub fn read_limited(path: &Path, limit: u64) -> Result<String, LoadError> {
+    let location = path.display().to_string();
+    let fail = |message: String| LoadError { location: location.clone(), message };
+    let meta = std::fs::metadata(path).map_err(|e| fail(format!("cannot read: {e}")))?;
+    if !meta.is_file() {
+        return Err(fail("not a regular file".to_string()));
+    }
+    if meta.len() > limit {
+        return Err(fail(format!("file is {} bytes, larger than the {limit}-byte limit", meta.len())));
+    }
+    let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read: {e}")))?;
+    String::from_utf8(bytes).map_err(|e| fail(format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to())))
+}
+
+/// Loads a RON world file.
+pub fn load_world(path: &Path) -> Result<VoxelWorld, LoadError> {
+    let text = read_limited(path, MAX_FILE_BYTES)?;
+    parse_world(&text, &path.display().to_string())
+}
+
+/// Serialises a world to RON text.
+pub fn world_to_string(world: &VoxelWorld) -> String {
+    let config = ron::ser::PrettyConfig::new().depth_limit(3).struct_names(false);
+    // Serialising plain data into a String cannot fail; fall back to the compact form if it ever does.
+    ron::ser::to_string_pretty(&WorldFile::from_world(world), config)
+        .unwrap_or_else(|e| format!("// serialisation failed: {e}\n"))
+}
+
+/// Saves a world atomically: writes `<path>.tmp`, syncs it, then renames it over `path`.
+pub fn save_world(world: &VoxelWorld, path: &Path) -> std::io::Result<()> {
+    let text = world_to_string(world);
+    write_atomically(path, text.as_bytes())
+}
+
+/// Writes bytes to a temporary sibling of `path` and renames it into place, so readers never see half a file.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
+    tmp_name.push(format!(".tmp{}", std::process::id()));
+    let tmp = path.with_file_name(tmp_name);
+    let result = (|| {
+        let mut file = std::fs::File::create(&tmp)?;
+        file.write_all(bytes)?;
+        file.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}

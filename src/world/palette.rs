@@ -1,0 +1,111 @@
+//! Materials: what a voxel id means (albedo, emission colour, emission strength).
+
+use serde::{Deserialize, Serialize};
+
+/// One material of the world palette. Colours are linear RGB.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Material {
+    pub name: String,
+    /// Diffuse reflectance per channel, in `[0, 1]`.
+    pub albedo: [f32; 3],
+    /// Emission colour per channel, in `[0, 1]`; radiance is `emission * strength`.
+    #[serde(default)]
+    pub emission: [f32; 3],
+    /// Radiance scale; the material is an emitter when it is above zero.
+    #[serde(default)]
+    pub strength: f32,
+}
+
+impl Material {
+    pub fn solid(name: &str, albedo: [f32; 3]) -> Self {
+        Material { name: name.to_string(), albedo, emission: [0.0; 3], strength: 0.0 }
+    }
+
+    pub fn emissive(name: &str, albedo: [f32; 3], emission: [f32; 3], strength: f32) -> Self {
+        Material { name: name.to_string(), albedo, emission, strength }
+    }
+
+    pub fn is_emissive(&self) -> bool {
+        self.strength > 0.0 && self.emission.iter().any(|&c| c > 0.0)
+    }
+
+    /// Emitted radiance per channel.
+    pub fn radiance(&self) -> [f32; 3] {
+        self.emission.map(|c| c * self.strength)
+    }
+
+    /// Why this material is unusable, if it is (non-finite or out-of-range values).
+    pub fn problem(&self) -> Option<String> {
+        let in_unit = |c: &f32| c.is_finite() && (0.0..=1.0).contains(c);
+        if !self.albedo.iter().all(in_unit) {
+            return Some(format!("material '{}': albedo {:?} must be within [0, 1]", self.name, self.albedo));
+        }
+        if !self.emission.iter().all(in_unit) {
+            return Some(format!("material '{}': emission {:?} must be within [0, 1]", self.name, self.emission));
+        }
+        if !self.strength.is_finite() || !(0.0..=1.0e6).contains(&self.strength) {
+            return Some(format!("material '{}': strength {} must be within [0, 1e6]", self.name, self.strength));
+        }
+        None
+    }
+}
+
+/// The materials of a world. Voxel id `k > 0` is `materials[k - 1]`; id 0 is air and has no entry.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct Palette {
+    pub materials: Vec<Material>,
+}
+
+/// The most materials a palette can hold (ids are `u16`, 0 is air).
+pub const MAX_MATERIALS: usize = u16::MAX as usize;
+
+impl Palette {
+    pub fn new(materials: Vec<Material>) -> Self {
+        Palette { materials }
+    }
+
+    /// The material of voxel id `id`, or `None` for air and unknown ids.
+    pub fn get(&self, id: u16) -> Option<&Material> {
+        if id == 0 { None } else { self.materials.get(id as usize - 1) }
+    }
+
+    /// The id of the material called `name`.
+    pub fn id_of(&self, name: &str) -> Option<u16> {
+        self.materials.iter().position(|m| m.name == name).map(|i| (i + 1) as u16)
+    }
+
+    /// Number of valid ids including air.
+    pub fn id_count(&self) -> usize {
+        self.materials.len() + 1
+    }
+
+    pub fn is_emissive(&self, id: u16) -> bool {
+        self.get(id).is_some_and(Material::is_emissive)
+    }
+
+    /// Adds a material and returns its id.
+    pub fn push(&mut self, material: Material) -> u16 {
+        self.materials.push(material);
+        self.materials.len() as u16
+    }
+
+    /// A small palette for generated worlds: terrain, building blocks and lights of several colours.
+    pub fn default_blocks() -> Self {
+        Palette::new(vec![
+            Material::solid("stone", [0.45, 0.45, 0.47]),
+            Material::solid("dirt", [0.42, 0.30, 0.20]),
+            Material::solid("grass", [0.30, 0.55, 0.22]),
+            Material::solid("sand", [0.76, 0.70, 0.50]),
+            Material::solid("wood", [0.55, 0.38, 0.22]),
+            Material::solid("leaves", [0.20, 0.45, 0.16]),
+            Material::solid("white", [0.80, 0.80, 0.80]),
+            Material::solid("red", [0.75, 0.10, 0.10]),
+            Material::solid("green", [0.12, 0.60, 0.15]),
+            Material::emissive("lamp-warm", [0.9, 0.8, 0.6], [1.0, 0.75, 0.45], 8.0),
+            Material::emissive("lamp-white", [0.9, 0.9, 0.9], [1.0, 1.0, 1.0], 12.0),
+            Material::emissive("lamp-blue", [0.5, 0.6, 0.9], [0.35, 0.55, 1.0], 6.0),
+            Material::emissive("lamp-red", [0.9, 0.4, 0.4], [1.0, 0.25, 0.2], 6.0),
+        ])
+    }
+}

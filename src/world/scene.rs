@@ -1,0 +1,232 @@
+//! Scene recipes (`assets/scenes/*.ron`): a short description that expands into a world. Also the generated
+//! default world of `glowbrick play`.
+//!
+//! ```ron
+//! (
+//!     size: (32, 16, 32),
+//!     seed: 7,
+//!     materials: [(name: "white", albedo: (0.8, 0.8, 0.8))],
+//!     ops: [Box(min: (0, 0, 0), max: (32, 1, 32), material: "white")],
+//!     views: [(name: "inside", origin: (16, 8, 2), direction: (0, 0, 1), fov_deg: 60)],
+//! )
+//! ```
+//! Boxes are `[min, max)` in voxels. Material names refer to `materials`; `"air"` clears.
+
+use super::format::{LoadError, read_limited};
+use super::grid::{AIR, MAX_WORLD_EDGE, Voxel};
+use super::palette::{MAX_MATERIALS, Material, Palette};
+use super::terrain::{TerrainParams, fill_terrain, hash_u32, surface_height};
+use super::{CameraView, VoxelWorld};
+use bevy::math::{IVec3, UVec3};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// One step of a recipe, applied in order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum SceneOp {
+    /// Fills `[min, max)` with a material.
+    Box { min: (i32, i32, i32), max: (i32, i32, i32), material: String },
+    /// A noise height field over the whole world.
+    Terrain { params: TerrainParams, rock: String, soil: String, surface: String },
+    /// `count` boxes of `size` at seeded random columns, standing on the surface (lamps, pillars, trees).
+    Scatter { material: String, count: u32, size: (i32, i32, i32) },
+}
+
+/// A scene recipe as written in `assets/scenes/NAME.ron`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneRecipe {
+    pub size: (u32, u32, u32),
+    #[serde(default)]
+    pub seed: u32,
+    pub materials: Vec<Material>,
+    pub ops: Vec<SceneOp>,
+    #[serde(default)]
+    pub views: Vec<CameraView>,
+}
+
+/// Most ops a recipe may hold, and most scattered boxes per op (hostile recipes must stay cheap).
+const MAX_OPS: usize = 100_000;
+const MAX_SCATTER: u32 = 1_000_000;
+
+impl SceneRecipe {
+    /// Validates the recipe and expands it into a world. `location` names the source in messages.
+    pub fn build(&self, location: &str) -> Result<VoxelWorld, LoadError> {
+        let fail = |message: String| LoadError { location: location.to_string(), message };
+        let (sx, sy, sz) = self.size;
+        for (axis, v) in [("x", sx), ("y", sy), ("z", sz)] {
+            if v == 0 || v > MAX_WORLD_EDGE {
+                return Err(fail(format!("size.{axis} = {v} must be within 1..={MAX_WORLD_EDGE}")));
+            }
+        }
+        if self.materials.len() > MAX_MATERIALS {
+            return Err(fail(format!("{} materials, at most {MAX_MATERIALS} allowed", self.materials.len())));
+        }
+        if self.ops.len() > MAX_OPS {
+            return Err(fail(format!("{} ops, at most {MAX_OPS} allowed", self.ops.len())));
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            if let Some(problem) = m.problem() {
+                return Err(fail(format!("materials[{i}]: {problem}")));
+            }
+        }
+        for (i, v) in self.views.iter().enumerate() {
+            if let Some(problem) = v.problem() {
+                return Err(fail(format!("views[{i}]: {problem}")));
+            }
+        }
+        let palette = Palette::new(self.materials.clone());
+        let mut world = VoxelWorld::new(UVec3::new(sx, sy, sz), palette);
+        world.views = self.views.clone();
+        for (i, op) in self.ops.iter().enumerate() {
+            apply_op(&mut world, self.seed, i as u32, op).map_err(|m| fail(format!("ops[{i}]: {m}")))?;
+        }
+        // Recipe building is not an edit: nothing is dirty until the world is uploaded as a whole.
+        world.grid.take_dirty();
+        Ok(world)
+    }
+}
+
+fn material_id(palette: &Palette, name: &str) -> Result<Voxel, String> {
+    if name == "air" {
+        return Ok(AIR);
+    }
+    palette.id_of(name).ok_or_else(|| format!("unknown material '{name}'"))
+}
+
+fn apply_op(world: &mut VoxelWorld, seed: u32, op_index: u32, op: &SceneOp) -> Result<(), String> {
+    match op {
+        SceneOp::Box { min, max, material } => {
+            let id = material_id(&world.palette, material)?;
+            let (lo, hi) = (IVec3::from(*min), IVec3::from(*max));
+            world.grid.fill_box(lo, hi, id).map(|_| ()).map_err(|e| format!("box {lo}..{hi}: {e}"))
+        }
+        SceneOp::Terrain { params, rock, soil, surface } => {
+            let ids = (
+                material_id(&world.palette, rock)?,
+                material_id(&world.palette, soil)?,
+                material_id(&world.palette, surface)?,
+            );
+            if !(params.frequency.is_finite() && params.amplitude.is_finite() && params.base_height.is_finite()) {
+                return Err("terrain parameters must be finite".into());
+            }
+            fill_terrain(world, seed, params, ids.0, ids.1, ids.2);
+            Ok(())
+        }
+        SceneOp::Scatter { material, count, size } => {
+            let id = material_id(&world.palette, material)?;
+            if *count > MAX_SCATTER {
+                return Err(format!("scatter count {count} exceeds {MAX_SCATTER}"));
+            }
+            let extent = IVec3::from(*size);
+            let world_size = world.grid.size().as_ivec3();
+            if extent.cmplt(IVec3::ONE).any() || extent.cmpgt(world_size).any() {
+                return Err(format!("scatter size {extent} must be at least 1 and fit in the world"));
+            }
+            for n in 0..*count {
+                let h = hash_u32(seed ^ hash_u32(op_index.wrapping_mul(0x9E37_79B9) ^ n));
+                let x = (h % (world_size.x - extent.x + 1) as u32) as i32;
+                let z = (hash_u32(h) % (world_size.z - extent.z + 1) as u32) as i32;
+                let base = surface_height(world, x, z) + 1;
+                if base + extent.y > world_size.y {
+                    continue;
+                }
+                let lo = IVec3::new(x, base, z);
+                world.grid.fill_box(lo, lo + extent, id).map_err(|e| e.to_string())?;
+            }
+            Ok(())
+        }
+    }
+}
+
+/// Parses recipe text into a world.
+pub fn parse_recipe(text: &str, location: &str) -> Result<VoxelWorld, LoadError> {
+    let recipe: SceneRecipe = ron::Options::default()
+        .with_recursion_limit(32)
+        .from_str(text)
+        .map_err(|e| LoadError { location: format!("{location}:{}", e.span.start), message: e.code.to_string() })?;
+    recipe.build(location)
+}
+
+/// Folder of the bundled scene recipes: `$GLOWBRICK_ASSETS/scenes`, else `assets/scenes` next to the crate.
+pub fn scenes_dir() -> PathBuf {
+    match std::env::var_os("GLOWBRICK_ASSETS") {
+        Some(dir) => PathBuf::from(dir).join("scenes"),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join("scenes"),
+    }
+}
+
+/// Loads `assets/scenes/NAME.ron`. Names are plain identifiers, so `--scene` cannot reach outside the folder.
+pub fn load_scene(name: &str) -> Result<VoxelWorld, LoadError> {
+    if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_') {
+        return Err(LoadError {
+            location: name.to_string(),
+            message: "scene names use letters, digits, '-' and '_'".into(),
+        });
+    }
+    let path = scenes_dir().join(format!("{name}.ron"));
+    if !path.exists() {
+        let known = list_scenes().join(", ");
+        return Err(LoadError {
+            location: path.display().to_string(),
+            message: format!("no such scene (known: {known})"),
+        });
+    }
+    load_recipe(&path)
+}
+
+/// Loads a recipe file from a path.
+pub fn load_recipe(path: &Path) -> Result<VoxelWorld, LoadError> {
+    let text = read_limited(path, 16 * 1024 * 1024)?;
+    parse_recipe(&text, &path.display().to_string())
+}
+
+/// Names of the bundled scene recipes, sorted.
+pub fn list_scenes() -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(scenes_dir())
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| e.path().file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    names.sort();
+    names
+}
+
+/// The generated default world of `glowbrick play`: rolling hills with wooden posts and lamps.
+pub fn generated_world(seed: u32, size: UVec3) -> Result<VoxelWorld, LoadError> {
+    let size = size.min(UVec3::splat(MAX_WORLD_EDGE));
+    let height = size.y as f32;
+    let recipe = SceneRecipe {
+        size: (size.x, size.y, size.z),
+        seed,
+        materials: Palette::default_blocks().materials,
+        ops: vec![
+            SceneOp::Terrain {
+                params: TerrainParams {
+                    base_height: height * 0.3,
+                    amplitude: height * 0.25,
+                    frequency: 0.012,
+                    octaves: 4,
+                    soil_depth: 3,
+                },
+                rock: "stone".into(),
+                soil: "dirt".into(),
+                surface: "grass".into(),
+            },
+            SceneOp::Scatter { material: "wood".into(), count: size.x * size.z / 900, size: (1, 5, 1) },
+            SceneOp::Scatter { material: "lamp-warm".into(), count: size.x * size.z / 1500, size: (1, 2, 1) },
+            SceneOp::Scatter { material: "lamp-blue".into(), count: size.x * size.z / 4000, size: (1, 1, 1) },
+        ],
+        views: Vec::new(),
+    };
+    let mut world = recipe.build("generated world")?;
+    let mut view = world.overview();
+    view.name = "start".into();
+    let centre = (size.as_vec3() * 0.5).as_ivec3();
+    let ground = surface_height(&world, centre.x, centre.z).max(0) as f32;
+    view.origin = [centre.x as f32 + 0.5, ground + 6.0, centre.z as f32 + 0.5];
+    view.direction = [0.6, -0.25, 0.75];
+    world.views.push(view);
+    Ok(world)
+}

@@ -1,0 +1,239 @@
+//! CPU ray traversal: a DDA over bricks that skips empty cells, then a DDA over the voxels of non-uniform bricks
+//! (Amanatides & Woo). `shaders/traversal.wgsl` mirrors this function step for step, so the GPU and CPU agree
+//! per pixel; keep the two in sync.
+//!
+//! Conventions shared by both: `t` is distance along the unit direction; every boundary crossing is computed as
+//! `(plane - origin) / dir` from the ray's own origin (never accumulated), so both sides round the same way; the
+//! hit face is the face the ray entered through; a ray starting inside a solid voxel hits it at `t = 0`.
+
+use super::grid::{BRICK_SIZE, BrickCell, BrickGrid, Voxel};
+use bevy::math::{IVec3, Vec3};
+
+/// A voxel face, by outward normal: +X, -X, +Y, -Y, +Z, -Z (index 0..6).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Face(pub u8);
+
+impl Face {
+    /// The face of `axis` whose normal points against a ray going in direction sign `dir_sign`.
+    pub fn entered(axis: usize, dir_positive: bool) -> Face {
+        Face(axis as u8 * 2 + dir_positive as u8)
+    }
+
+    pub fn axis(self) -> usize {
+        (self.0 / 2) as usize
+    }
+
+    pub fn normal(self) -> IVec3 {
+        let mut n = IVec3::ZERO;
+        n[self.axis()] = if self.0 % 2 == 0 { 1 } else { -1 };
+        n
+    }
+
+    pub const ALL: [Face; 6] = [Face(0), Face(1), Face(2), Face(3), Face(4), Face(5)];
+}
+
+/// A ray with a unit direction.
+#[derive(Clone, Copy, Debug)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+}
+
+impl Ray {
+    /// A ray from `origin` towards `dir` (normalised here; a zero direction gives a ray that hits nothing).
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Ray { origin, dir: dir.normalize_or_zero() }
+    }
+
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.dir * t
+    }
+}
+
+/// The first solid voxel along a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub voxel: IVec3,
+    pub face: Face,
+    pub distance: f32,
+    pub material: Voxel,
+}
+
+/// Per-axis slab parameters of a ray: `1 / dir` (infinite on zero components).
+fn inverse_dir(dir: Vec3) -> Vec3 {
+    Vec3::new(
+        if dir.x != 0.0 { 1.0 / dir.x } else { f32::INFINITY },
+        if dir.y != 0.0 { 1.0 / dir.y } else { f32::INFINITY },
+        if dir.z != 0.0 { 1.0 / dir.z } else { f32::INFINITY },
+    )
+}
+
+/// Ray parameter where the ray crosses plane `plane` of `axis` (infinite when parallel).
+#[inline]
+fn cross_t(ray: &Ray, inv: Vec3, axis: usize, plane: f32) -> f32 {
+    if ray.dir[axis] == 0.0 { f32::INFINITY } else { (plane - ray.origin[axis]) * inv[axis] }
+}
+
+/// Entry into the axis-aligned box `[lo, hi]`: `(t_enter, t_exit, axis of t_enter)`; `t_enter > t_exit` on a miss.
+/// The axis is the first (x, y, z order) whose near plane gives the largest entry parameter.
+pub fn box_entry(ray: &Ray, lo: Vec3, hi: Vec3) -> (f32, f32, usize) {
+    let inv = inverse_dir(ray.dir);
+    let mut t_enter = f32::NEG_INFINITY;
+    let mut t_exit = f32::INFINITY;
+    let mut axis = 0;
+    for a in 0..3 {
+        if ray.dir[a] == 0.0 {
+            if ray.origin[a] < lo[a] || ray.origin[a] > hi[a] {
+                return (f32::INFINITY, f32::NEG_INFINITY, 0);
+            }
+            continue;
+        }
+        let (near, far) = if ray.dir[a] > 0.0 { (lo[a], hi[a]) } else { (hi[a], lo[a]) };
+        let t0 = (near - ray.origin[a]) * inv[a];
+        let t1 = (far - ray.origin[a]) * inv[a];
+        if t0 > t_enter {
+            t_enter = t0;
+            axis = a;
+        }
+        t_exit = t_exit.min(t1);
+    }
+    (t_enter, t_exit, axis)
+}
+
+/// Finds the first solid voxel along `ray` within `max_distance`.
+pub fn trace(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
+    if ray.dir == Vec3::ZERO || !ray.origin.is_finite() || !ray.dir.is_finite() {
+        return None;
+    }
+    let size = grid.size().as_vec3();
+    let (t_enter, t_exit, enter_axis) = box_entry(ray, Vec3::ZERO, size);
+    let t_end = t_exit.min(max_distance);
+    let mut t = t_enter.max(0.0);
+    if t > t_end {
+        return None;
+    }
+    let inv = inverse_dir(ray.dir);
+    let step = ray.dir.signum().as_ivec3();
+    let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
+    let brick_edge = BRICK_SIZE as f32;
+    let last_brick = ((grid.size().as_ivec3() - IVec3::ONE) >> 3_i32).max(IVec3::ZERO);
+    // The face through which the ray entered the current cell; a ray starting inside the world uses the axis of
+    // its voxel's entry, as `box_entry` reports for a box around the origin.
+    let mut axis = enter_axis;
+    if t_enter < 0.0 {
+        let v = ray.origin.floor();
+        axis = box_entry(ray, v, v + Vec3::ONE).2;
+    }
+
+    let start = ray.at(t);
+    let mut brick = (start / brick_edge).floor().as_ivec3().clamp(IVec3::ZERO, last_brick);
+    let mut brick_t_max = Vec3::ZERO;
+    for a in 0..3 {
+        let plane = (brick[a] + positive[a] as i32) as f32 * brick_edge;
+        brick_t_max[a] = cross_t(ray, inv, a, plane);
+    }
+
+    loop {
+        match grid.cell(brick) {
+            BrickCell::Empty => {}
+            BrickCell::Homogeneous(material) => {
+                let voxel = clamp_into_brick(ray.at(t).floor().as_ivec3(), brick).min(grid.size().as_ivec3() - 1);
+                return Some(Hit { voxel, face: Face::entered(axis, positive[axis]), distance: t, material });
+            }
+            BrickCell::Pooled(_) => {
+                if let Some(hit) = trace_in_brick(grid, ray, inv, brick, t, t_end, axis) {
+                    return Some(hit);
+                }
+            }
+        }
+        // Step to the next brick along the axis whose boundary comes first.
+        let a = min_axis(brick_t_max);
+        t = brick_t_max[a];
+        if t > t_end {
+            return None;
+        }
+        axis = a;
+        brick[a] += step[a];
+        if brick[a] < 0 || brick[a] > last_brick[a] {
+            return None;
+        }
+        brick_t_max[a] = cross_t(ray, inv, a, (brick[a] + positive[a] as i32) as f32 * brick_edge);
+    }
+}
+
+/// Voxel DDA inside one pooled brick, starting at parameter `t` where the ray entered it through `axis`.
+fn trace_in_brick(
+    grid: &BrickGrid,
+    ray: &Ray,
+    inv: Vec3,
+    brick: IVec3,
+    mut t: f32,
+    t_end: f32,
+    mut axis: usize,
+) -> Option<Hit> {
+    let step = ray.dir.signum().as_ivec3();
+    let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
+    let lo = brick * BRICK_SIZE;
+    let hi = (lo + IVec3::splat(BRICK_SIZE)).min(grid.size().as_ivec3()) - IVec3::ONE;
+    let mut voxel = ray.at(t).floor().as_ivec3().clamp(lo, hi);
+    let mut t_max = Vec3::ZERO;
+    for a in 0..3 {
+        t_max[a] = cross_t(ray, inv, a, (voxel[a] + positive[a] as i32) as f32);
+    }
+    loop {
+        let material = grid.get(voxel);
+        if material != 0 {
+            return Some(Hit { voxel, face: Face::entered(axis, positive[axis]), distance: t, material });
+        }
+        let a = min_axis(t_max);
+        t = t_max[a];
+        if t > t_end {
+            return None;
+        }
+        axis = a;
+        voxel[a] += step[a];
+        if voxel[a] < lo[a] || voxel[a] > hi[a] {
+            return None;
+        }
+        t_max[a] = cross_t(ray, inv, a, (voxel[a] + positive[a] as i32) as f32);
+    }
+}
+
+/// The axis of the smallest component; ties go to the first in x, y, z order.
+#[inline]
+fn min_axis(v: Vec3) -> usize {
+    if v.x <= v.y && v.x <= v.z {
+        0
+    } else if v.y <= v.z {
+        1
+    } else {
+        2
+    }
+}
+
+fn clamp_into_brick(voxel: IVec3, brick: IVec3) -> IVec3 {
+    let lo = brick * BRICK_SIZE;
+    voxel.clamp(lo, lo + IVec3::splat(BRICK_SIZE - 1))
+}
+
+/// Brute-force reference: tests every solid voxel's box and keeps the nearest entry. For tests only; cost grows
+/// with the number of solid voxels.
+pub fn trace_brute_force(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
+    let mut best: Option<Hit> = None;
+    grid.for_each_solid(|p, material| {
+        let lo = p.as_vec3();
+        let (t0, t1, axis) = box_entry(ray, lo, lo + Vec3::ONE);
+        if t0 > t1 || t1 < 0.0 {
+            return;
+        }
+        let t = t0.max(0.0);
+        if t > max_distance {
+            return;
+        }
+        if best.is_none_or(|b| t < b.distance) {
+            let face = Face::entered(axis, ray.dir[axis] > 0.0);
+            best = Some(Hit { voxel: p, face, distance: t, material });
+        }
+    });
+    best
+}

@@ -1,0 +1,118 @@
+//! The GPU primary-ray pass against the CPU traversal, per pixel, on any adapter (lavapipe in CI).
+//!
+//! The pass runs with `debug=hit`, which writes `(voxel.x, voxel.y, voxel.z, face + 1)` (exact in f16), and the
+//! CPU traces the same camera rays. Tolerance: at most 0.5% of pixels may differ, and only where the two disagree
+//! about a ray through a voxel edge or corner (the hit voxels are neighbours) or grazing a silhouette.
+//! With `GLOWBRICK_REQUIRE_GPU=1` a missing adapter fails the test; otherwise it is skipped with a message.
+
+use bevy::math::{IVec3, UVec2, UVec3};
+use glowbrick::headless::{HeadlessOptions, render_headless};
+use glowbrick::image_io::LinearImage;
+use glowbrick::render::camera::{camera_ray, view_transform, world_from_clip};
+use glowbrick::settings::RenderSettings;
+use glowbrick::world::scene::{generated_world, load_scene};
+use glowbrick::world::{CameraView, VoxelWorld, trace};
+
+fn require_gpu() -> bool {
+    std::env::var("GLOWBRICK_REQUIRE_GPU").is_ok_and(|v| v == "1")
+}
+
+/// Renders, or returns None when no adapter exists and the GPU is not required.
+fn render(world: VoxelWorld, view: &CameraView, settings: RenderSettings, w: u32, h: u32) -> Option<LinearImage> {
+    let options = HeadlessOptions { width: w, height: h, frames: 2, settings, ..Default::default() };
+    match std::panic::catch_unwind(|| render_headless(world, view, &options)) {
+        Ok(result) => Some(result.expect("headless render")),
+        Err(_) if !require_gpu() => {
+            eprintln!("skipping GPU test: no adapter (set GLOWBRICK_REQUIRE_GPU=1 to make this a failure)");
+            None
+        }
+        Err(panic) => std::panic::resume_unwind(panic),
+    }
+}
+
+struct Comparison {
+    pixels: usize,
+    hits: usize,
+    mismatches: usize,
+}
+
+fn compare(world: &VoxelWorld, view: &CameraView, gpu: &LinearImage) -> Comparison {
+    let (w, h) = (gpu.width, gpu.height);
+    let transform = view_transform(view);
+    let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
+    let mut c = Comparison { pixels: (w * h) as usize, hits: 0, mismatches: 0 };
+    for y in 0..h {
+        for x in 0..w {
+            let ray = camera_ray(m, transform.translation, UVec2::new(x, y), w, h);
+            let cpu = trace(&world.grid, &ray, f32::INFINITY);
+            let p = gpu.pixel(x, y);
+            let gpu_hit = (p[3] > 0.0).then(|| (IVec3::new(p[0] as i32, p[1] as i32, p[2] as i32), p[3] as u8 - 1));
+            match (cpu, gpu_hit) {
+                (None, None) => {}
+                (Some(cpu), Some((voxel, face))) => {
+                    c.hits += 1;
+                    if cpu.voxel != voxel || cpu.face.0 != face {
+                        c.mismatches += 1;
+                        let apart = (cpu.voxel - voxel).abs().max_element();
+                        assert!(
+                            apart <= 1,
+                            "pixel ({x}, {y}): cpu {cpu:?}, gpu voxel {voxel} face {face}: not neighbours"
+                        );
+                    }
+                }
+                (cpu, gpu) => {
+                    c.mismatches += 1;
+                    eprintln!("pixel ({x}, {y}): cpu {cpu:?} gpu {gpu:?} (silhouette)");
+                }
+            }
+        }
+    }
+    c
+}
+
+#[test]
+fn gpu_primary_rays_match_cpu_traversal() {
+    let hit_view = RenderSettings::default().with_pairs(&["debug=hit".to_string()]).unwrap();
+    let room = load_scene("test-room").unwrap();
+    let terrain = generated_world(9, UVec3::new(64, 40, 64)).unwrap();
+    let cases = [
+        ("test-room inside", room.clone(), room.view(Some("inside")).unwrap().clone()),
+        ("test-room top", room.clone(), room.view(Some("top")).unwrap().clone()),
+        ("terrain overview", terrain.clone(), terrain.overview()),
+    ];
+    for (name, world, view) in cases {
+        let Some(gpu) = render(world.clone(), &view, hit_view.clone(), 96, 64) else { return };
+        let c = compare(&world, &view, &gpu);
+        eprintln!("{name}: {} pixels, {} hits, {} mismatches", c.pixels, c.hits, c.mismatches);
+        assert!(c.hits * 3 > c.pixels, "{name}: the view should mostly hit voxels ({} of {})", c.hits, c.pixels);
+        assert!(c.mismatches * 200 <= c.pixels, "{name}: {} of {} pixels differ", c.mismatches, c.pixels);
+    }
+}
+
+#[test]
+fn lit_render_is_finite_and_shows_emission() {
+    let room = load_scene("test-room").unwrap();
+    let view = room.view(Some("inside")).unwrap().clone();
+    // Sun off: inside the closed room only the window's sky light and the lamp remain.
+    let settings = RenderSettings::default().with_pairs(&["sun=off".to_string()]).unwrap();
+    let Some(image) = render(room.clone(), &view, settings, 96, 64) else { return };
+    assert_eq!(image.non_finite_pixels(), 0);
+    // Every pixel that sees the lamp is at least as bright as the lamp's own radiance.
+    let transform = view_transform(&view);
+    let m = world_from_clip(&transform, view.fov_deg.to_radians(), 96, 64);
+    let lamp = room.palette.id_of("lamp").unwrap();
+    let radiance = room.palette.get(lamp).unwrap().radiance();
+    let mut lamp_pixels = 0;
+    for y in 0..64 {
+        for x in 0..96 {
+            let ray = camera_ray(m, transform.translation, UVec2::new(x, y), 96, 64);
+            if trace(&room.grid, &ray, f32::INFINITY).is_some_and(|h| h.material == lamp) {
+                let p = image.pixel(x, y);
+                // f16 storage: allow its relative precision.
+                assert!((0..3).all(|c| p[c] >= radiance[c] * 0.999), "lamp pixel ({x}, {y}) = {p:?}");
+                lamp_pixels += 1;
+            }
+        }
+    }
+    assert!(lamp_pixels > 0, "the view should see the lamp");
+}

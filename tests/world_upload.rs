@@ -1,0 +1,54 @@
+//! The renderer's upload staging: the first frame uploads the whole world, later frames only the dirty bricks.
+
+use bevy::prelude::*;
+use glowbrick::render::upload::{UploadState, WorldUpload, stage_world_upload};
+use glowbrick::world::scene::load_scene;
+use glowbrick::world::{Edit, VoxelWorld};
+
+fn app_with(world: VoxelWorld) -> App {
+    let mut app = App::new();
+    app.insert_resource(world)
+        .init_resource::<UploadState>()
+        .init_resource::<WorldUpload>()
+        .add_systems(Update, stage_world_upload);
+    app
+}
+
+#[test]
+fn first_frame_is_full_then_only_dirty_bricks() {
+    let mut app = app_with(load_scene("test-room").unwrap());
+    app.update();
+    let upload = app.world().resource::<WorldUpload>().clone();
+    assert!(upload.full.is_some() && upload.materials.is_some());
+    // Nothing changed: nothing to send.
+    app.update();
+    assert!(app.world().resource::<WorldUpload>().is_empty());
+    // One placed voxel in an empty brick: one top cell and one pooled brick.
+    app.world_mut().resource_mut::<VoxelWorld>().apply(Edit::Place { at: IVec3::new(9, 9, 9), material: 1 }).unwrap();
+    app.update();
+    let upload = app.world().resource::<WorldUpload>().clone();
+    assert!(upload.full.is_none() && upload.materials.is_none());
+    let brick = app.world().resource::<VoxelWorld>().grid.brick_index(IVec3::ONE) as u32;
+    assert_eq!(upload.top_cells.iter().map(|c| c.0).collect::<Vec<_>>(), vec![brick]);
+    assert_eq!(upload.bricks.len(), 1);
+    assert_eq!(upload.bricks[0].1[1 + 8 * (1 + 8)], 1, "the placed voxel is in the uploaded brick");
+    assert_eq!(upload.bytes(), 4 + 1024);
+    // A whole-brick fill uploads the top cell only (the brick is homogeneous, not pooled).
+    app.world_mut()
+        .resource_mut::<VoxelWorld>()
+        .apply(Edit::FillBox { min: IVec3::new(8, 0, 16), max: IVec3::new(15, 7, 23), material: 2 })
+        .unwrap();
+    app.update();
+    let upload = app.world().resource::<WorldUpload>().clone();
+    assert_eq!(upload.bricks.len(), 0);
+    assert_eq!(upload.top_cells.len(), 1);
+    // A palette change sends the material table alone.
+    app.world_mut().resource_mut::<VoxelWorld>().palette.materials[0].albedo = [0.1, 0.2, 0.3];
+    app.update();
+    let upload = app.world().resource::<WorldUpload>().clone();
+    assert!(upload.materials.is_some() && upload.top_cells.is_empty() && upload.full.is_none());
+    // A new world (loaded or generated) is uploaded whole.
+    app.insert_resource(load_scene("test-room").unwrap());
+    app.update();
+    assert!(app.world().resource::<WorldUpload>().full.is_some());
+}
