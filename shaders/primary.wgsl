@@ -87,7 +87,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                     }
                 }
                 // Sky light seen by the face: the sky colour in the normal's direction, a crude ambient term.
-                let lit = frame.sun_radiance.rgb * sun + sky(normal) * 0.5;
+                let lit = frame.sun_radiance.rgb * sun + sky(normal) * 0.3;
                 colour = vec4((material.albedo.rgb * lit + material.radiance.rgb) * frame.exposure, 1.0);
             }
         }

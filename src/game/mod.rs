@@ -5,8 +5,8 @@ pub mod fly_camera;
 use crate::render::VoxelRenderPlugin;
 use crate::render::camera::voxel_camera_bundle;
 use crate::settings::RenderSettings;
-use crate::world::VoxelWorld;
 use crate::world::format::save_world;
+use crate::world::{CameraView, VoxelWorld};
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
 use std::path::PathBuf;
@@ -42,8 +42,27 @@ pub fn run_game(world: VoxelWorld, settings: RenderSettings, save_path: PathBuf)
         .run()
 }
 
-fn save_on_f5(keys: Res<ButtonInput<KeyCode>>, world: Res<VoxelWorld>, path: Res<SavePath>) {
+/// F5 saves the world, with the player's camera as its first view ("player") so reopening starts there.
+fn save_on_f5(
+    keys: Res<ButtonInput<KeyCode>>,
+    mut world: ResMut<VoxelWorld>,
+    path: Res<SavePath>,
+    camera: Single<(&Transform, &Projection), With<fly_camera::FlyCamera>>,
+) {
     if keys.just_pressed(KeyCode::F5) {
+        let (transform, projection) = *camera;
+        let fov = match projection {
+            Projection::Perspective(p) => p.fov.to_degrees(),
+            _ => 60.0,
+        };
+        let player = CameraView {
+            name: "player".into(),
+            origin: transform.translation.into(),
+            direction: transform.forward().as_vec3().into(),
+            fov_deg: fov,
+        };
+        world.views.retain(|v| v.name != "player");
+        world.views.insert(0, player);
         match save_world(&world, &path.0) {
             Ok(()) => info!("saved {}", path.0.display()),
             Err(e) => error!("could not save {}: {e}", path.0.display()),

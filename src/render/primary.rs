@@ -31,7 +31,7 @@ impl FrameParams {
         let sun = Vec3::new(0.45, 0.8, 0.3).normalize();
         FrameParams {
             sun: [sun.x, sun.y, sun.z, if settings.sun { 1.0 } else { 0.0 }],
-            sun_radiance: [2.6, 2.4, 2.1, 0.0],
+            sun_radiance: [1.1, 1.0, 0.9, 0.0],
             sky_zenith: [0.35, 0.55, 0.95, 0.0],
             sky_horizon: [0.75, 0.82, 0.9, 0.0],
             debug_view: settings.debug.shader_index(),

@@ -86,11 +86,11 @@ impl VoxelWorld {
         }
     }
 
-    /// A view that sees the whole world from outside a corner, for worlds without views.
+    /// A view over the world from just outside a corner, for worlds without views.
     pub fn overview(&self) -> CameraView {
         let size = self.grid.size().as_vec3();
         let target = size * Vec3::new(0.5, 0.3, 0.5);
-        let origin = Vec3::new(-0.25 * size.x, size.y * 1.2 + 8.0, -0.25 * size.z);
+        let origin = Vec3::new(-0.1 * size.x, size.y * 0.9 + 4.0, -0.1 * size.z);
         CameraView {
             name: "overview".into(),
             origin: origin.into(),

@@ -1,0 +1,107 @@
+//! The command-line contract: exit codes, one-line errors, and the summary `check-world` prints.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn glowbrick(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_glowbrick")).args(args).output().expect("run glowbrick")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn repo(path: &str) -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(path).display().to_string()
+}
+
+#[test]
+fn check_world_summarises_a_recipe() {
+    let out = glowbrick(&["check-world", &repo("assets/scenes/cornell.ron")]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("size: 144x144x144"), "{stdout}");
+    assert!(stdout.contains("lights: 256 voxel=0 brick=256"), "{stdout}");
+    assert!(stdout.contains("emitters: 131072"), "{stdout}");
+    assert!(stdout.contains("views: front, inside"), "{stdout}");
+}
+
+#[test]
+fn check_world_reports_a_broken_file_in_one_line() {
+    let dir = std::env::temp_dir().join(format!("glowbrick-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("broken.ron");
+    std::fs::write(&path, "(format: \"glowbrick-world\", version: 1, size: (8, 8, 8), palette: [], bricks: [(at: (0, 0, 0), fill: Uniform(3))])").unwrap();
+    let out = glowbrick(&["check-world", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("bricks[0] at (0, 0, 0): material id 3 out of range"), "{stderr}");
+    let out = glowbrick(&["check-world", dir.join("missing.ron").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+}
+
+#[test]
+fn bad_settings_and_arguments_fail_cleanly() {
+    let out = glowbrick(&["render", "--scene", "test-room", "--set", "colour=blue", "--out", "/tmp/x.png"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("unknown setting 'colour'") && stderr.contains("debug="), "{stderr}");
+    let out = glowbrick(&["render", "--scene", "test-room", "--set", "sun=maybe", "--out", "/tmp/x.png"]);
+    assert!(text(&out.stderr).contains("not one of on|off"));
+    let out = glowbrick(&["render", "--scene", "test-room", "--view", "nope", "--out", "/tmp/x.png"]);
+    assert!(text(&out.stderr).contains("no view 'nope' (this world has: inside, top)"), "{}", text(&out.stderr));
+    let out = glowbrick(&["render", "--scene", "test-room", "--out", "/tmp/x.jpg"]);
+    assert!(text(&out.stderr).contains("must end in .png or .exr"));
+    let out = glowbrick(&["render", "--scene", "test-room", "--width", "0", "--out", "/tmp/x.png"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("image size 0x180"), "{}", text(&out.stderr));
+    let out = glowbrick(&["play", "--new", "--size", "4,4,4"]);
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("must be within 8..=1024"), "{}", text(&out.stderr));
+}
+
+/// `render` writes linear float EXR (values above 1 survive) and an 8-bit PNG, headless.
+#[test]
+fn render_writes_exr_and_png_headless() {
+    if std::env::var("GLOWBRICK_REQUIRE_GPU").as_deref() != Ok("1") {
+        eprintln!("skipping: set GLOWBRICK_REQUIRE_GPU=1 to run GPU command-line tests");
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("glowbrick-render-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let exr = dir.join("room.exr");
+    let out = glowbrick(&[
+        "render",
+        "--scene",
+        "test-room",
+        "--view",
+        "inside",
+        "--width",
+        "96",
+        "--height",
+        "64",
+        "--out",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let image = image::open(&exr).unwrap().into_rgba32f();
+    assert_eq!(image.dimensions(), (96, 64));
+    let brightest = image.pixels().map(|p| p.0[0]).fold(0.0f32, f32::max);
+    assert!(brightest > 1.0, "the lamp (radiance 10) should exceed 1 in linear EXR, got {brightest}");
+    assert!(image.pixels().all(|p| p.0.iter().all(|c| c.is_finite())));
+    let png = dir.join("room.png");
+    let out = glowbrick(&[
+        "render",
+        "--scene",
+        "test-room",
+        "--width",
+        "96",
+        "--height",
+        "64",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(image::open(&png).unwrap().into_rgb8().dimensions(), (96, 64));
+}
