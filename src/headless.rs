@@ -2,8 +2,8 @@
 //! readback of the linear HDR result after the requested number of frames. Used by `glowbrick render` and tests.
 
 use crate::image_io::LinearImage;
+use crate::render::FramesRendered;
 use crate::render::camera::voxel_camera_bundle;
-use crate::render::{FramesRendered, VoxelRenderPlugin};
 use crate::settings::RenderSettings;
 use crate::world::{CameraView, VoxelWorld};
 use bevy::app::PluginsState;
@@ -76,7 +76,7 @@ pub fn render_headless(world: VoxelWorld, view: &CameraView, options: &HeadlessO
     )
     .insert_resource(world)
     .insert_resource(options.settings.clone())
-    .add_plugins(VoxelRenderPlugin);
+    .add_plugins(crate::GlowbrickCorePlugin);
 
     let mut image = Image::new_target_texture(w, h, TextureFormat::Rgba32Float, None);
     image.texture_descriptor.usage |= TextureUsages::COPY_SRC;

@@ -6,6 +6,16 @@
 pub mod game;
 pub mod headless;
 pub mod image_io;
+pub mod lights;
 pub mod render;
 pub mod settings;
 pub mod world;
+
+/// Everything a running world needs besides a window: the edit path, the light pool and the renderer.
+pub struct GlowbrickCorePlugin;
+
+impl bevy::app::Plugin for GlowbrickCorePlugin {
+    fn build(&self, app: &mut bevy::app::App) {
+        app.add_plugins((world::events::WorldEditPlugin, lights::plugin::LightsPlugin, render::VoxelRenderPlugin));
+    }
+}

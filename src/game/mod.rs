@@ -2,7 +2,6 @@
 
 pub mod fly_camera;
 
-use crate::render::VoxelRenderPlugin;
 use crate::render::camera::voxel_camera_bundle;
 use crate::settings::RenderSettings;
 use crate::world::format::save_world;
@@ -30,7 +29,7 @@ pub fn run_game(world: VoxelWorld, settings: RenderSettings, save_path: PathBuf)
         .insert_resource(world)
         .insert_resource(settings)
         .insert_resource(SavePath(save_path))
-        .add_plugins((VoxelRenderPlugin, fly_camera::FlyCameraPlugin))
+        .add_plugins((crate::GlowbrickCorePlugin, fly_camera::FlyCameraPlugin))
         .add_systems(Startup, move |mut commands: Commands| {
             commands.spawn((
                 voxel_camera_bundle(&view),

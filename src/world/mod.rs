@@ -1,6 +1,7 @@
 //! The voxel world: brick grid, palette, named camera views, edits, traversal, generation and files.
 
 pub mod edit;
+pub mod events;
 pub mod format;
 pub mod grid;
 pub mod palette;

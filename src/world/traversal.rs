@@ -25,7 +25,7 @@ impl Face {
 
     pub fn normal(self) -> IVec3 {
         let mut n = IVec3::ZERO;
-        n[self.axis()] = if self.0 % 2 == 0 { 1 } else { -1 };
+        n[self.axis()] = if self.0.is_multiple_of(2) { 1 } else { -1 };
         n
     }
 

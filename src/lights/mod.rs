@@ -1,0 +1,309 @@
+//! The light pool (seed 000 §4.2, DESIGN.md "Light pool"): what Voxel ReSTIR samples from.
+//!
+//! - One *voxel light* per emissive voxel with at least one air neighbour; one *brick light* (a cube of 8) per
+//!   homogeneous emissive brick that lies fully inside the world and touches air, replacing its 512 voxel
+//!   lights. Enclosed emitters are not lights.
+//! - Lights live in stable slots with generation counters: removing a light frees its slot and bumps the
+//!   generation, so a reference held by a reservoir is detected as stale (`LightPool::get`).
+//! - Edits update only the lights within one voxel of the edited region (`update_region`); `from_world` scans
+//!   everything and is for loading only.
+//! - Candidates are drawn from an alias table over emitted power (`alias`), rebuilt when the pool changed.
+
+pub mod alias;
+pub mod plugin;
+pub mod upload;
+
+pub use alias::{AliasEntry, AliasTable};
+
+use crate::world::grid::{BRICK_SIZE, BrickCell, Voxel};
+use crate::world::{AIR, VoxelWorld};
+use bevy::math::IVec3;
+use bevy::prelude::Resource;
+use std::collections::{BTreeSet, HashMap};
+
+/// What a light is made of: one voxel, or one whole brick (by brick coordinate).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum LightKey {
+    Voxel(IVec3),
+    Brick(IVec3),
+}
+
+/// One emitter: an axis-aligned cube of voxels with one material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    pub key: LightKey,
+    /// Lowest corner of the cube, in voxels.
+    pub min: IVec3,
+    /// Edge length in voxels: 1 or 8.
+    pub size: i32,
+    pub material: Voxel,
+    /// Emitted radiance (emission colour x strength).
+    pub radiance: [f32; 3],
+    /// Area of the cube's faces that touch air, in voxel faces.
+    pub exposed_area: f32,
+    /// Sampling weight: luminance(radiance) x exposed area.
+    pub power: f32,
+}
+
+/// A reference to a light that survives pool changes: stale once the slot's generation moved on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LightRef {
+    pub slot: u32,
+    pub generation: u32,
+}
+
+#[derive(Clone, Debug, Default)]
+struct Slot {
+    light: Option<Light>,
+    generation: u32,
+}
+
+/// All lights of a world, in stable slots.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct LightPool {
+    slots: Vec<Slot>,
+    free_slots: Vec<u32>,
+    by_key: HashMap<LightKey, u32>,
+    /// Slots added, removed or changed since the last `take_changed`.
+    changed: BTreeSet<u32>,
+    alias: AliasTable,
+    alias_stale: bool,
+}
+
+/// Rec. 709 luminance of linear RGB.
+pub fn luminance(rgb: [f32; 3]) -> f32 {
+    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
+}
+
+const NEIGHBOURS: [IVec3; 6] = [IVec3::X, IVec3::NEG_X, IVec3::Y, IVec3::NEG_Y, IVec3::Z, IVec3::NEG_Z];
+
+/// The material of brick `b` when it is a brick-light candidate: homogeneous, emissive, and fully inside the world.
+fn brick_light_material(world: &VoxelWorld, b: IVec3) -> Option<Voxel> {
+    let BrickCell::Homogeneous(m) = world.grid.cell(b) else { return None };
+    let inside = ((b + IVec3::ONE) * BRICK_SIZE).cmple(world.grid.size().as_ivec3()).all();
+    (inside && world.palette.is_emissive(m)).then_some(m)
+}
+
+fn make_light(
+    world: &VoxelWorld,
+    key: LightKey,
+    min: IVec3,
+    size: i32,
+    material: Voxel,
+    exposed: u32,
+) -> Option<Light> {
+    if exposed == 0 {
+        return None;
+    }
+    let radiance = world.palette.get(material)?.radiance();
+    let exposed_area = exposed as f32;
+    Some(Light { key, min, size, material, radiance, exposed_area, power: luminance(radiance) * exposed_area })
+}
+
+/// The light voxel `p` should be, if any (never one inside a brick light).
+pub fn voxel_light_at(world: &VoxelWorld, p: IVec3) -> Option<Light> {
+    let material = world.grid.get(p);
+    if material == AIR || !world.palette.is_emissive(material) || brick_light_material(world, p >> 3_i32).is_some() {
+        return None;
+    }
+    let exposed = NEIGHBOURS.iter().filter(|&&n| world.grid.get(p + n) == AIR).count() as u32;
+    make_light(world, LightKey::Voxel(p), p, 1, material, exposed)
+}
+
+/// The light brick `b` should be, if any.
+pub fn brick_light_at(world: &VoxelWorld, b: IVec3) -> Option<Light> {
+    let material = brick_light_material(world, b)?;
+    let lo = b * BRICK_SIZE;
+    let mut exposed = 0;
+    for axis in 0..3 {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        for plane in [lo[axis] - 1, lo[axis] + BRICK_SIZE] {
+            for i in 0..BRICK_SIZE {
+                for j in 0..BRICK_SIZE {
+                    let mut p = lo;
+                    p[axis] = plane;
+                    p[u] += i;
+                    p[v] += j;
+                    exposed += (world.grid.get(p) == AIR) as u32;
+                }
+            }
+        }
+    }
+    make_light(world, LightKey::Brick(b), lo, BRICK_SIZE, material, exposed)
+}
+
+impl LightPool {
+    /// Scans the whole world (for loading; edits use `update_region`).
+    pub fn from_world(world: &VoxelWorld) -> Self {
+        let mut pool = LightPool::default();
+        let grid = &world.grid;
+        for (index, &raw) in grid.top_cells().iter().enumerate() {
+            if let BrickCell::Homogeneous(_) = BrickCell::decode(raw)
+                && let Some(light) = brick_light_at(world, grid.brick_coord(index as u32))
+            {
+                pool.set(light.key, Some(light));
+            }
+        }
+        grid.for_each_solid(|p, m| {
+            if world.palette.is_emissive(m)
+                && let Some(light) = voxel_light_at(world, p)
+            {
+                pool.set(light.key, Some(light));
+            }
+        });
+        pool
+    }
+
+    /// Brings the lights within one voxel of the edited box `[min, max]` (inclusive) up to date: voxel lights
+    /// there, the brick-light status of every brick the grown box touches, and all voxels of a brick whose
+    /// brick-light status flipped (its 512 voxels stop or start being voxel lights). Cost follows the box, not
+    /// the world.
+    pub fn update_region(&mut self, world: &VoxelWorld, min: IVec3, max: IVec3) {
+        let size = world.grid.size().as_ivec3();
+        let lo = (min.min(max) - IVec3::ONE).max(IVec3::ZERO);
+        let hi = (min.max(max) + IVec3::ONE).min(size - IVec3::ONE);
+        if lo.cmpgt(hi).any() {
+            return;
+        }
+        let mut flipped = Vec::new();
+        for b in brick_range(lo, hi) {
+            let was = self.by_key.contains_key(&LightKey::Brick(b));
+            let light = brick_light_at(world, b);
+            if was != light.is_some() {
+                flipped.push(b);
+            }
+            self.set(LightKey::Brick(b), light);
+        }
+        self.update_voxels(world, lo, hi);
+        for b in flipped {
+            let brick_lo = b * BRICK_SIZE;
+            let brick_hi = (brick_lo + IVec3::splat(BRICK_SIZE - 1)).min(size - IVec3::ONE);
+            self.update_voxels(world, brick_lo, brick_hi);
+        }
+    }
+
+    /// Re-evaluates the voxel lights of every voxel in `[lo, hi]` (inclusive, inside the world).
+    fn update_voxels(&mut self, world: &VoxelWorld, lo: IVec3, hi: IVec3) {
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    let p = IVec3::new(x, y, z);
+                    let light = voxel_light_at(world, p);
+                    // Skip the hash lookup for the common case: no light wanted and none there.
+                    if light.is_some() || self.by_key.contains_key(&LightKey::Voxel(p)) {
+                        self.set(LightKey::Voxel(p), light);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Adds, updates in place, or removes (bumping the generation) the light of `key`.
+    fn set(&mut self, key: LightKey, light: Option<Light>) {
+        match (self.by_key.get(&key).copied(), light) {
+            (None, None) => {}
+            (Some(slot), None) => {
+                let s = &mut self.slots[slot as usize];
+                s.light = None;
+                s.generation = s.generation.wrapping_add(1);
+                self.free_slots.push(slot);
+                self.by_key.remove(&key);
+                self.mark(slot);
+            }
+            (Some(slot), Some(light)) => {
+                if self.slots[slot as usize].light != Some(light) {
+                    self.slots[slot as usize].light = Some(light);
+                    self.mark(slot);
+                }
+            }
+            (None, Some(light)) => {
+                let slot = self.free_slots.pop().unwrap_or_else(|| {
+                    self.slots.push(Slot::default());
+                    self.slots.len() as u32 - 1
+                });
+                self.slots[slot as usize].light = Some(light);
+                self.by_key.insert(key, slot);
+                self.mark(slot);
+            }
+        }
+    }
+
+    fn mark(&mut self, slot: u32) {
+        self.changed.insert(slot);
+        self.alias_stale = true;
+    }
+
+    /// Number of live lights.
+    pub fn len(&self) -> usize {
+        self.by_key.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.by_key.is_empty()
+    }
+
+    /// Number of slots (live or free); GPU buffers hold this many.
+    pub fn slot_count(&self) -> u32 {
+        self.slots.len() as u32
+    }
+
+    /// The light in `slot` and the slot's generation.
+    pub fn slot(&self, slot: u32) -> Option<(Option<&Light>, u32)> {
+        self.slots.get(slot as usize).map(|s| (s.light.as_ref(), s.generation))
+    }
+
+    /// The light a reference points to, or `None` when it was removed (even if the slot was reused since).
+    pub fn get(&self, r: LightRef) -> Option<&Light> {
+        let s = self.slots.get(r.slot as usize)?;
+        if s.generation == r.generation { s.light.as_ref() } else { None }
+    }
+
+    /// A reference to the light of `key`, if it exists.
+    pub fn find(&self, key: LightKey) -> Option<LightRef> {
+        let slot = *self.by_key.get(&key)?;
+        Some(LightRef { slot, generation: self.slots[slot as usize].generation })
+    }
+
+    /// Live lights with their slots, in slot order.
+    pub fn lights(&self) -> impl Iterator<Item = (u32, &Light)> {
+        self.slots.iter().enumerate().filter_map(|(i, s)| s.light.as_ref().map(|l| (i as u32, l)))
+    }
+
+    /// Counts of (voxel lights, brick lights).
+    pub fn counts(&self) -> (usize, usize) {
+        let bricks = self.by_key.keys().filter(|k| matches!(k, LightKey::Brick(_))).count();
+        (self.len() - bricks, bricks)
+    }
+
+    /// Slots changed since the last call, ascending; clears the set.
+    pub fn take_changed(&mut self) -> Vec<u32> {
+        std::mem::take(&mut self.changed).into_iter().collect()
+    }
+
+    /// The power alias table over the live lights, rebuilt first if the pool changed since it was built.
+    pub fn alias(&mut self) -> &AliasTable {
+        if self.alias_stale {
+            self.rebuild_alias();
+        }
+        &self.alias
+    }
+
+    /// Whether the alias table is out of date (it is rebuilt by `alias`).
+    pub fn alias_is_stale(&self) -> bool {
+        self.alias_stale
+    }
+
+    /// Rebuilds the alias table, in time linear in the number of lights.
+    pub fn rebuild_alias(&mut self) {
+        let lights: Vec<(u32, f32)> = self.lights().map(|(slot, l)| (slot, l.power)).collect();
+        self.alias = AliasTable::build(&lights);
+        self.alias_stale = false;
+    }
+}
+
+/// Brick coordinates overlapping the voxel box `[lo, hi]` (inclusive).
+fn brick_range(lo: IVec3, hi: IVec3) -> impl Iterator<Item = IVec3> {
+    let (blo, bhi) = (lo >> 3_i32, hi >> 3_i32);
+    (blo.z..=bhi.z)
+        .flat_map(move |z| (blo.y..=bhi.y).flat_map(move |y| (blo.x..=bhi.x).map(move |x| IVec3::new(x, y, z))))
+}

@@ -1,0 +1,204 @@
+//! The light pool follows the world exactly and incrementally; stale references are detected; the alias table
+//! samples in proportion to power.
+
+use bevy::math::{IVec3, UVec3};
+use glowbrick::lights::{AliasTable, LightKey, LightPool};
+use glowbrick::world::{Edit, Material, Palette, VoxelWorld};
+use proptest::prelude::*;
+use std::collections::BTreeSet;
+
+const STONE: u16 = 1;
+const WARM: u16 = 2;
+const BLUE: u16 = 3;
+
+fn palette() -> Palette {
+    Palette::new(vec![
+        Material::solid("stone", [0.5; 3]),
+        Material::emissive("warm", [0.9; 3], [1.0, 0.7, 0.4], 5.0),
+        Material::emissive("blue", [0.5; 3], [0.2, 0.4, 1.0], 0.5),
+    ])
+}
+
+/// The pool as a comparable set: (key, min, size, material, exposed area).
+fn as_set(pool: &LightPool) -> BTreeSet<(bool, [i32; 3], i32, u16, u32)> {
+    pool.lights()
+        .map(|(_, l)| {
+            (matches!(l.key, LightKey::Brick(_)), l.min.to_array(), l.size, l.material, l.exposed_area as u32)
+        })
+        .collect()
+}
+
+/// Applies an edit and updates the pool incrementally, as the game's edit path does.
+fn edit(world: &mut VoxelWorld, pool: &mut LightPool, e: Edit) {
+    if world.apply(e).unwrap() > 0 {
+        let (min, max) = e.bounds();
+        pool.update_region(world, min, max);
+    }
+}
+
+fn edit_strategy() -> impl Strategy<Value = Edit> {
+    let pos = (0..24, 0..24, 0..24).prop_map(|(x, y, z)| IVec3::new(x, y, z));
+    let material = prop_oneof![Just(0u16), Just(STONE), Just(WARM), Just(BLUE)];
+    prop_oneof![
+        4 => (pos.clone(), material.clone()).prop_map(|(at, m)| if m == 0 { Edit::Break { at } } else { Edit::Place { at, material: m } }),
+        1 => (pos.clone(), (0..5, 0..5, 0..5), material.clone()).prop_map(|(min, e, m)| {
+            Edit::FillBox { min, max: (min + IVec3::new(e.0, e.1, e.2)).min(IVec3::splat(23)), material: m }
+        }),
+        // Whole aligned bricks make and unmake brick lights.
+        1 => ((0..3, 0..3, 0..3), material).prop_map(|(b, m)| {
+            let min = IVec3::new(b.0, b.1, b.2) * 8;
+            Edit::FillBox { min, max: min + IVec3::splat(7), material: m }
+        }),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(150))]
+
+    #[test]
+    fn incremental_pool_equals_full_rescan(edits in prop::collection::vec(edit_strategy(), 1..50)) {
+        let mut world = VoxelWorld::new(UVec3::splat(24), palette());
+        let mut pool = LightPool::from_world(&world);
+        for e in edits {
+            edit(&mut world, &mut pool, e);
+        }
+        let rescan = LightPool::from_world(&world);
+        prop_assert_eq!(as_set(&pool), as_set(&rescan));
+        prop_assert_eq!(pool.counts(), rescan.counts());
+    }
+}
+
+#[test]
+fn reused_slot_gets_a_new_generation_and_old_refs_go_stale() {
+    let mut world = VoxelWorld::new(UVec3::splat(16), palette());
+    let mut pool = LightPool::from_world(&world);
+    edit(&mut world, &mut pool, Edit::Place { at: IVec3::new(2, 2, 2), material: WARM });
+    let old = pool.find(LightKey::Voxel(IVec3::new(2, 2, 2))).unwrap();
+    assert_eq!(pool.get(old).unwrap().material, WARM);
+    edit(&mut world, &mut pool, Edit::Break { at: IVec3::new(2, 2, 2) });
+    assert!(pool.get(old).is_none(), "a removed light is stale");
+    edit(&mut world, &mut pool, Edit::Place { at: IVec3::new(9, 9, 9), material: BLUE });
+    let new = pool.find(LightKey::Voxel(IVec3::new(9, 9, 9))).unwrap();
+    assert_eq!(new.slot, old.slot, "the freed slot is reused");
+    assert_ne!(new.generation, old.generation);
+    assert!(pool.get(old).is_none(), "the old reference does not see the new light in its slot");
+    assert_eq!(pool.get(new).unwrap().material, BLUE);
+    // Recolouring updates in place: same slot, same generation, new material.
+    edit(&mut world, &mut pool, Edit::Place { at: IVec3::new(9, 9, 9), material: WARM });
+    assert_eq!(pool.find(LightKey::Voxel(IVec3::new(9, 9, 9))), Some(new));
+    assert_eq!(pool.get(new).unwrap().material, WARM);
+}
+
+#[test]
+fn aligned_emissive_brick_is_one_light_until_broken() {
+    let mut world = VoxelWorld::new(UVec3::splat(32), palette());
+    let mut pool = LightPool::from_world(&world);
+    edit(&mut world, &mut pool, Edit::FillBox { min: IVec3::splat(8), max: IVec3::splat(15), material: WARM });
+    assert_eq!(pool.counts(), (0, 1));
+    let brick = pool.lights().next().unwrap().1;
+    assert_eq!((brick.key, brick.min, brick.size), (LightKey::Brick(IVec3::ONE), IVec3::splat(8), 8));
+    assert_eq!(brick.exposed_area, 6.0 * 64.0);
+    // Breaking the top-centre voxel: 296 surface voxels minus the broken one plus the interior one under it.
+    edit(&mut world, &mut pool, Edit::Break { at: IVec3::new(11, 15, 11) });
+    assert_eq!(pool.counts(), (296, 0));
+    assert_eq!(as_set(&pool), as_set(&LightPool::from_world(&world)));
+    // Restoring it brings the single brick light back.
+    edit(&mut world, &mut pool, Edit::Place { at: IVec3::new(11, 15, 11), material: WARM });
+    assert_eq!(pool.counts(), (0, 1));
+    // A brick light buried in stone is no light at all.
+    edit(&mut world, &mut pool, Edit::FillBox { min: IVec3::splat(0), max: IVec3::splat(23), material: STONE });
+    edit(&mut world, &mut pool, Edit::FillBox { min: IVec3::splat(8), max: IVec3::splat(15), material: WARM });
+    assert_eq!(pool.counts(), (0, 0));
+}
+
+/// Deterministic uniform numbers in [0, 1) (SplitMix64).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// Chi-square critical value at p = 0.001 (Wilson-Hilferty; exact 10.83 for one degree of freedom).
+fn chi_square_critical(df: usize) -> f64 {
+    if df == 1 {
+        return 10.828;
+    }
+    let k = df as f64;
+    let z = 3.0902;
+    k * (1.0 - 2.0 / (9.0 * k) + z * (2.0 / (9.0 * k)).sqrt()).powi(3)
+}
+
+/// Draws 10^6 samples and tests the counts against the power distribution, pooling small expected counts.
+fn check_alias(powers: &[f32]) {
+    let lights: Vec<(u32, f32)> = powers.iter().enumerate().map(|(i, &p)| (i as u32 * 3 + 1, p)).collect();
+    let table = AliasTable::build(&lights);
+    let total: f64 = powers.iter().map(|&p| p as f64).sum();
+    let draws = 1_000_000u32;
+    let mut counts = vec![0u64; powers.len()];
+    let mut rng = Rng(powers.len() as u64);
+    for _ in 0..draws {
+        let (slot, pdf) = table.sample(rng.next(), rng.next()).unwrap();
+        let index = ((slot - 1) / 3) as usize;
+        assert!((pdf as f64 - powers[index] as f64 / total).abs() <= 1e-6 * (pdf as f64).max(1e-30) + 1e-12);
+        counts[index] += 1;
+    }
+    // Pool bins in order of expected count until each group expects at least 20 draws.
+    let mut order: Vec<usize> = (0..powers.len()).collect();
+    order.sort_by(|&a, &b| powers[a].total_cmp(&powers[b]));
+    let (mut chi2, mut groups) = (0.0, 0usize);
+    let (mut expected, mut observed) = (0.0f64, 0u64);
+    for (k, &i) in order.iter().enumerate() {
+        expected += draws as f64 * powers[i] as f64 / total;
+        observed += counts[i];
+        if expected >= 20.0 || k + 1 == order.len() {
+            chi2 += (observed as f64 - expected).powi(2) / expected.max(1e-12);
+            groups += 1;
+            expected = 0.0;
+            observed = 0;
+        }
+    }
+    if groups <= 1 {
+        assert_eq!(counts.iter().sum::<u64>(), draws as u64);
+        return;
+    }
+    let critical = chi_square_critical(groups - 1);
+    assert!(chi2 < critical, "{} lights: chi2 {chi2:.1} >= {critical:.1} with {groups} groups", powers.len());
+}
+
+#[test]
+fn alias_table_samples_in_proportion_to_power() {
+    check_alias(&[3.0]);
+    check_alias(&[1.0, 1.0e6]);
+    check_alias(&[2.0, 5.0]);
+    let mut rng = Rng(7);
+    // Powers spread log-uniformly over six decades.
+    let spread = |n: usize, rng: &mut Rng| (0..n).map(|_| 10f32.powf(rng.next() * 6.0)).collect::<Vec<_>>();
+    check_alias(&spread(1000, &mut rng));
+    check_alias(&spread(100_000, &mut rng));
+}
+
+#[test]
+fn alias_table_falls_back_to_uniform() {
+    let table = AliasTable::build(&[(4, 0.0), (9, f32::NAN), (11, 0.0)]);
+    assert!(table.uniform);
+    let p = table.column_probabilities();
+    assert!(p.iter().all(|&x| (x - 1.0 / 3.0).abs() < 1e-6), "{p:?}");
+    assert_eq!(table.sample(0.5, 0.99).map(|s| s.1), Some(1.0 / 3.0));
+    assert!(AliasTable::build(&[]).sample(0.5, 0.5).is_none());
+}
+
+#[test]
+fn cornell_has_256_brick_lights() {
+    let cornell = glowbrick::world::scene::load_scene("cornell").unwrap();
+    let pool = LightPool::from_world(&cornell);
+    assert_eq!(pool.counts(), (0, 256));
+    // Each brick light shows its bottom face (64 voxel faces) to the room; the front row also its open front.
+    let front = pool.lights().filter(|(_, l)| l.exposed_area == 128.0).count();
+    let inner = pool.lights().filter(|(_, l)| l.exposed_area == 64.0).count();
+    assert_eq!((front, inner), (16, 240));
+}
