@@ -50,77 +50,129 @@ impl Default for HeadlessOptions {
 pub const MAX_IMAGE_EDGE: u32 = 8192;
 
 /// Pixels read back from the GPU, shared with the observer that receives them.
-#[derive(Resource, Clone, Default)]
+#[derive(Clone, Default)]
 struct Captured(Arc<Mutex<Option<Vec<u8>>>>);
 
-#[derive(Resource)]
-struct CaptureTarget(Handle<Image>);
+/// A windowless app rendering one voxel camera into an image: step it, edit its world, read frames back.
+pub struct HeadlessRenderer {
+    app: App,
+    target: Handle<Image>,
+    captured: Captured,
+    frames: FramesRendered,
+    width: u32,
+    height: u32,
+    timeout: Duration,
+}
+
+impl HeadlessRenderer {
+    /// Builds the app around `world` with a camera at `view`. Panics inside Bevy when no GPU adapter exists
+    /// (callers that must report it catch the unwind).
+    pub fn new(world: VoxelWorld, view: &CameraView, options: &HeadlessOptions) -> Result<Self, String> {
+        let (w, h) = (options.width, options.height);
+        if w == 0 || h == 0 || w > MAX_IMAGE_EDGE || h > MAX_IMAGE_EDGE {
+            return Err(format!("image size {w}x{h} must be within 1..={MAX_IMAGE_EDGE} on each side"));
+        }
+        let mut app = App::new();
+        app.add_plugins(
+            DefaultPlugins
+                .set(WindowPlugin { primary_window: None, exit_condition: ExitCondition::DontExit, ..default() })
+                .set(RenderPlugin { synchronous_pipeline_compilation: true, ..default() })
+                .set(LogPlugin { level: bevy::log::Level::WARN, filter: "wgpu=error,naga=warn".into(), ..default() })
+                .disable::<WinitPlugin>()
+                .disable::<PipelinedRenderingPlugin>(),
+        )
+        .insert_resource(world)
+        .insert_resource(options.settings.clone())
+        .add_plugins(crate::GlowbrickCorePlugin);
+
+        let mut image = Image::new_target_texture(w, h, TextureFormat::Rgba32Float, None);
+        image.texture_descriptor.usage |= TextureUsages::COPY_SRC;
+        let target = app.world_mut().resource_mut::<Assets<Image>>().add(image);
+        app.world_mut().spawn((
+            voxel_camera_bundle(view),
+            Tonemapping::None,
+            RenderTarget::Image(target.clone().into()),
+        ));
+        while app.plugins_state() == PluginsState::Adding {
+            bevy::tasks::tick_global_task_pools_on_main_thread();
+        }
+        app.finish();
+        app.cleanup();
+        let frames = app.world().resource::<FramesRendered>().clone();
+        Ok(HeadlessRenderer {
+            app,
+            target,
+            captured: Captured::default(),
+            frames,
+            width: w,
+            height: h,
+            timeout: options.timeout,
+        })
+    }
+
+    /// The app, to send edit messages or read resources of either world.
+    pub fn app_mut(&mut self) -> &mut App {
+        &mut self.app
+    }
+
+    /// Frames the primary pass has dispatched so far.
+    pub fn frames_rendered(&self) -> u32 {
+        self.frames.0.load(Ordering::Relaxed)
+    }
+
+    /// Runs one frame and waits for the GPU (one frame in flight: on software Vulkan, queued frames would
+    /// otherwise pile up).
+    pub fn step(&mut self) {
+        self.app.update();
+        if let Some(device) = self.app.world().get_resource::<RenderDevice>() {
+            let _ = device.wgpu_device().poll(PollType::Wait { submission_index: None, timeout: None });
+        }
+    }
+
+    /// Renders `frames` more frames and returns the last one's linear HDR image.
+    pub fn render(&mut self, frames: u32) -> Result<LinearImage, String> {
+        if frames == 0 || frames > 100_000 {
+            return Err(format!("frames = {frames} must be within 1..=100000"));
+        }
+        let goal = self.frames_rendered() + frames;
+        let start = Instant::now();
+        let mut readback: Option<Entity> = None;
+        loop {
+            self.step();
+            if let Some(bytes) = self.captured.0.lock().map_err(|_| "readback lock poisoned")?.take() {
+                if let Some(entity) = readback {
+                    self.app.world_mut().despawn(entity);
+                }
+                return decode_rgba32f(&bytes, self.width, self.height);
+            }
+            if readback.is_none() && self.frames_rendered() >= goal {
+                let sink = self.captured.clone();
+                let entity = self
+                    .app
+                    .world_mut()
+                    .spawn(Readback::texture(self.target.clone()))
+                    .observe(move |event: On<ReadbackComplete>| {
+                        if let Ok(mut slot) = sink.0.lock() {
+                            slot.get_or_insert_with(|| event.data.clone());
+                        }
+                    })
+                    .id();
+                readback = Some(entity);
+            }
+            if start.elapsed() > self.timeout {
+                return Err(format!(
+                    "timed out after {:?}: {} of {goal} frames rendered (is a GPU adapter available?)",
+                    self.timeout,
+                    self.frames_rendered()
+                ));
+            }
+        }
+    }
+}
 
 /// Renders `world` from `view` without a window and returns the linear HDR image (before tonemapping).
 pub fn render_headless(world: VoxelWorld, view: &CameraView, options: &HeadlessOptions) -> Result<LinearImage, String> {
-    let (w, h) = (options.width, options.height);
-    if w == 0 || h == 0 || w > MAX_IMAGE_EDGE || h > MAX_IMAGE_EDGE {
-        return Err(format!("image size {w}x{h} must be within 1..={MAX_IMAGE_EDGE} on each side"));
-    }
-    if options.frames == 0 || options.frames > 100_000 {
-        return Err(format!("frames = {} must be within 1..=100000", options.frames));
-    }
-    let mut app = App::new();
-    app.add_plugins(
-        DefaultPlugins
-            .set(WindowPlugin { primary_window: None, exit_condition: ExitCondition::DontExit, ..default() })
-            .set(RenderPlugin { synchronous_pipeline_compilation: true, ..default() })
-            .set(LogPlugin { level: bevy::log::Level::WARN, filter: "wgpu=error,naga=warn".into(), ..default() })
-            .disable::<WinitPlugin>()
-            .disable::<PipelinedRenderingPlugin>(),
-    )
-    .insert_resource(world)
-    .insert_resource(options.settings.clone())
-    .add_plugins(crate::GlowbrickCorePlugin);
-
-    let mut image = Image::new_target_texture(w, h, TextureFormat::Rgba32Float, None);
-    image.texture_descriptor.usage |= TextureUsages::COPY_SRC;
-    let target = app.world_mut().resource_mut::<Assets<Image>>().add(image);
-    app.world_mut().spawn((voxel_camera_bundle(view), Tonemapping::None, RenderTarget::Image(target.clone().into())));
-    let captured = Captured::default();
-    app.insert_resource(captured.clone()).insert_resource(CaptureTarget(target));
-    while app.plugins_state() == PluginsState::Adding {
-        bevy::tasks::tick_global_task_pools_on_main_thread();
-    }
-    app.finish();
-    app.cleanup();
-
-    let frames = app.world().resource::<FramesRendered>().clone();
-    let start = Instant::now();
-    let mut readback_spawned = false;
-    loop {
-        app.update();
-        // One frame in flight at a time: on software Vulkan, queued frames would otherwise pile up.
-        if let Some(device) = app.world().get_resource::<RenderDevice>() {
-            let _ = device.wgpu_device().poll(PollType::Wait { submission_index: None, timeout: None });
-        }
-        if let Some(bytes) = captured.0.lock().map_err(|_| "readback lock poisoned")?.take() {
-            return decode_rgba32f(&bytes, w, h);
-        }
-        if !readback_spawned && frames.0.load(Ordering::Relaxed) >= options.frames {
-            let handle = app.world().resource::<CaptureTarget>().0.clone();
-            let sink = captured.clone();
-            app.world_mut().spawn(Readback::texture(handle)).observe(move |event: On<ReadbackComplete>| {
-                if let Ok(mut slot) = sink.0.lock() {
-                    slot.get_or_insert_with(|| event.data.clone());
-                }
-            });
-            readback_spawned = true;
-        }
-        if start.elapsed() > options.timeout {
-            return Err(format!(
-                "timed out after {:?}: {} of {} frames rendered (is a GPU adapter available?)",
-                options.timeout,
-                frames.0.load(Ordering::Relaxed),
-                options.frames
-            ));
-        }
-    }
+    HeadlessRenderer::new(world, view, options)?.render(options.frames)
 }
 
 /// Strips any 256-byte row padding of a texture readback and decodes little-endian f32 RGBA.

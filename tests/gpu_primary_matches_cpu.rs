@@ -5,69 +5,21 @@
 //! about a ray through a voxel edge or corner (the hit voxels are neighbours) or grazing a silhouette.
 //! With `GLOWBRICK_REQUIRE_GPU=1` a missing adapter fails the test; otherwise it is skipped with a message.
 
-use bevy::math::{IVec3, UVec2, UVec3};
-use glowbrick::headless::{HeadlessOptions, render_headless};
+mod common;
+
+use bevy::math::{UVec2, UVec3};
+use common::compare_hits;
+use glowbrick::headless::HeadlessOptions;
 use glowbrick::image_io::LinearImage;
 use glowbrick::render::camera::{camera_ray, view_transform, world_from_clip};
 use glowbrick::settings::RenderSettings;
 use glowbrick::world::scene::{generated_world, load_scene};
 use glowbrick::world::{CameraView, VoxelWorld, trace};
 
-fn require_gpu() -> bool {
-    std::env::var("GLOWBRICK_REQUIRE_GPU").is_ok_and(|v| v == "1")
-}
-
 /// Renders, or returns None when no adapter exists and the GPU is not required.
 fn render(world: VoxelWorld, view: &CameraView, settings: RenderSettings, w: u32, h: u32) -> Option<LinearImage> {
     let options = HeadlessOptions { width: w, height: h, frames: 2, settings, ..Default::default() };
-    match std::panic::catch_unwind(|| render_headless(world, view, &options)) {
-        Ok(result) => Some(result.expect("headless render")),
-        Err(_) if !require_gpu() => {
-            eprintln!("skipping GPU test: no adapter (set GLOWBRICK_REQUIRE_GPU=1 to make this a failure)");
-            None
-        }
-        Err(panic) => std::panic::resume_unwind(panic),
-    }
-}
-
-struct Comparison {
-    pixels: usize,
-    hits: usize,
-    mismatches: usize,
-}
-
-fn compare(world: &VoxelWorld, view: &CameraView, gpu: &LinearImage) -> Comparison {
-    let (w, h) = (gpu.width, gpu.height);
-    let transform = view_transform(view);
-    let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
-    let mut c = Comparison { pixels: (w * h) as usize, hits: 0, mismatches: 0 };
-    for y in 0..h {
-        for x in 0..w {
-            let ray = camera_ray(m, transform.translation, UVec2::new(x, y), w, h);
-            let cpu = trace(&world.grid, &ray, f32::INFINITY);
-            let p = gpu.pixel(x, y);
-            let gpu_hit = (p[3] > 0.0).then(|| (IVec3::new(p[0] as i32, p[1] as i32, p[2] as i32), p[3] as u8 - 1));
-            match (cpu, gpu_hit) {
-                (None, None) => {}
-                (Some(cpu), Some((voxel, face))) => {
-                    c.hits += 1;
-                    if cpu.voxel != voxel || cpu.face.0 != face {
-                        c.mismatches += 1;
-                        let apart = (cpu.voxel - voxel).abs().max_element();
-                        assert!(
-                            apart <= 1,
-                            "pixel ({x}, {y}): cpu {cpu:?}, gpu voxel {voxel} face {face}: not neighbours"
-                        );
-                    }
-                }
-                (cpu, gpu) => {
-                    c.mismatches += 1;
-                    eprintln!("pixel ({x}, {y}): cpu {cpu:?} gpu {gpu:?} (silhouette)");
-                }
-            }
-        }
-    }
-    c
+    Some(common::renderer(world, view, &options)?.render(options.frames).expect("render"))
 }
 
 #[test]
@@ -82,7 +34,7 @@ fn gpu_primary_rays_match_cpu_traversal() {
     ];
     for (name, world, view) in cases {
         let Some(gpu) = render(world.clone(), &view, hit_view.clone(), 96, 64) else { return };
-        let c = compare(&world, &view, &gpu);
+        let c = compare_hits(&world, &view, &gpu);
         eprintln!("{name}: {} pixels, {} hits, {} mismatches", c.pixels, c.hits, c.mismatches);
         assert!(c.hits * 3 > c.pixels, "{name}: the view should mostly hit voxels ({} of {})", c.hits, c.pixels);
         assert!(c.mismatches * 200 <= c.pixels, "{name}: {} of {} pixels differ", c.mismatches, c.pixels);

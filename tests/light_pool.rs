@@ -202,3 +202,39 @@ fn cornell_has_256_brick_lights() {
     let inner = pool.lights().filter(|(_, l)| l.exposed_area == 64.0).count();
     assert_eq!((front, inner), (16, 240));
 }
+
+/// Through the game's edit path: the first frame uploads every slot, later frames only the changed ones, and
+/// the alias table only when the pool changed.
+#[test]
+fn light_upload_sends_changed_slots_only() {
+    use bevy::prelude::*;
+    use glowbrick::lights::plugin::LightsPlugin;
+    use glowbrick::lights::upload::LightUpload;
+    use glowbrick::world::events::{EditRequest, WorldEditPlugin};
+
+    let mut world = VoxelWorld::new(UVec3::splat(16), palette());
+    world.apply(Edit::Place { at: IVec3::new(1, 1, 1), material: WARM }).unwrap();
+    world.apply(Edit::Place { at: IVec3::new(5, 1, 1), material: BLUE }).unwrap();
+    let mut app = App::new();
+    app.add_plugins((WorldEditPlugin, LightsPlugin)).insert_resource(world);
+    app.update();
+    let upload = app.world().resource::<LightUpload>().clone();
+    assert_eq!(upload.light_count, 2);
+    assert!(upload.full.is_some() && upload.alias.as_ref().is_some_and(|a| a.len() == 2));
+
+    app.update();
+    assert!(app.world().resource::<LightUpload>().is_empty(), "no change, nothing to send");
+
+    app.world_mut().write_message(EditRequest(Edit::Place { at: IVec3::new(9, 9, 9), material: WARM }));
+    app.update();
+    let upload = app.world().resource::<LightUpload>().clone();
+    assert!(upload.full.is_none());
+    assert_eq!(upload.slots.len(), 1);
+    assert_eq!(upload.slots[0].1.min, [9, 9, 9]);
+    assert_eq!((upload.light_count, upload.alias.map(|a| a.len())), (3, Some(3)));
+
+    // A stone placed far from every light changes no light and sends nothing.
+    app.world_mut().write_message(EditRequest(Edit::Place { at: IVec3::new(14, 14, 1), material: STONE }));
+    app.update();
+    assert!(app.world().resource::<LightUpload>().is_empty());
+}
