@@ -25,8 +25,8 @@ fn lattice_world(size: UVec3) -> VoxelWorld {
 }
 
 fn apply(world: &mut VoxelWorld, pool: &mut LightPool, edit: Edit) {
-    world.apply(edit).unwrap();
     let (min, max) = edit.bounds();
+    world.apply(edit).unwrap();
     pool.update_region(world, min, max);
 }
 

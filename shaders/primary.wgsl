@@ -16,6 +16,11 @@ struct FrameParams {
     shadows: u32,
     exposure: f32,
     frame: u32,
+    // Targeted voxel (xyz) and face + 1 (w; 0 = none).
+    highlight_target: vec4<i32>,
+    // Box selection, inclusive corners; selection_min.w is 1 when shown.
+    selection_min: vec4<i32>,
+    selection_max: vec4<i32>,
 }
 
 @group(1) @binding(0) var output: texture_storage_2d<rgba16float, write>;
@@ -40,6 +45,31 @@ fn primary_ray_dir(pixel: vec2<u32>, size: vec2<f32>) -> vec3<f32> {
 fn sky(dir: vec3<f32>) -> vec3<f32> {
     let up = clamp(dir.y * 0.5 + 0.5, 0.0, 1.0);
     return mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, up);
+}
+
+// Outlines the targeted voxel's edges, brightens its targeted face, and tints voxels in the box selection.
+fn highlight(colour: vec3<f32>, hit_voxel: vec3<i32>, face: u32, point: vec3<f32>, distance: f32) -> vec3<f32> {
+    var c = colour;
+    if frame.selection_min.w == 1 && all(hit_voxel >= frame.selection_min.xyz) && all(hit_voxel <= frame.selection_max.xyz) {
+        c = mix(c, vec3(0.25, 0.6, 1.0), 0.35);
+    }
+    if frame.highlight_target.w == 0 || any(hit_voxel != frame.highlight_target.xyz) {
+        return c;
+    }
+    // Position on the hit face in [0, 1]^2: the two axes other than the face's.
+    let local = point - vec3<f32>(hit_voxel);
+    let axis = face / 2u;
+    let uv = vec2(local[(axis + 1u) % 3u], local[(axis + 2u) % 3u]);
+    let edge = min(min(uv.x, 1.0 - uv.x), min(uv.y, 1.0 - uv.y));
+    // About two pixels wide at typical fields of view, whatever the distance.
+    let width = clamp(0.004 * distance, 0.02, 0.2);
+    if edge < width {
+        return vec3(0.02);
+    }
+    if u32(frame.highlight_target.w) == face + 1u {
+        c = c * 1.2 + vec3(0.04);
+    }
+    return c;
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -88,7 +118,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 }
                 // Sky light seen by the face: the sky colour in the normal's direction, a crude ambient term.
                 let lit = frame.sun_radiance.rgb * sun + sky(normal) * 0.3;
-                colour = vec4((material.albedo.rgb * lit + material.radiance.rgb) * frame.exposure, 1.0);
+                let shaded = (material.albedo.rgb * lit + material.radiance.rgb) * frame.exposure;
+                let point = origin + dir * hit.distance;
+                colour = vec4(highlight(shaded, hit.voxel, hit.face, point, hit.distance), 1.0);
             }
         }
     }

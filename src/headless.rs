@@ -11,11 +11,11 @@ use bevy::camera::RenderTarget;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::log::LogPlugin;
 use bevy::prelude::*;
-use bevy::render::RenderPlugin;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::{PollType, TextureFormat, TextureUsages};
 use bevy::render::renderer::RenderDevice;
+use bevy::render::{RenderApp, RenderPlugin};
 use bevy::window::ExitCondition;
 use bevy::winit::WinitPlugin;
 use std::sync::atomic::Ordering;
@@ -158,6 +158,9 @@ impl HeadlessRenderer {
                     })
                     .id();
                 readback = Some(entity);
+            }
+            if let Some(error) = crate::render::primary::pipeline_error(self.app.sub_app(RenderApp).world()) {
+                return Err(error);
             }
             if start.elapsed() > self.timeout {
                 return Err(format!(

@@ -43,9 +43,9 @@ struct PlayArgs {
     /// Size of the generated world in voxels, X,Y,Z.
     #[arg(long, default_value = "192,64,192", value_parser = parse_size)]
     size: UVec3,
-    /// Where F5 saves.
-    #[arg(long, default_value = "saves/world.ron")]
-    save: PathBuf,
+    /// Where F5 saves and F9 loads (default: saves/<name of --world>.ron, or saves/world.ron).
+    #[arg(long)]
+    save: Option<PathBuf>,
     #[command(flatten)]
     settings: SettingArgs,
 }
@@ -133,8 +133,12 @@ fn play(args: PlayArgs) -> Result<(), String> {
         Some(_) => return Err("--new generates a world; it cannot be combined with --world or --scene".into()),
         None => WorldSource::Generated { seed: args.seed, size: args.size },
     };
+    let save = args.save.unwrap_or_else(|| {
+        let name = args.world.world.as_ref().and_then(|p| p.file_stem()).map(|s| s.to_string_lossy().into_owned());
+        PathBuf::from("saves").join(format!("{}.ron", name.as_deref().unwrap_or("world")))
+    });
     let world = source.load().map_err(|e| e.to_string())?;
-    glowbrick::game::run_game(world, settings, args.save);
+    glowbrick::game::run_game(world, settings, save);
     Ok(())
 }
 

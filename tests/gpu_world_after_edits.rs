@@ -42,7 +42,7 @@ fn gpu_world_follows_edits() {
         Edit::Break { at: IVec3::new(4, 5, 10) },
     ];
     for edit in edits {
-        renderer.app_mut().world_mut().write_message(EditRequest(edit));
+        renderer.app_mut().world_mut().write_message(EditRequest::player(edit));
     }
     // The frame that applies the edits uploads only the five dirty bricks (x + 4 * (y + 2 * z) = 8, 9, 10, 12,
     // 13): their top cells and pooled voxels.
@@ -69,7 +69,7 @@ fn gpu_world_follows_edits() {
         }
     });
     for at in lamps {
-        renderer.app_mut().world_mut().write_message(EditRequest(Edit::Break { at }));
+        renderer.app_mut().world_mut().write_message(EditRequest::player(Edit::Break { at }));
     }
     renderer.render(1).unwrap();
     assert_eq!(gpu_light_state(renderer.app_mut()), (0, false));

@@ -30,8 +30,8 @@ fn as_set(pool: &LightPool) -> BTreeSet<(bool, [i32; 3], i32, u16, u32)> {
 
 /// Applies an edit and updates the pool incrementally, as the game's edit path does.
 fn edit(world: &mut VoxelWorld, pool: &mut LightPool, e: Edit) {
+    let (min, max) = e.bounds();
     if world.apply(e).unwrap() > 0 {
-        let (min, max) = e.bounds();
         pool.update_region(world, min, max);
     }
 }
@@ -225,7 +225,7 @@ fn light_upload_sends_changed_slots_only() {
     app.update();
     assert!(app.world().resource::<LightUpload>().is_empty(), "no change, nothing to send");
 
-    app.world_mut().write_message(EditRequest(Edit::Place { at: IVec3::new(9, 9, 9), material: WARM }));
+    app.world_mut().write_message(EditRequest::player(Edit::Place { at: IVec3::new(9, 9, 9), material: WARM }));
     app.update();
     let upload = app.world().resource::<LightUpload>().clone();
     assert!(upload.full.is_none());
@@ -234,7 +234,7 @@ fn light_upload_sends_changed_slots_only() {
     assert_eq!((upload.light_count, upload.alias.map(|a| a.len())), (3, Some(3)));
 
     // A stone placed far from every light changes no light and sends nothing.
-    app.world_mut().write_message(EditRequest(Edit::Place { at: IVec3::new(14, 14, 1), material: STONE }));
+    app.world_mut().write_message(EditRequest::player(Edit::Place { at: IVec3::new(14, 14, 1), material: STONE }));
     app.update();
     assert!(app.world().resource::<LightUpload>().is_empty());
 }

@@ -30,6 +30,8 @@ impl Dense {
 enum Op {
     Set(IVec3, Voxel),
     Fill(IVec3, IVec3, Voxel),
+    /// Writes seeded pseudo-random voxels into a box (the undo path).
+    Restore(IVec3, IVec3, u32),
 }
 
 const SIZE: IVec3 = IVec3::new(21, 17, 19); // not a multiple of 8: border bricks are partial
@@ -39,7 +41,10 @@ fn op_strategy() -> impl Strategy<Value = Op> {
     let mat = prop_oneof![Just(0u16), 1u16..4];
     prop_oneof![
         3 => (pos.clone(), mat.clone()).prop_map(|(p, m)| Op::Set(p, m)),
-        1 => (pos.clone(), pos, mat).prop_map(|(a, b, m)| Op::Fill(a.min(b), a.max(b), m)),
+        1 => (pos.clone(), pos.clone(), mat).prop_map(|(a, b, m)| Op::Fill(a.min(b), a.max(b), m)),
+        1 => (pos.clone(), (0..6, 0..6, 0..6), any::<u32>()).prop_map(|(a, e, seed)| {
+            Op::Restore(a, (a + IVec3::new(e.0, e.1, e.2)).min(SIZE - 1), seed)
+        }),
     ]
 }
 
@@ -60,12 +65,21 @@ proptest! {
         let mut dense = Dense::new(SIZE);
         for op in &ops {
             let before: Vec<Voxel> = dense.voxels.clone();
-            let (edit, lo, hi) = match *op {
-                Op::Set(p, m) => (if m == 0 { Edit::Break { at: p } } else { Edit::Place { at: p, material: m } }, p, p),
-                Op::Fill(a, b, m) => (Edit::FillBox { min: a, max: b, material: m }, a, b),
+            let (edit, lo, hi, voxels): (Edit, IVec3, IVec3, Vec<Voxel>) = match *op {
+                Op::Set(p, m) => (if m == 0 { Edit::Break { at: p } } else { Edit::Place { at: p, material: m } }, p, p, vec![m]),
+                Op::Fill(a, b, m) => {
+                    let n = ((b - a + 1).x * (b - a + 1).y * (b - a + 1).z) as usize;
+                    (Edit::FillBox { min: a, max: b, material: m }, a, b, vec![m; n])
+                }
+                Op::Restore(a, b, seed) => {
+                    let n = ((b - a + 1).x * (b - a + 1).y * (b - a + 1).z) as usize;
+                    // Runs of equal voxels, so some bricks end uniform and must collapse.
+                    let voxels: Vec<Voxel> = (0..n).map(|i| (glowbrick::world::terrain::hash_u32(seed ^ (i as u32 / 37)) % 4) as Voxel).collect();
+                    (Edit::Restore { min: a, max: b, voxels: voxels.clone().into() }, a, b, voxels)
+                }
             };
-            let material = match edit { Edit::Break { .. } => 0, Edit::Place { material, .. } | Edit::FillBox { material, .. } => material };
-            for z in lo.z..=hi.z { for y in lo.y..=hi.y { for x in lo.x..=hi.x { dense.set(IVec3::new(x, y, z), material); } } }
+            let mut i = 0;
+            for z in lo.z..=hi.z { for y in lo.y..=hi.y { for x in lo.x..=hi.x { dense.set(IVec3::new(x, y, z), voxels[i]); i += 1; } } }
             world.grid.take_dirty();
             let changed = world.apply(edit).unwrap();
             // The reported change count and the dirty set follow exactly the voxels that changed.

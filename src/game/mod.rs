@@ -1,20 +1,35 @@
-//! The playable game: a window, the voxel renderer, a fly camera, and saving with F5.
+//! The playable game: a window, the voxel renderer, the player, building, undo, save/load and the HUD.
+//!
+//! `GameLogicPlugin` holds everything that needs no window (so tests drive it headless through messages);
+//! `run_game` adds the window, input mapping and HUD on top.
 
-pub mod fly_camera;
+pub mod hud;
+pub mod interaction;
+pub mod player;
+pub mod save_load;
+pub mod undo;
 
 use crate::render::camera::voxel_camera_bundle;
 use crate::settings::RenderSettings;
-use crate::world::format::save_world;
-use crate::world::{CameraView, VoxelWorld};
+use crate::world::VoxelWorld;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
 use std::path::PathBuf;
 
-/// Where F5 saves the world.
-#[derive(Resource, Clone, Debug)]
-pub struct SavePath(pub PathBuf);
+/// Game rules without input devices or UI: targeting, actions to edits, undo/redo, save/load.
+pub struct GameLogicPlugin;
 
-/// Opens the game window on `world` and runs until the window closes.
+impl Plugin for GameLogicPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_resource::<hud::StatusLine>().add_plugins((
+            interaction::InteractionPlugin,
+            undo::UndoPlugin,
+            save_load::SaveLoadPlugin,
+        ));
+    }
+}
+
+/// Opens the game window on `world` and runs until the window closes. F5 and F9 use `save_path`.
 pub fn run_game(world: VoxelWorld, settings: RenderSettings, save_path: PathBuf) -> AppExit {
     let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
     App::new()
@@ -28,45 +43,19 @@ pub fn run_game(world: VoxelWorld, settings: RenderSettings, save_path: PathBuf)
         }))
         .insert_resource(world)
         .insert_resource(settings)
-        .insert_resource(SavePath(save_path))
-        .add_plugins((crate::GlowbrickCorePlugin, fly_camera::FlyCameraPlugin))
+        .insert_resource(save_load::SavePath(save_path))
+        .add_plugins((
+            crate::GlowbrickCorePlugin,
+            GameLogicPlugin,
+            player::PlayerPlugin,
+            interaction::InteractionInputPlugin,
+            hud::HudPlugin,
+        ))
         .add_systems(Startup, move |mut commands: Commands| {
-            commands.spawn((
-                voxel_camera_bundle(&view),
-                Tonemapping::AcesFitted,
-                fly_camera::FlyCamera::looking(&view),
-            ));
+            commands.spawn((voxel_camera_bundle(&view), Tonemapping::AcesFitted, player::Player::looking(&view)));
         })
-        .add_systems(Update, (save_on_f5, toggle_debug_view))
+        .add_systems(Update, (undo::history_keys, save_load::save_load_keys, toggle_debug_view))
         .run()
-}
-
-/// F5 saves the world, with the player's camera as its first view ("player") so reopening starts there.
-fn save_on_f5(
-    keys: Res<ButtonInput<KeyCode>>,
-    mut world: ResMut<VoxelWorld>,
-    path: Res<SavePath>,
-    camera: Single<(&Transform, &Projection), With<fly_camera::FlyCamera>>,
-) {
-    if keys.just_pressed(KeyCode::F5) {
-        let (transform, projection) = *camera;
-        let fov = match projection {
-            Projection::Perspective(p) => p.fov.to_degrees(),
-            _ => 60.0,
-        };
-        let player = CameraView {
-            name: "player".into(),
-            origin: transform.translation.into(),
-            direction: transform.forward().as_vec3().into(),
-            fov_deg: fov,
-        };
-        world.views.retain(|v| v.name != "player");
-        world.views.insert(0, player);
-        match save_world(&world, &path.0) {
-            Ok(()) => info!("saved {}", path.0.display()),
-            Err(e) => error!("could not save {}: {e}", path.0.display()),
-        }
-    }
 }
 
 /// F3 cycles the debug views (lit, albedo, normal, depth).

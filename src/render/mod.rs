@@ -20,7 +20,7 @@ use bevy::core_pipeline::core_3d::main_transparent_pass_3d;
 use bevy::core_pipeline::{Core3d, Core3dSystems};
 use bevy::prelude::*;
 use bevy::render::extract_component::ExtractComponentPlugin;
-use bevy::render::extract_resource::ExtractResourcePlugin;
+use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
 use bevy::render::{ExtractSchedule, Render, RenderApp, RenderStartup, RenderSystems};
 use bevy::shader::{Shader, ShaderDefVal};
 use std::sync::Arc;
@@ -32,6 +32,14 @@ pub struct GlowbrickShaders {
     pub world: Handle<Shader>,
     pub traversal: Handle<Shader>,
     pub primary: Handle<Shader>,
+}
+
+/// What the primary pass outlines: the player's target voxel and face, and a pending box selection
+/// (inclusive corners). Written by the game, read by the renderer.
+#[derive(Resource, ExtractResource, Clone, Copy, Debug, Default, PartialEq)]
+pub struct Highlight {
+    pub target: Option<(IVec3, u8)>,
+    pub selection: Option<(IVec3, IVec3)>,
 }
 
 /// Frames the primary pass has dispatched, shared by both worlds (headless capture waits on it).
@@ -63,11 +71,13 @@ impl Plugin for VoxelRenderPlugin {
         app.insert_resource(handles.clone())
             .insert_resource(frames.clone())
             .init_resource::<RenderSettings>()
+            .init_resource::<Highlight>()
             .init_resource::<upload::UploadState>()
             .init_resource::<upload::WorldUpload>()
             .add_plugins((
                 ExtractComponentPlugin::<VoxelCamera>::default(),
                 ExtractResourcePlugin::<RenderSettings>::default(),
+                ExtractResourcePlugin::<Highlight>::default(),
             ))
             .add_systems(PostUpdate, upload::stage_world_upload.run_if(resource_exists::<crate::world::VoxelWorld>));
 

@@ -2,7 +2,7 @@
 //! Runs in Bevy's `Core3d` schedule after the (empty) main passes and before tonemapping.
 
 use super::gpu_world::{GpuWorld, WorldLayout};
-use super::{FramesRendered, GlowbrickShaders, VoxelCamera, shader_defs};
+use super::{FramesRendered, GlowbrickShaders, Highlight, VoxelCamera, shader_defs};
 use crate::settings::RenderSettings;
 use bevy::prelude::*;
 use bevy::render::render_resource::binding_types::{texture_storage_2d, uniform_buffer, uniform_buffer_sized};
@@ -24,10 +24,15 @@ pub struct FrameParams {
     pub shadows: u32,
     pub exposure: f32,
     pub frame: u32,
+    /// Targeted voxel (xyz) and face + 1 (w; 0 = none).
+    pub target: [i32; 4],
+    /// Box selection corners, inclusive; `selection_min.w` is 1 when a selection is shown.
+    pub selection_min: [i32; 4],
+    pub selection_max: [i32; 4],
 }
 
 impl FrameParams {
-    pub fn from_settings(settings: &RenderSettings, frame: u32) -> Self {
+    pub fn new(settings: &RenderSettings, highlight: &Highlight, frame: u32) -> Self {
         let sun = Vec3::new(0.45, 0.8, 0.3).normalize();
         FrameParams {
             sun: [sun.x, sun.y, sun.z, if settings.sun { 1.0 } else { 0.0 }],
@@ -38,6 +43,9 @@ impl FrameParams {
             shadows: settings.shadows as u32,
             exposure: settings.exposure,
             frame,
+            target: highlight.target.map_or([0; 4], |(v, face)| [v.x, v.y, v.z, face as i32 + 1]),
+            selection_min: highlight.selection.map_or([0; 4], |(a, _)| [a.x, a.y, a.z, 1]),
+            selection_max: highlight.selection.map_or([0; 4], |(_, b)| [b.x, b.y, b.z, 1]),
         }
     }
 }
@@ -85,16 +93,29 @@ pub fn init_primary_pipeline(
     commands.insert_resource(PrimaryPipeline { view_layout, pipeline, frame_params });
 }
 
+/// The primary pipeline's compile error, if it failed (so headless callers fail fast instead of waiting).
+pub fn pipeline_error(render_world: &World) -> Option<String> {
+    let pipeline = render_world.get_resource::<PrimaryPipeline>()?;
+    match render_world.resource::<PipelineCache>().get_compute_pipeline_state(pipeline.pipeline) {
+        CachedPipelineState::Err(e) if !matches!(e, bevy::shader::ShaderCacheError::ShaderNotLoaded(_)) => {
+            Some(format!("the primary-ray shader failed to compile: {e}"))
+        }
+        _ => None,
+    }
+}
+
 /// Writes this frame's parameters (Render schedule, PrepareResources).
 pub fn prepare_frame_params(
     pipeline: Option<Res<PrimaryPipeline>>,
     settings: Option<Res<RenderSettings>>,
+    highlight: Option<Res<Highlight>>,
     frames: Res<FramesRendered>,
     queue: Res<RenderQueue>,
 ) {
     let Some(pipeline) = pipeline else { return };
     let settings = settings.map(|s| s.clone()).unwrap_or_default();
-    let params = FrameParams::from_settings(&settings, frames.0.load(Ordering::Relaxed));
+    let highlight = highlight.map(|h| *h).unwrap_or_default();
+    let params = FrameParams::new(&settings, &highlight, frames.0.load(Ordering::Relaxed));
     queue.write_buffer(&pipeline.frame_params, 0, bytemuck::bytes_of(&params));
 }
 

@@ -2,20 +2,38 @@
 //! `apply_edit_requests`, which reports each change as an `EditApplied` message (the light pool listens) and
 //! each refusal as an `EditRefused` message. The grid records the dirty bricks the renderer uploads.
 
-use super::{Edit, EditError, VoxelWorld};
+use super::{Edit, EditError, Voxel, VoxelWorld};
 use bevy::prelude::*;
+use std::sync::Arc;
 
-/// Asks for an edit.
-#[derive(Message, Clone, Copy, Debug, PartialEq, Eq)]
-pub struct EditRequest(pub Edit);
+/// Asks for an edit. `undoable` edits (the player's) record what they replace so undo can put it back.
+#[derive(Message, Clone, Debug, PartialEq, Eq)]
+pub struct EditRequest {
+    pub edit: Edit,
+    pub undoable: bool,
+}
 
-/// An edit that changed the world: its inclusive voxel bounds and how many voxels changed.
-#[derive(Message, Clone, Copy, Debug, PartialEq, Eq)]
+impl EditRequest {
+    /// A player's edit, recorded for undo.
+    pub fn player(edit: Edit) -> Self {
+        EditRequest { edit, undoable: true }
+    }
+
+    /// An edit that undo does not record (undo and redo themselves, scripted changes).
+    pub fn unrecorded(edit: Edit) -> Self {
+        EditRequest { edit, undoable: false }
+    }
+}
+
+/// An edit that changed the world: its inclusive voxel bounds, how many voxels changed, and for undoable edits
+/// the voxels the box held before.
+#[derive(Message, Clone, Debug, PartialEq, Eq)]
 pub struct EditApplied {
     pub edit: Edit,
     pub min: IVec3,
     pub max: IVec3,
     pub changed: u64,
+    pub before: Option<Arc<[Voxel]>>,
 }
 
 /// An edit the world refused (out of the world, unknown material); the world is unchanged.
@@ -23,16 +41,6 @@ pub struct EditApplied {
 pub struct EditRefused {
     pub edit: Edit,
     pub error: EditError,
-}
-
-impl Edit {
-    /// Inclusive voxel bounds of what the edit may touch.
-    pub fn bounds(&self) -> (IVec3, IVec3) {
-        match *self {
-            Edit::Place { at, .. } | Edit::Break { at } => (at, at),
-            Edit::FillBox { min, max, .. } => (min.min(max), min.max(max)),
-        }
-    }
 }
 
 /// Systems that apply edits, in `Update`.
@@ -56,12 +64,14 @@ pub fn apply_edit_requests(
     mut applied: MessageWriter<EditApplied>,
     mut refused: MessageWriter<EditRefused>,
 ) {
-    for &EditRequest(edit) in requests.read() {
-        match world.apply(edit) {
+    for request in requests.read() {
+        let edit = request.edit.clone();
+        let (min, max) = edit.bounds();
+        let before = request.undoable.then(|| Arc::from(world.grid.read_box(min, max + IVec3::ONE)));
+        match world.apply(edit.clone()) {
             Ok(0) => {}
             Ok(changed) => {
-                let (min, max) = edit.bounds();
-                applied.write(EditApplied { edit, min, max, changed });
+                applied.write(EditApplied { edit, min, max, changed, before });
             }
             Err(error) => {
                 refused.write(EditRefused { edit, error });

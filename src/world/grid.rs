@@ -237,6 +237,65 @@ impl BrickGrid {
         Ok(changed)
     }
 
+    /// The voxels of the box `[min, max)` (x fastest, then y, then z); air outside the world.
+    pub fn read_box(&self, min: IVec3, max: IVec3) -> Vec<Voxel> {
+        let e = (max - min).max(IVec3::ZERO);
+        let mut out = Vec::with_capacity(e.x as usize * e.y as usize * e.z as usize);
+        for z in min.z..max.z {
+            for y in min.y..max.y {
+                for x in min.x..max.x {
+                    out.push(self.get(IVec3::new(x, y, z)));
+                }
+            }
+        }
+        out
+    }
+
+    /// Writes `voxels` (x fastest, then y, then z) into the box `[min, max)`, which must lie inside the world.
+    /// Checks each touched brick for collapse once, not per voxel. Returns the number of voxels that changed.
+    pub fn write_box(&mut self, min: IVec3, max: IVec3, voxels: &[Voxel]) -> Result<u64, OutOfWorld> {
+        if max.cmple(min).any() {
+            return Ok(0);
+        }
+        if !self.contains(min) {
+            return Err(OutOfWorld { position: min, size: self.size });
+        }
+        if !self.contains(max - IVec3::ONE) {
+            return Err(OutOfWorld { position: max - IVec3::ONE, size: self.size });
+        }
+        let e = max - min;
+        let mut changed = 0u64;
+        let mut touched = BTreeSet::new();
+        for z in min.z..max.z {
+            for y in min.y..max.y {
+                for x in min.x..max.x {
+                    let p = IVec3::new(x, y, z);
+                    let q = p - min;
+                    let v = voxels[(q.x + e.x * (q.y + e.y * q.z)) as usize];
+                    if self.get(p) == v {
+                        continue;
+                    }
+                    let index = self.brick_index(p >> 3_i32);
+                    let slot = match BrickCell::decode(self.top[index]) {
+                        BrickCell::Pooled(slot) => slot,
+                        BrickCell::Empty => self.expand(index, AIR),
+                        BrickCell::Homogeneous(m) => self.expand(index, m),
+                    };
+                    self.pool[slot as usize * BRICK_VOXELS + local_index(p & 7_i32)] = v;
+                    touched.insert(index);
+                    changed += 1;
+                }
+            }
+        }
+        for index in touched {
+            if let BrickCell::Pooled(slot) = BrickCell::decode(self.top[index]) {
+                self.collapse_if_uniform(index, slot);
+            }
+            self.dirty.insert(index as u32);
+        }
+        Ok(changed)
+    }
+
     /// Fills `[lo, hi)`, which lies inside brick `b`.
     fn fill_in_brick(&mut self, b: IVec3, lo: IVec3, hi: IVec3, voxel: Voxel) -> u64 {
         let index = self.brick_index(b);

@@ -1,0 +1,229 @@
+//! The HUD (Bevy UI): crosshair, hotbar swatches, the selected material, frame rate and light count, a status
+//! line for saves and errors, a one-line hint, and a help panel toggled with F1.
+
+use super::interaction::{Brush, Hotbar, Target};
+use super::player::Player;
+use crate::lights::LightPool;
+use crate::world::VoxelWorld;
+use bevy::prelude::*;
+
+/// A message shown for a few seconds at the top of the screen (saves, loads, errors).
+#[derive(Resource, Default, Debug)]
+pub struct StatusLine {
+    pub text: String,
+    /// Seconds left to show it.
+    pub remaining: f32,
+}
+
+impl StatusLine {
+    pub fn show(&mut self, text: String) {
+        info!("{text}");
+        self.text = text;
+        self.remaining = 5.0;
+    }
+}
+
+#[derive(Component)]
+struct HotbarSlot(usize);
+#[derive(Component)]
+struct StatsText;
+#[derive(Component)]
+struct MaterialText;
+#[derive(Component)]
+struct StatusText;
+#[derive(Component)]
+struct HelpPanel;
+
+const HINT: &str = "WASD move | mouse look | LMB break | RMB place | MMB pick | wheel/1-9 block | B box brush | \
+                    F walk/fly | Ctrl+Z/Y undo/redo | F5 save | F9 load | F1 help";
+
+const HELP: &str = "glowbrick controls\n\n\
+    click          capture the mouse (Esc releases it)\n\
+    W A S D        move            mouse          look\n\
+    Space / Shift  up / down (flying), Space jumps (walking)\n\
+    Ctrl           move faster     F              toggle walking / flying\n\
+    left click     break the targeted block\n\
+    right click    place the selected block on the targeted face\n\
+    middle click   pick the targeted block into the hotbar slot\n\
+    wheel, 1-9     choose a hotbar slot\n\
+    B              box brush: click two corners to fill (right) or clear (left)\n\
+    Ctrl+Z, Ctrl+Y undo, redo\n\
+    F3             debug views (lit, albedo, normal, depth)\n\
+    F5, F9         save, load\n\
+    F1             this help";
+
+pub struct HudPlugin;
+
+impl Plugin for HudPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_resource::<StatusLine>()
+            .add_systems(Startup, spawn_hud)
+            .add_systems(Update, (update_hotbar, update_texts, toggle_help));
+    }
+}
+
+fn text(value: &str, size: f32) -> (Text, TextFont, TextColor) {
+    (Text::new(value), TextFont::from_font_size(size), TextColor(Color::WHITE))
+}
+
+fn spawn_hud(mut commands: Commands) {
+    // Crosshair: two thin bars at the centre, white with a dark rim so it shows on bright blocks too.
+    for (w, h) in [(16.0, 4.0), (4.0, 16.0)] {
+        commands.spawn((
+            Node {
+                position_type: PositionType::Absolute,
+                left: Val::Percent(50.0),
+                top: Val::Percent(50.0),
+                width: Val::Px(w),
+                height: Val::Px(h),
+                margin: UiRect { left: Val::Px(-w / 2.0), top: Val::Px(-h / 2.0), ..default() },
+                border: UiRect::all(Val::Px(1.0)),
+                ..default()
+            },
+            BackgroundColor(Color::srgba(1.0, 1.0, 1.0, 0.9)),
+            BorderColor::all(Color::srgba(0.0, 0.0, 0.0, 0.8)),
+        ));
+    }
+    // Frame rate, lights, mode: top left.
+    commands.spawn((
+        Node { position_type: PositionType::Absolute, left: Val::Px(10.0), top: Val::Px(8.0), ..default() },
+        text("", 16.0),
+        StatsText,
+    ));
+    // Status: top centre.
+    commands.spawn((
+        Node {
+            position_type: PositionType::Absolute,
+            top: Val::Px(8.0),
+            width: Val::Percent(100.0),
+            justify_content: JustifyContent::Center,
+            ..default()
+        },
+        children![(text("", 18.0), StatusText)],
+    ));
+    // Hotbar, material name and hint: bottom centre.
+    commands
+        .spawn(Node {
+            position_type: PositionType::Absolute,
+            bottom: Val::Px(8.0),
+            width: Val::Percent(100.0),
+            flex_direction: FlexDirection::Column,
+            align_items: AlignItems::Center,
+            row_gap: Val::Px(4.0),
+            ..default()
+        })
+        .with_children(|bottom| {
+            bottom.spawn((text("", 16.0), MaterialText));
+            bottom.spawn(Node { column_gap: Val::Px(4.0), ..default() }).with_children(|row| {
+                for i in 0..9 {
+                    row.spawn((
+                        Node {
+                            width: Val::Px(40.0),
+                            height: Val::Px(40.0),
+                            border: UiRect::all(Val::Px(3.0)),
+                            ..default()
+                        },
+                        BackgroundColor(Color::BLACK),
+                        BorderColor::all(Color::srgb(0.2, 0.2, 0.2)),
+                        HotbarSlot(i),
+                    ));
+                }
+            });
+            bottom.spawn(text(HINT, 13.0));
+        });
+    // Help panel, hidden until F1.
+    commands.spawn((
+        Node {
+            position_type: PositionType::Absolute,
+            left: Val::Percent(25.0),
+            top: Val::Percent(15.0),
+            padding: UiRect::all(Val::Px(16.0)),
+            display: Display::None,
+            ..default()
+        },
+        BackgroundColor(Color::srgba(0.0, 0.0, 0.0, 0.8)),
+        HelpPanel,
+        children![text(HELP, 16.0)],
+    ));
+}
+
+fn update_hotbar(
+    hotbar: Res<Hotbar>,
+    world: Res<VoxelWorld>,
+    mut slots: Query<(&HotbarSlot, &mut BackgroundColor, &mut BorderColor)>,
+) {
+    if !hotbar.is_changed() && !world.is_changed() {
+        return;
+    }
+    for (slot, mut background, mut border) in &mut slots {
+        let material = world.palette.get(hotbar.slots[slot.0]);
+        let [r, g, b] = match material {
+            Some(m) if m.is_emissive() => m.emission,
+            Some(m) => m.albedo,
+            None => [0.0; 3],
+        };
+        background.0 = Color::linear_rgb(r, g, b);
+        let selected = slot.0 == hotbar.selected;
+        *border = BorderColor::all(if selected { Color::WHITE } else { Color::srgb(0.2, 0.2, 0.2) });
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn update_texts(
+    time: Res<Time>,
+    mut smoothed_dt: Local<f32>,
+    hotbar: Res<Hotbar>,
+    brush: Res<Brush>,
+    target: Res<Target>,
+    world: Res<VoxelWorld>,
+    pool: Res<LightPool>,
+    player: Query<&Player>,
+    mut status: ResMut<StatusLine>,
+    mut stats: Query<&mut Text, (With<StatsText>, Without<MaterialText>, Without<StatusText>)>,
+    mut material_text: Query<&mut Text, (With<MaterialText>, Without<StatusText>)>,
+    mut status_text: Query<&mut Text, With<StatusText>>,
+) {
+    let dt = time.delta_secs();
+    *smoothed_dt = if *smoothed_dt == 0.0 { dt } else { *smoothed_dt * 0.9 + dt * 0.1 };
+    let mode = if player.single().is_ok_and(|p| p.walking) { "walking" } else { "flying" };
+    let brush = match *brush {
+        Brush::Single => "single".to_string(),
+        Brush::Box { first_corner: None } => "box (click first corner)".to_string(),
+        Brush::Box { first_corner: Some(c) } => format!("box from {} {} {} (click second corner)", c.x, c.y, c.z),
+    };
+    let target = target.0.map_or("-".to_string(), |h| format!("{} {} {}", h.voxel.x, h.voxel.y, h.voxel.z));
+    let (voxel_lights, brick_lights) = pool.counts();
+    if let Ok(mut t) = stats.single_mut() {
+        t.0 = format!(
+            "{:.0} fps  {:.1} ms\nlights {} (voxel {voxel_lights}, brick {brick_lights})\n{mode} | brush {brush}\ntarget {target}",
+            1.0 / smoothed_dt.max(1e-6),
+            *smoothed_dt * 1000.0,
+            pool.len(),
+        );
+    }
+    if let Ok(mut t) = material_text.single_mut() {
+        t.0 = match world.palette.get(hotbar.material()) {
+            Some(m) if m.is_emissive() => {
+                let [r, g, b] = m.emission;
+                format!("{}  (emits {r:.2} {g:.2} {b:.2} x {})", m.name, m.strength)
+            }
+            Some(m) => m.name.clone(),
+            None => "(empty slot)".to_string(),
+        };
+    }
+    status.remaining -= dt;
+    if let Ok(mut t) = status_text.single_mut() {
+        let shown = if status.remaining > 0.0 { status.text.as_str() } else { "" };
+        if t.0 != shown {
+            t.0 = shown.to_string();
+        }
+    }
+}
+
+fn toggle_help(keys: Res<ButtonInput<KeyCode>>, mut panel: Query<&mut Node, With<HelpPanel>>) {
+    if keys.just_pressed(KeyCode::F1)
+        && let Ok(mut node) = panel.single_mut()
+    {
+        node.display = if node.display == Display::None { Display::Flex } else { Display::None };
+    }
+}

@@ -1,0 +1,107 @@
+//! Saving and loading in game: F5 saves the world (with the player's camera as its first view) to the save
+//! path with an atomic write, keeping one `.bak` of the previous save; F9 loads the save path. A failed load
+//! leaves the current world as it is and says why on the HUD.
+
+use super::hud::StatusLine;
+use super::player::Player;
+use crate::world::format::{save_world, write_atomically};
+use crate::world::source::load_path;
+use crate::world::{CameraView, VoxelWorld};
+use bevy::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Where F5 saves and F9 loads.
+#[derive(Resource, Clone, Debug)]
+pub struct SavePath(pub PathBuf);
+
+/// Asks to save or load.
+#[derive(Message, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SaveAction {
+    Save,
+    Load,
+}
+
+pub struct SaveLoadPlugin;
+
+impl Plugin for SaveLoadPlugin {
+    fn build(&self, app: &mut App) {
+        app.add_message::<SaveAction>().add_systems(Update, save_or_load);
+    }
+}
+
+/// F5 saves, F9 loads. Needs a window.
+pub fn save_load_keys(keys: Res<ButtonInput<KeyCode>>, mut actions: MessageWriter<SaveAction>) {
+    if keys.just_pressed(KeyCode::F5) {
+        actions.write(SaveAction::Save);
+    }
+    if keys.just_pressed(KeyCode::F9) {
+        actions.write(SaveAction::Load);
+    }
+}
+
+/// `<path>.bak`.
+pub fn backup_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".bak");
+    path.with_file_name(name)
+}
+
+/// Saves with one backup: the previous save is copied to `.bak` (itself atomically) before the new one
+/// replaces it, so at every moment a complete save exists on disk.
+pub fn save_with_backup(world: &VoxelWorld, path: &Path) -> std::io::Result<()> {
+    if path.is_file() {
+        let previous = std::fs::read(path)?;
+        write_atomically(&backup_path(path), &previous)?;
+    }
+    save_world(world, path)
+}
+
+/// The player's camera as a view named "player".
+pub fn player_view(transform: &Transform, fov_deg: f32) -> CameraView {
+    CameraView {
+        name: "player".into(),
+        origin: transform.translation.into(),
+        direction: transform.forward().as_vec3().into(),
+        fov_deg,
+    }
+}
+
+fn save_or_load(
+    mut actions: MessageReader<SaveAction>,
+    mut commands: Commands,
+    world: Option<ResMut<VoxelWorld>>,
+    path: Res<SavePath>,
+    mut camera: Query<(&mut Transform, &mut Player, &Projection)>,
+    mut status: ResMut<StatusLine>,
+) {
+    let Some(mut world) = world else { return };
+    for action in actions.read() {
+        match action {
+            SaveAction::Save => {
+                if let Ok((transform, _, projection)) = camera.single() {
+                    let fov = match projection {
+                        Projection::Perspective(p) => p.fov.to_degrees(),
+                        _ => 60.0,
+                    };
+                    world.views.retain(|v| v.name != "player");
+                    world.views.insert(0, player_view(transform, fov));
+                }
+                match save_with_backup(&world, &path.0) {
+                    Ok(()) => status.show(format!("saved {}", path.0.display())),
+                    Err(e) => status.show(format!("could not save {}: {e}", path.0.display())),
+                }
+            }
+            SaveAction::Load => match load_path(&path.0) {
+                Ok(loaded) => {
+                    if let (Some(view), Ok((mut transform, mut player, _))) = (loaded.view(None), camera.single_mut()) {
+                        *transform = crate::render::camera::view_transform(view);
+                        *player = Player { walking: player.walking, ..Player::looking(view) };
+                    }
+                    status.show(format!("loaded {}", path.0.display()));
+                    commands.insert_resource(loaded);
+                }
+                Err(e) => status.show(format!("load failed, world unchanged: {e}")),
+            },
+        }
+    }
+}
