@@ -216,3 +216,19 @@ fn a_64_cubed_fill_marks_exactly_the_touched_bricks_dirty() {
     assert_eq!(dirty.len(), 9 * 9 * 9);
     assert_eq!(world(&app).summary().voxels, 64 * 64 * 64);
 }
+
+#[test]
+fn walking_falls_onto_the_floor_and_walls_stop_it() {
+    use glowbrick::game::player::{EYE_HEIGHT, move_with_collision};
+    let room = load_scene("test-room").unwrap();
+    // Dropping from 5 voxels above the floor (whose top is y = 1): the feet stop on it.
+    let eye = Vec3::new(16.5, 6.0 + EYE_HEIGHT, 16.5);
+    let (landed, blocked) = move_with_collision(&room, eye, Vec3::new(0.0, -20.0, 0.0));
+    assert!(blocked.y && !blocked.x && !blocked.z);
+    assert!((landed.y - EYE_HEIGHT - 1.0).abs() < 0.01, "feet at {}", landed.y - EYE_HEIGHT);
+    // Walking 20 voxels towards -x runs into the wall (x 0..1): the body's side stops before x = 1.
+    let (stopped, blocked) =
+        move_with_collision(&room, Vec3::new(16.5, 1.0 + EYE_HEIGHT, 16.5), Vec3::new(-20.0, 0.0, 0.0));
+    assert!(blocked.x);
+    assert!(stopped.x - 0.3 >= 1.0 && stopped.x - 0.3 < 1.01, "stopped at x = {}", stopped.x);
+}

@@ -83,6 +83,16 @@ pub fn move_with_collision(world: &VoxelWorld, eye: Vec3, delta: Vec3) -> (Vec3,
             next[axis] += step[axis];
             let (lo, hi) = body_box(next, true);
             if box_hits_solid(world, lo, hi) {
+                // Close the gap: bisect how far this step can go so the body rests against the voxel.
+                let (mut free, mut hit) = (0.0, 1.0);
+                for _ in 0..10 {
+                    let mid = 0.5 * (free + hit);
+                    let mut probe = eye;
+                    probe[axis] += step[axis] * mid;
+                    let (lo, hi) = body_box(probe, true);
+                    if box_hits_solid(world, lo, hi) { hit = mid } else { free = mid }
+                }
+                eye[axis] += step[axis] * free;
                 blocked.set(axis, true);
             } else {
                 eye = next;

@@ -82,7 +82,12 @@ pub fn stage_world_upload(
     mut state: ResMut<UploadState>,
     mut upload: ResMut<WorldUpload>,
 ) {
-    *upload = WorldUpload::default();
+    *upload = stage_upload(&mut world, &mut state);
+}
+
+/// This frame's upload for `world` given what the GPU already holds; clears the world's dirty set.
+pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpload {
+    let mut upload = WorldUpload::default();
     let needed_slots = world.grid.pool_capacity();
     let replaced = state.world_instance != Some(world.instance);
     if replaced || needed_slots > state.gpu_pool_slots {
@@ -114,6 +119,7 @@ pub fn stage_world_upload(
         upload.materials = Some(Arc::new(gpu_materials(&world.palette)));
         state.palette = Some(world.palette.clone());
     }
+    upload
 }
 
 /// Render-world queue of uploads not yet written to GPU buffers (applied in order by `prepare_gpu_world`).
