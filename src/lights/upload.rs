@@ -3,9 +3,10 @@
 //! buffers in the render world (PrepareResources), like the world upload in `render::upload`.
 
 use super::{AliasEntry, Light, LightPool};
+use crate::render::gpu_world::storage_buffer;
 use bevy::prelude::*;
 use bevy::render::Extract;
-use bevy::render::render_resource::{Buffer, BufferInitDescriptor, BufferUsages};
+use bevy::render::render_resource::Buffer;
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use std::sync::Arc;
 
@@ -106,14 +107,6 @@ pub fn extract_light_upload(upload: Extract<Option<Res<LightUpload>>>, mut pendi
     }
 }
 
-fn storage(device: &RenderDevice, label: &str, bytes: &[u8]) -> Buffer {
-    device.create_buffer_with_data(&BufferInitDescriptor {
-        label: Some(label),
-        contents: bytes,
-        usage: BufferUsages::STORAGE | BufferUsages::COPY_DST,
-    })
-}
-
 /// Alias entries padded to at least one (storage buffers cannot be empty).
 fn alias_bytes(entries: &[AliasEntry]) -> Vec<u8> {
     let padded: Vec<AliasEntry> = if entries.is_empty() { vec![AliasEntry::default()] } else { entries.to_vec() };
@@ -129,9 +122,9 @@ pub fn prepare_gpu_lights(
 ) {
     for upload in pending.0.drain(..) {
         if let Some(all) = &upload.full {
-            let lights = storage(&device, "glowbrick_lights", bytemuck::cast_slice(all));
+            let lights = storage_buffer(&device, "glowbrick_lights", bytemuck::cast_slice(all));
             let entries = upload.alias.as_deref().map_or(&[][..], |a| a.as_slice());
-            let alias = storage(&device, "glowbrick_light_alias", &alias_bytes(entries));
+            let alias = storage_buffer(&device, "glowbrick_light_alias", &alias_bytes(entries));
             let fresh = GpuLights {
                 lights,
                 alias,
@@ -151,7 +144,7 @@ pub fn prepare_gpu_lights(
         }
         if let Some(entries) = &upload.alias {
             if entries.len() as u32 > gpu.alias_capacity {
-                gpu.alias = storage(&device, "glowbrick_light_alias", &alias_bytes(entries));
+                gpu.alias = storage_buffer(&device, "glowbrick_light_alias", &alias_bytes(entries));
                 gpu.alias_capacity = entries.len() as u32;
             } else if !entries.is_empty() {
                 queue.write_buffer(&gpu.alias, 0, bytemuck::cast_slice(entries));

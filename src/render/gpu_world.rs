@@ -43,7 +43,8 @@ pub struct GpuWorld {
 #[derive(Resource)]
 pub struct WorldLayout(pub BindGroupLayoutDescriptor);
 
-fn storage(device: &RenderDevice, label: &str, contents: &[u8]) -> Buffer {
+/// A storage buffer initialised with `contents` that later frames can write (COPY_DST).
+pub fn storage_buffer(device: &RenderDevice, label: &str, contents: &[u8]) -> Buffer {
     device.create_buffer_with_data(&BufferInitDescriptor {
         label: Some(label),
         contents,
@@ -63,7 +64,7 @@ fn voxel_bytes(voxels: &[u16]) -> &[u8] {
 }
 
 fn material_buffer(device: &RenderDevice, materials: &[GpuMaterial]) -> Buffer {
-    storage(device, "glowbrick_materials", bytemuck::cast_slice(materials))
+    storage_buffer(device, "glowbrick_materials", bytemuck::cast_slice(materials))
 }
 
 /// Applies the queued uploads to the GPU buffers (creating them on the first full upload).
@@ -89,8 +90,8 @@ pub fn prepare_gpu_world(
                 contents: &info_bytes(full),
                 usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
             });
-            let top_cells = storage(&device, "glowbrick_top_cells", bytemuck::cast_slice(&full.top_cells));
-            let brick_pool = storage(&device, "glowbrick_brick_pool", voxel_bytes(&full.pool));
+            let top_cells = storage_buffer(&device, "glowbrick_top_cells", bytemuck::cast_slice(&full.top_cells));
+            let brick_pool = storage_buffer(&device, "glowbrick_brick_pool", voxel_bytes(&full.pool));
             let material_capacity = materials.len() as u32;
             let materials = material_buffer(&device, &materials);
             let bind_group =

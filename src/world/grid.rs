@@ -209,17 +209,25 @@ impl BrickGrid {
         Ok(true)
     }
 
-    /// Fills the box `[min, max)`: `max` is exclusive and the whole box must lie inside the world (no clipping). Whole bricks covered by the box become homogeneous without touching the pool.
-    /// Returns the number of voxels that changed.
-    pub fn fill_box(&mut self, min: IVec3, max: IVec3, voxel: Voxel) -> Result<u64, OutOfWorld> {
+    /// Whether the box `[min, max)` holds any voxel (`Ok(false)` when empty), or the corner outside the world.
+    fn box_in_world(&self, min: IVec3, max: IVec3) -> Result<bool, OutOfWorld> {
         if max.cmple(min).any() {
+            return Ok(false);
+        }
+        for corner in [min, max - IVec3::ONE] {
+            if !self.contains(corner) {
+                return Err(OutOfWorld { position: corner, size: self.size });
+            }
+        }
+        Ok(true)
+    }
+
+    /// Fills the box `[min, max)`: `max` is exclusive and the whole box must lie inside the world (no clipping).
+    /// Whole bricks covered by the box become homogeneous without touching the pool. Returns the number of voxels
+    /// that changed.
+    pub fn fill_box(&mut self, min: IVec3, max: IVec3, voxel: Voxel) -> Result<u64, OutOfWorld> {
+        if !self.box_in_world(min, max)? {
             return Ok(0);
-        }
-        if !self.contains(min) {
-            return Err(OutOfWorld { position: min, size: self.size });
-        }
-        if !self.contains(max - IVec3::ONE) {
-            return Err(OutOfWorld { position: max - IVec3::ONE, size: self.size });
         }
         let mut changed = 0u64;
         let bmin = min >> 3_i32;
@@ -254,14 +262,8 @@ impl BrickGrid {
     /// Writes `voxels` (x fastest, then y, then z) into the box `[min, max)`, which must lie inside the world.
     /// Checks each touched brick for collapse once, not per voxel. Returns the number of voxels that changed.
     pub fn write_box(&mut self, min: IVec3, max: IVec3, voxels: &[Voxel]) -> Result<u64, OutOfWorld> {
-        if max.cmple(min).any() {
+        if !self.box_in_world(min, max)? {
             return Ok(0);
-        }
-        if !self.contains(min) {
-            return Err(OutOfWorld { position: min, size: self.size });
-        }
-        if !self.contains(max - IVec3::ONE) {
-            return Err(OutOfWorld { position: max - IVec3::ONE, size: self.size });
         }
         let e = max - min;
         let mut changed = 0u64;
