@@ -54,3 +54,22 @@ pub fn write_image(image: &LinearImage, path: &Path) -> Result<(), String> {
     };
     result.map_err(|e| format!("{}: cannot write image: {e}", path.display()))
 }
+
+/// Writes a PNG of values already in [0, 1] (sRGB-encoded, no tonemapping): false-colour and debug images.
+pub fn write_png_plain(image: &LinearImage, path: &Path) -> Result<(), String> {
+    let mut buffer = ImageBuffer::<Rgb<u8>, Vec<u8>>::new(image.width, image.height);
+    for (x, y, px) in buffer.enumerate_pixels_mut() {
+        let p = image.pixel(x, y);
+        *px = Rgb([0, 1, 2].map(|c| (linear_to_srgb(p[c].clamp(0.0, 1.0)) * 255.0 + 0.5) as u8));
+    }
+    buffer.save(path).map_err(|e| format!("{}: cannot write image: {e}", path.display()))
+}
+
+/// Reads a linear float image (EXR, or anything the `image` crate decodes) with a clear one-line error.
+pub fn read_image(path: &Path) -> Result<LinearImage, String> {
+    let decoded = image::open(path).map_err(|e| format!("{}: cannot read image: {e}", path.display()))?;
+    let rgba = decoded.into_rgba32f();
+    let (width, height) = rgba.dimensions();
+    let pixels = rgba.pixels().map(|p| p.0).collect();
+    Ok(LinearImage { width, height, pixels })
+}

@@ -7,6 +7,7 @@ pub mod game;
 pub mod headless;
 pub mod image_io;
 pub mod lights;
+pub mod reference;
 pub mod render;
 pub mod settings;
 pub mod world;

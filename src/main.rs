@@ -3,9 +3,11 @@
 use bevy::math::UVec3;
 use clap::{Args, Parser, Subcommand};
 use glowbrick::headless::{HeadlessOptions, render_headless};
-use glowbrick::image_io::write_image;
+use glowbrick::image_io::{read_image, write_image, write_png_plain};
+use glowbrick::reference::{ReferenceOptions, metrics, render_reference};
 use glowbrick::settings::{RenderSettings, SETTING_KEYS};
 use glowbrick::world::source::{WorldSource, load_path};
+use glowbrick::world::{CameraView, VoxelWorld};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -26,8 +28,44 @@ enum Command {
     Play(PlayArgs),
     /// Render a world headless (no window) to a PNG (tonemapped) or EXR (linear) image.
     Render(RenderArgs),
+    /// Render the CPU ground truth (direct light, or with --bounces diffuse bounces) to a linear EXR.
+    Reference(ReferenceArgs),
+    /// Compare two images: prints mae, mse, relmse and bias of A against the reference B.
+    Compare {
+        image: PathBuf,
+        reference: PathBuf,
+        /// Also write a false-colour error image (PNG).
+        #[arg(long)]
+        diff: Option<PathBuf>,
+    },
     /// Validate a world file or scene recipe and print a summary (exit code 1 on error).
     CheckWorld { path: PathBuf },
+}
+
+#[derive(Args)]
+struct ReferenceArgs {
+    #[command(flatten)]
+    world: WorldArgs,
+    #[arg(long)]
+    view: Option<String>,
+    #[arg(long, default_value_t = 320)]
+    width: u32,
+    #[arg(long, default_value_t = 180)]
+    height: u32,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 256)]
+    spp: u32,
+    /// Diffuse bounces after the camera hit (0: direct light only).
+    #[arg(long, default_value_t = 0)]
+    bounces: u32,
+    /// Stop after this many seconds (after a whole batch of samples).
+    #[arg(long)]
+    seconds: Option<f64>,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output image (.exr keeps linear values).
+    #[arg(long)]
+    out: PathBuf,
 }
 
 #[derive(Args)]
@@ -115,6 +153,8 @@ fn main() -> ExitCode {
     let result = match cli.command.unwrap_or(Command::Play(cli.play)) {
         Command::Play(args) => play(args),
         Command::Render(args) => render(args),
+        Command::Reference(args) => reference(args),
+        Command::Compare { image, reference, diff } => compare(image, reference, diff),
         Command::CheckWorld { path } => check_world(path),
     };
     match result {
@@ -142,24 +182,35 @@ fn play(args: PlayArgs) -> Result<(), String> {
     Ok(())
 }
 
-fn render(args: RenderArgs) -> Result<(), String> {
-    let settings = RenderSettings::default().with_pairs(&args.settings.pairs)?;
-    let source = args.world.source().ok_or("render needs --world PATH or --scene NAME")?;
+/// Loads the world of `--world`/`--scene` and picks the view named `view` (or its first, or an overview).
+fn world_and_view(world: &WorldArgs, view: Option<&str>, command: &str) -> Result<(VoxelWorld, CameraView), String> {
+    let source = world.source().ok_or_else(|| format!("{command} needs --world PATH or --scene NAME"))?;
     let world = source.load().map_err(|e| e.to_string())?;
-    let view = match &args.view {
+    let view = match view {
         Some(name) => world.view(Some(name)).cloned().ok_or_else(|| {
             let names: Vec<&str> = world.views.iter().map(|v| v.name.as_str()).collect();
-            format!(
-                "no view '{name}' (this world has: {})",
-                if names.is_empty() { "none".into() } else { names.join(", ") }
-            )
+            let names = if names.is_empty() { "none".to_string() } else { names.join(", ") };
+            format!("no view '{name}' (this world has: {names})")
         })?,
         None => world.view(None).cloned().unwrap_or_else(|| world.overview()),
     };
-    let ext = args.out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("png") | Some("exr")) {
-        return Err(format!("{}: output must end in .png or .exr", args.out.display()));
+    Ok((world, view))
+}
+
+/// Refuses an output path whose extension is not one of `allowed`, before any work is done.
+fn check_output(path: &std::path::Path, allowed: &[&str]) -> Result<(), String> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+    if allowed.contains(&ext.as_str()) {
+        return Ok(());
     }
+    let list: Vec<String> = allowed.iter().map(|e| format!(".{e}")).collect();
+    Err(format!("{}: output must end in {}", path.display(), list.join(" or ")))
+}
+
+fn render(args: RenderArgs) -> Result<(), String> {
+    let settings = RenderSettings::default().with_pairs(&args.settings.pairs)?;
+    let (world, view) = world_and_view(&args.world, args.view.as_deref(), "render")?;
+    check_output(&args.out, &["png", "exr"])?;
     let options =
         HeadlessOptions { width: args.width, height: args.height, frames: args.frames, settings, ..Default::default() };
     let start = std::time::Instant::now();
@@ -174,6 +225,48 @@ fn render(args: RenderArgs) -> Result<(), String> {
         args.frames,
         start.elapsed().as_secs_f64()
     );
+    Ok(())
+}
+
+fn reference(args: ReferenceArgs) -> Result<(), String> {
+    let (world, view) = world_and_view(&args.world, args.view.as_deref(), "reference")?;
+    check_output(&args.out, &["exr", "png"])?;
+    if let Some(s) = args.seconds.filter(|s| !(s.is_finite() && *s > 0.0)) {
+        return Err(format!("--seconds {s} must be a positive number"));
+    }
+    let options = ReferenceOptions {
+        width: args.width,
+        height: args.height,
+        spp: args.spp,
+        bounces: args.bounces,
+        seed: args.seed,
+        time_budget: args.seconds.map(std::time::Duration::from_secs_f64),
+    };
+    let result = render_reference(&world, &view, &options)?;
+    write_image(&result.image, &args.out)?;
+    println!(
+        "wrote {} ({}x{}, view '{}', {} spp, {} bounces, {:.1} s)",
+        args.out.display(),
+        args.width,
+        args.height,
+        view.name,
+        result.spp,
+        args.bounces,
+        result.elapsed.as_secs_f64()
+    );
+    Ok(())
+}
+
+fn compare(image: PathBuf, reference: PathBuf, diff: Option<PathBuf>) -> Result<(), String> {
+    let a = read_image(&image)?;
+    let b = read_image(&reference)?;
+    let m = metrics::compare(&a, &b)?;
+    if let Some(path) = diff {
+        check_output(&path, &["png"])?;
+        // White at four times the mean absolute error: the worst pixels stand out.
+        write_png_plain(&metrics::error_image(&a, &b, (4.0 * m.mae).max(1e-6) as f32), &path)?;
+    }
+    println!("{m}");
     Ok(())
 }
 

@@ -105,3 +105,55 @@ fn render_writes_exr_and_png_headless() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert_eq!(image::open(&png).unwrap().into_rgb8().dimensions(), (96, 64));
 }
+
+#[test]
+fn reference_and_compare_work_together() {
+    let dir = std::env::temp_dir().join(format!("glowbrick-ref-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let exr = dir.join("ref.exr");
+    let out = glowbrick(&[
+        "reference",
+        "--scene",
+        "test-room",
+        "--width",
+        "16",
+        "--height",
+        "9",
+        "--spp",
+        "4",
+        "--out",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("4 spp"), "{}", text(&out.stdout));
+    let diff = dir.join("diff.png");
+    let out = glowbrick(&["compare", exr.to_str().unwrap(), exr.to_str().unwrap(), "--diff", diff.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stdout).trim(), "mae=0.000000 mse=0.000000 relmse=0.000000 bias=+0.000000");
+    assert!(diff.is_file());
+    // A corrupt or missing input is one clear error, not a number.
+    let corrupt = dir.join("corrupt.exr");
+    std::fs::write(&corrupt, b"not an image").unwrap();
+    for bad in [corrupt.to_str().unwrap(), "/nonexistent/x.exr"] {
+        let out = glowbrick(&["compare", exr.to_str().unwrap(), bad]);
+        assert_eq!(out.status.code(), Some(1));
+        let stderr = text(&out.stderr);
+        assert!(stderr.contains("cannot read image") && stderr.lines().count() == 1, "{stderr}");
+    }
+    let other = dir.join("other.exr");
+    glowbrick(&[
+        "reference",
+        "--scene",
+        "test-room",
+        "--width",
+        "8",
+        "--height",
+        "9",
+        "--spp",
+        "1",
+        "--out",
+        other.to_str().unwrap(),
+    ]);
+    let out = glowbrick(&["compare", exr.to_str().unwrap(), other.to_str().unwrap()]);
+    assert!(text(&out.stderr).contains("differ in size: 16x9 against 8x9"), "{}", text(&out.stderr));
+}

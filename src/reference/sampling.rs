@@ -1,0 +1,91 @@
+//! Random numbers and sampling for the CPU reference: a PCG stream per (pixel, sample), cosine-weighted
+//! hemisphere directions, and uniform points on the faces of a light's cube that face the shading point.
+
+use crate::lights::Light;
+use bevy::math::{IVec3, Vec3};
+
+/// PCG32 (O'Neill), seeded per pixel and sample so renders are deterministic whatever the thread schedule.
+#[derive(Clone, Debug)]
+pub struct Pcg(u64);
+
+impl Pcg {
+    pub fn new(seed: u64, stream: u64) -> Self {
+        let mut rng = Pcg(seed.wrapping_add(stream.wrapping_mul(0x9E37_79B9_7F4A_7C15)));
+        rng.next_u32();
+        rng
+    }
+
+    pub fn next_u32(&mut self) -> u32 {
+        let old = self.0;
+        self.0 = old.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        xorshifted.rotate_right((old >> 59) as u32)
+    }
+
+    /// Uniform in [0, 1).
+    pub fn next_f32(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    }
+}
+
+/// An orthonormal frame around unit `n` (Duff et al. 2017).
+pub fn frame(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), Vec3::new(b, sign + n.y * n.y * a, -n.y))
+}
+
+/// A cosine-distributed direction around unit `n` (pdf = cos / pi).
+pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let r = u1.sqrt();
+    let phi = std::f32::consts::TAU * u2;
+    let (t, b) = frame(n);
+    (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt()).normalize()
+}
+
+/// A point on a light's surface: position, outward face normal, and the pdf of choosing it per unit area
+/// (given the light was chosen).
+#[derive(Clone, Copy, Debug)]
+pub struct LightPoint {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub pdf_area: f32,
+}
+
+/// Chooses uniformly one of the cube faces whose front side sees `p`, then a uniform point on it. A face that
+/// cannot see `p` contributes nothing, so leaving it out keeps the estimator unbiased. `None` when `p` is inside
+/// the cube's slab on every axis (it is then inside the light).
+pub fn sample_light_point(light: &Light, p: Vec3, u_face: f32, u: f32, v: f32) -> Option<LightPoint> {
+    let lo = light.min.as_vec3();
+    let size = light.size as f32;
+    let hi = lo + Vec3::splat(size);
+    let mut faces = [(0usize, 0f32); 3];
+    let mut count = 0;
+    for axis in 0..3 {
+        if p[axis] > hi[axis] {
+            faces[count] = (axis, 1.0);
+            count += 1;
+        } else if p[axis] < lo[axis] {
+            faces[count] = (axis, -1.0);
+            count += 1;
+        }
+    }
+    if count == 0 {
+        return None;
+    }
+    let (axis, sign) = faces[((u_face * count as f32) as usize).min(count - 1)];
+    let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+    let mut position = Vec3::ZERO;
+    position[axis] = if sign > 0.0 { hi[axis] } else { lo[axis] };
+    position[a] = lo[a] + u * size;
+    position[b] = lo[b] + v * size;
+    let mut normal = Vec3::ZERO;
+    normal[axis] = sign;
+    Some(LightPoint { position, normal, pdf_area: 1.0 / (count as f32 * size * size) })
+}
+
+/// Whether voxel `v` lies in the light's cube.
+pub fn light_contains(light: &Light, v: IVec3) -> bool {
+    v.cmpge(light.min).all() && v.cmplt(light.min + IVec3::splat(light.size)).all()
+}
