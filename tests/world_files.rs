@@ -126,3 +126,22 @@ fn example_save_opens() {
     let world = load_path(&path).unwrap();
     assert!(world.summary().voxel_lights > 0, "the example world has lamps");
 }
+
+/// The thesis-like recipes build, with the emitters each is meant to have.
+#[test]
+fn thesis_like_recipes_build_with_their_lights() {
+    let lights = |name: &str| {
+        let world = load_scene(name).unwrap();
+        assert!(!world.views.is_empty(), "{name} has camera views");
+        let s = world.summary();
+        (s.voxel_lights, s.brick_lights)
+    };
+    let (letters, _) = lights("letters");
+    assert!((1000..3000).contains(&letters), "letters: {letters} voxel lights");
+    let (apartments, _) = lights("apartments");
+    assert!((2000..6000).contains(&apartments), "apartments: {apartments} voxel lights");
+    // 1,500 lamps of three voxels each, all exposed.
+    assert_eq!(lights("mountain"), (4500, 0));
+    // The daylight panel outside the window is 4 x 8 aligned bricks.
+    assert_eq!(lights("window-room"), (0, 32));
+}

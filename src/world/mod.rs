@@ -2,6 +2,7 @@
 
 pub mod edit;
 pub mod events;
+pub mod font;
 pub mod format;
 pub mod grid;
 pub mod palette;

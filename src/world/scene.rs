@@ -12,6 +12,7 @@
 //! ```
 //! Boxes are `[min, max)` in voxels. Material names refer to `materials`; `"air"` clears.
 
+use super::font::glyph;
 use super::format::{LoadError, read_limited};
 use super::grid::{AIR, MAX_WORLD_EDGE, Voxel};
 use super::palette::{MAX_MATERIALS, Material, Palette};
@@ -30,6 +31,32 @@ pub enum SceneOp {
     Terrain { params: TerrainParams, rock: String, soil: String, surface: String },
     /// `count` boxes of `size` at seeded random columns, standing on the surface (lamps, pillars, trees).
     Scatter { material: String, count: u32, size: (i32, i32, i32) },
+    /// `count` boxes with seeded random sizes in `[size_min, size_max]`, placed inside `[min, max)` (floating
+    /// blocks).
+    RandomBoxes {
+        material: String,
+        count: u32,
+        min: (i32, i32, i32),
+        max: (i32, i32, i32),
+        size_min: (i32, i32, i32),
+        size_max: (i32, i32, i32),
+    },
+    /// Replaces a seeded `fraction` of the air-exposed voxels of material `on` with materials drawn from
+    /// `materials` (lit windows on blocks).
+    Speckle { on: String, materials: Vec<String>, fraction: f32 },
+    /// Writes `text` in the 5 x 7 font: glyph pixels become `scale`^2 x `depth` voxels; `origin` is the bottom
+    /// left of the first glyph, `right` and `up` the unit axes the text runs along, `depth_dir` the axis it
+    /// extends into (into a wall or floor to set it flush).
+    Text {
+        text: String,
+        material: String,
+        origin: (i32, i32, i32),
+        right: (i32, i32, i32),
+        up: (i32, i32, i32),
+        depth_dir: (i32, i32, i32),
+        scale: i32,
+        depth: i32,
+    },
 }
 
 /// A scene recipe as written in `assets/scenes/NAME.ron`.
@@ -136,8 +163,90 @@ fn apply_op(world: &mut VoxelWorld, seed: u32, op_index: u32, op: &SceneOp) -> R
             }
             Ok(())
         }
+        SceneOp::RandomBoxes { material, count, min, max, size_min, size_max } => {
+            let id = material_id(&world.palette, material)?;
+            if *count > MAX_SCATTER {
+                return Err(format!("random box count {count} exceeds {MAX_SCATTER}"));
+            }
+            let (lo, hi) = (IVec3::from(*min), IVec3::from(*max));
+            let (smin, smax) = (IVec3::from(*size_min), IVec3::from(*size_max));
+            if smin.cmplt(IVec3::ONE).any() || smax.cmplt(smin).any() || (hi - lo).cmplt(smax).any() {
+                return Err("random boxes need 1 <= size_min <= size_max <= max - min".into());
+            }
+            if !world.grid.contains(lo) || !world.grid.contains(hi - IVec3::ONE) {
+                return Err(format!("random box region {lo}..{hi} leaves the world"));
+            }
+            for n in 0..*count {
+                let mut h = hash_u32(seed ^ hash_u32(op_index.wrapping_mul(0x85EB_CA6B) ^ n));
+                let mut draw = |lo: i32, hi_inclusive: i32| {
+                    h = hash_u32(h);
+                    lo + (h % (hi_inclusive - lo + 1) as u32) as i32
+                };
+                let size = IVec3::new(draw(smin.x, smax.x), draw(smin.y, smax.y), draw(smin.z, smax.z));
+                let at = IVec3::new(draw(lo.x, hi.x - size.x), draw(lo.y, hi.y - size.y), draw(lo.z, hi.z - size.z));
+                world.grid.fill_box(at, at + size, id).map_err(|e| e.to_string())?;
+            }
+            Ok(())
+        }
+        SceneOp::Speckle { on, materials, fraction } => {
+            let on = material_id(&world.palette, on)?;
+            let ids = materials.iter().map(|m| material_id(&world.palette, m)).collect::<Result<Vec<_>, _>>()?;
+            if ids.is_empty() || !(0.0..=1.0).contains(fraction) {
+                return Err("speckle needs materials and a fraction within [0, 1]".into());
+            }
+            let mut exposed = Vec::new();
+            world.grid.for_each_solid(|p, m| {
+                if m == on && NEIGHBOURS.iter().any(|&d| world.grid.get(p + d) == AIR) {
+                    exposed.push(p);
+                }
+            });
+            let threshold = (*fraction as f64 * u32::MAX as f64) as u32;
+            for p in exposed {
+                let h = hash_u32(
+                    seed ^ hash_u32(op_index ^ hash_u32((p.x as u32) ^ hash_u32((p.y as u32) ^ hash_u32(p.z as u32)))),
+                );
+                if h < threshold {
+                    let pick = ids[(hash_u32(h) % ids.len() as u32) as usize];
+                    world.grid.set(p, pick).map_err(|e| e.to_string())?;
+                }
+            }
+            Ok(())
+        }
+        SceneOp::Text { text, material, origin, right, up, depth_dir, scale, depth } => {
+            let id = material_id(&world.palette, material)?;
+            let axes = [IVec3::from(*right), IVec3::from(*up), IVec3::from(*depth_dir)];
+            if axes.iter().any(|a| a.abs().element_sum() != 1) {
+                return Err("text right, up and depth_dir must be unit axes like (1, 0, 0)".into());
+            }
+            if !(1..=64).contains(scale) || !(1..=64).contains(depth) || text.chars().count() > 256 {
+                return Err("text scale and depth must be within 1..=64, text at most 256 characters".into());
+            }
+            let [right, up, into] = axes;
+            for (i, c) in text.chars().enumerate() {
+                let rows = glyph(c).ok_or_else(|| format!("the font has no '{c}' (A-Z, 0-9 and space)"))?;
+                for (row, bits) in rows.iter().enumerate() {
+                    for col in 0..5 {
+                        if bits & (0b10000 >> col) == 0 {
+                            continue;
+                        }
+                        let cell = IVec3::from(*origin)
+                            + right * ((i as i32 * 6 + col) * scale)
+                            + up * ((6 - row as i32) * scale);
+                        for (a, b, k) in
+                            (0..*scale).flat_map(|a| (0..*scale).flat_map(move |b| (0..*depth).map(move |k| (a, b, k))))
+                        {
+                            let p = cell + right * a + up * b + into * k;
+                            world.grid.set(p, id).map_err(|e| format!("text '{text}': {e}"))?;
+                        }
+                    }
+                }
+            }
+            Ok(())
+        }
     }
 }
+
+const NEIGHBOURS: [IVec3; 6] = [IVec3::X, IVec3::NEG_X, IVec3::Y, IVec3::NEG_Y, IVec3::Z, IVec3::NEG_Z];
 
 /// Parses recipe text into a world.
 pub fn parse_recipe(text: &str, location: &str) -> Result<VoxelWorld, LoadError> {
