@@ -4,6 +4,7 @@
 #import bevy_render::view::View
 #import glowbrick::world::materials
 #import glowbrick::traversal::{trace, face_normal, INF}
+#import glowbrick::lights::{Rng, pcg, direct_sample}
 
 struct FrameParams {
     // xyz: unit direction towards the sun; w: 1 when the sun is on.
@@ -21,11 +22,19 @@ struct FrameParams {
     // Box selection, inclusive corners; selection_min.w is 1 when shown.
     selection_min: vec4<i32>,
     selection_max: vec4<i32>,
+    // 0: sun and sky; 1: next-event estimation over the light pool (emitters only, no sky).
+    lighting: u32,
+    power_pick: u32,
+    light_count: u32,
+    // Frames averaged including this one; 1 restarts the average.
+    accumulated: u32,
 }
 
 @group(1) @binding(0) var output: texture_storage_2d<rgba16float, write>;
 @group(1) @binding(1) var<uniform> view: View;
 @group(1) @binding(2) var<uniform> frame: FrameParams;
+// Running sum of accumulated frames per pixel (rgb; a unused).
+@group(1) @binding(3) var<storage, read_write> accumulation: array<vec4<f32>>;
 
 const DEBUG_NONE: u32 = 0u;
 const DEBUG_ALBEDO: u32 = 1u;
@@ -81,9 +90,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let origin = view.world_position;
     let dir = primary_ray_dir(id.xy, vec2<f32>(size));
     let hit = trace(origin, dir, INF);
+    let nee = frame.lighting == 1u;
     var colour = vec4(0.0);
     if !hit.found {
-        if frame.debug_view == DEBUG_NONE {
+        if frame.debug_view == DEBUG_NONE && !nee {
             colour = vec4(sky(dir) * frame.exposure, 1.0);
         }
     } else {
@@ -103,6 +113,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 colour = vec4(vec3(hit.distance), 1.0);
             }
             default: {
+                if nee {
+                    let point = origin + dir * hit.distance;
+                    var rng = Rng(pcg(id.x + size.x * id.y) ^ pcg(frame.frame * 0x9E3779B9u + 1u));
+                    let radiance = material.radiance.rgb
+                        + direct_sample(point, normal, material.albedo.rgb, frame.light_count, frame.power_pick == 1u, &rng);
+                    colour = vec4(highlight(radiance * frame.exposure, hit.voxel, hit.face, point, hit.distance), 1.0);
+                    break;
+                }
                 let sun_dir = frame.sun.xyz;
                 var sun = 0.0;
                 let cos_sun = dot(normal, sun_dir);
@@ -124,5 +142,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     }
-    textureStore(output, vec2<i32>(id.xy), colour);
+    // Progressive accumulation: the running mean of the frames since anything changed.
+    let index = id.x + size.x * id.y;
+    var sum = colour.rgb;
+    if frame.accumulated > 1u {
+        sum += accumulation[index].rgb;
+    }
+    accumulation[index] = vec4(sum, 1.0);
+    textureStore(output, vec2<i32>(id.xy), vec4(sum / f32(max(frame.accumulated, 1u)), colour.a));
 }

@@ -34,10 +34,26 @@ impl DebugView {
     }
 }
 
+/// How surfaces are lit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Lighting {
+    /// A sun with shadows and sky light, plus emission: the game's look before the ReSTIR passes exist.
+    #[default]
+    Sun,
+    /// Emitters only (the thesis' convention, no sky): one next-event-estimation light sample per pixel with a
+    /// shadow ray. The baseline ReSTIR is measured against, and what the CPU reference converges to.
+    Nee,
+}
+
 /// Settings every pass reads.
 #[derive(Resource, ExtractResource, Clone, Debug, PartialEq)]
 pub struct RenderSettings {
     pub debug: DebugView,
+    pub lighting: Lighting,
+    /// Pick lights in proportion to power (alias table) or uniformly.
+    pub power_pick: bool,
+    /// Average frames while nothing changes (camera, world, lights, settings).
+    pub accumulate: bool,
     /// Sun light on or off (off leaves only sky light and emission).
     pub sun: bool,
     /// Shadow rays towards the sun.
@@ -48,12 +64,21 @@ pub struct RenderSettings {
 
 impl Default for RenderSettings {
     fn default() -> Self {
-        RenderSettings { debug: DebugView::None, sun: true, shadows: true, exposure: 1.0 }
+        RenderSettings {
+            debug: DebugView::None,
+            lighting: Lighting::Sun,
+            power_pick: true,
+            accumulate: false,
+            sun: true,
+            shadows: true,
+            exposure: 1.0,
+        }
     }
 }
 
 /// The keys `--set` accepts, with their values, for error messages and `--help`.
-pub const SETTING_KEYS: &str = "debug=none|albedo|normal|hit|depth, sun=on|off, shadows=on|off, exposure=<0.001..1000>";
+pub const SETTING_KEYS: &str = "lighting=sun|nee, pick=power|uniform, accumulate=on|off, \
+                                 debug=none|albedo|normal|hit|depth, sun=on|off, shadows=on|off, exposure=<0.001..1000>";
 
 fn parse_switch(key: &str, value: &str) -> Result<bool, String> {
     match value {
@@ -77,6 +102,21 @@ impl RenderSettings {
                         format!("setting debug: '{value}' is not one of none|albedo|normal|hit|depth")
                     })?;
             }
+            "lighting" => {
+                self.lighting = match value {
+                    "sun" => Lighting::Sun,
+                    "nee" => Lighting::Nee,
+                    _ => return Err(format!("setting lighting: '{value}' is not one of sun|nee")),
+                }
+            }
+            "pick" => {
+                self.power_pick = match value {
+                    "power" => true,
+                    "uniform" => false,
+                    _ => return Err(format!("setting pick: '{value}' is not one of power|uniform")),
+                }
+            }
+            "accumulate" => self.accumulate = parse_switch(key, value)?,
             "sun" => self.sun = parse_switch(key, value)?,
             "shadows" => self.shadows = parse_switch(key, value)?,
             "exposure" => {

@@ -3,7 +3,8 @@
 
 use super::LightPool;
 use super::upload::{
-    LightUpload, LightUploadState, PendingLightUploads, extract_light_upload, prepare_gpu_lights, stage_light_upload,
+    LightUpload, LightUploadState, LightsLayout, PendingLightUploads, extract_light_upload, prepare_gpu_lights,
+    stage_light_upload,
 };
 use crate::world::VoxelWorld;
 use crate::world::events::{ApplyEdits, EditApplied};
@@ -33,6 +34,7 @@ impl Plugin for LightsPlugin {
         if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
             render_app
                 .init_resource::<PendingLightUploads>()
+                .init_resource::<LightsLayout>()
                 .add_systems(ExtractSchedule, extract_light_upload)
                 .add_systems(Render, prepare_gpu_lights.in_set(RenderSystems::PrepareResources));
         }

@@ -6,7 +6,10 @@ use super::{AliasEntry, Light, LightPool};
 use crate::render::gpu_world::storage_buffer;
 use bevy::prelude::*;
 use bevy::render::Extract;
-use bevy::render::render_resource::Buffer;
+use bevy::render::render_resource::binding_types::storage_buffer_read_only_sized;
+use bevy::render::render_resource::{
+    BindGroup, BindGroupEntries, BindGroupLayoutDescriptor, BindGroupLayoutEntries, Buffer, PipelineCache, ShaderStages,
+};
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use std::sync::Arc;
 
@@ -94,6 +97,40 @@ pub struct GpuLights {
     pub alias_capacity: u32,
     pub light_count: u32,
     pub has_lights: bool,
+    /// Group 2 of the lighting passes (`shaders/lights.wgsl`): slots, then alias table.
+    pub bind_group: BindGroup,
+    /// Whether the lights changed this frame (accumulation restarts).
+    pub changed: bool,
+}
+
+/// Layout of the lights bind group.
+#[derive(Resource, Clone)]
+pub struct LightsLayout(pub BindGroupLayoutDescriptor);
+
+impl Default for LightsLayout {
+    fn default() -> Self {
+        LightsLayout(BindGroupLayoutDescriptor::new(
+            "glowbrick_lights_layout",
+            &BindGroupLayoutEntries::sequential(
+                ShaderStages::COMPUTE,
+                (storage_buffer_read_only_sized(false, None), storage_buffer_read_only_sized(false, None)),
+            ),
+        ))
+    }
+}
+
+fn lights_bind_group(
+    device: &RenderDevice,
+    cache: &PipelineCache,
+    layout: &LightsLayout,
+    lights: &Buffer,
+    alias: &Buffer,
+) -> BindGroup {
+    device.create_bind_group(
+        "glowbrick_lights",
+        &cache.get_bind_group_layout(&layout.0),
+        &BindGroupEntries::sequential((lights.as_entire_binding(), alias.as_entire_binding())),
+    )
 }
 
 /// Uploads not yet written, in order.
@@ -117,20 +154,28 @@ pub fn prepare_gpu_lights(
     mut commands: Commands,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
+    cache: Res<PipelineCache>,
+    layout: Res<LightsLayout>,
     mut pending: ResMut<PendingLightUploads>,
     mut gpu: Option<ResMut<GpuLights>>,
 ) {
+    if let Some(gpu) = gpu.as_deref_mut() {
+        gpu.changed = false;
+    }
     for upload in pending.0.drain(..) {
         if let Some(all) = &upload.full {
             let lights = storage_buffer(&device, "glowbrick_lights", bytemuck::cast_slice(all));
             let entries = upload.alias.as_deref().map_or(&[][..], |a| a.as_slice());
             let alias = storage_buffer(&device, "glowbrick_light_alias", &alias_bytes(entries));
+            let bind_group = lights_bind_group(&device, &cache, &layout, &lights, &alias);
             let fresh = GpuLights {
                 lights,
                 alias,
                 alias_capacity: entries.len().max(1) as u32,
                 light_count: upload.light_count,
                 has_lights: upload.light_count > 0,
+                bind_group,
+                changed: true,
             };
             match gpu.as_deref_mut() {
                 Some(existing) => *existing = fresh,
@@ -139,6 +184,7 @@ pub fn prepare_gpu_lights(
             continue;
         }
         let Some(gpu) = gpu.as_deref_mut() else { continue };
+        gpu.changed |= !upload.is_empty();
         for (slot, light) in &upload.slots {
             queue.write_buffer(&gpu.lights, *slot as u64 * size_of::<GpuLight>() as u64, bytemuck::bytes_of(light));
         }
@@ -146,6 +192,7 @@ pub fn prepare_gpu_lights(
             if entries.len() as u32 > gpu.alias_capacity {
                 gpu.alias = storage_buffer(&device, "glowbrick_light_alias", &alias_bytes(entries));
                 gpu.alias_capacity = entries.len() as u32;
+                gpu.bind_group = lights_bind_group(&device, &cache, &layout, &gpu.lights, &gpu.alias);
             } else if !entries.is_empty() {
                 queue.write_buffer(&gpu.alias, 0, bytemuck::cast_slice(entries));
             }

@@ -4,7 +4,7 @@
 //! 1. main world, PostUpdate: `upload::stage_world_upload` turns the world's dirty bricks into an upload;
 //! 2. extract: `upload::extract_world_upload` copies it to the render world;
 //! 3. Render / PrepareResources: `gpu_world::prepare_gpu_world` writes it to GPU buffers,
-//!    `primary::prepare_frame_params` writes this frame's settings;
+//!    `primary::prepare_view_resources` writes each view's parameters and restarts accumulation on change;
 //! 4. Core3d / MainPass, per camera with `VoxelCamera`: `primary::primary_pass`; then Bevy's tonemapping.
 
 pub mod camera;
@@ -31,6 +31,7 @@ use std::sync::atomic::AtomicU32;
 pub struct GlowbrickShaders {
     pub world: Handle<Shader>,
     pub traversal: Handle<Shader>,
+    pub lights: Handle<Shader>,
     pub primary: Handle<Shader>,
 }
 
@@ -65,6 +66,7 @@ impl Plugin for VoxelRenderPlugin {
         let handles = GlowbrickShaders {
             world: add(include_str!("../../shaders/world.wgsl"), "glowbrick/world.wgsl"),
             traversal: add(include_str!("../../shaders/traversal.wgsl"), "glowbrick/traversal.wgsl"),
+            lights: add(include_str!("../../shaders/lights.wgsl"), "glowbrick/lights.wgsl"),
             primary: add(include_str!("../../shaders/primary.wgsl"), "glowbrick/primary.wgsl"),
         };
         let frames = app.world().get_resource::<FramesRendered>().cloned().unwrap_or_default();
@@ -91,7 +93,10 @@ impl Plugin for VoxelRenderPlugin {
             .add_systems(ExtractSchedule, upload::extract_world_upload)
             .add_systems(
                 Render,
-                (gpu_world::prepare_gpu_world, primary::prepare_frame_params).in_set(RenderSystems::PrepareResources),
+                (gpu_world::prepare_gpu_world, primary::prepare_view_resources)
+                    .chain()
+                    .after(crate::lights::upload::prepare_gpu_lights)
+                    .in_set(RenderSystems::PrepareResources),
             )
             .add_systems(Core3d, primary::primary_pass.after(main_transparent_pass_3d).in_set(Core3dSystems::MainPass));
     }

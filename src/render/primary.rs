@@ -1,18 +1,22 @@
-//! The primary-ray pass: a compute shader per camera that traces the brick grid and writes the HDR view target.
+//! The primary-ray pass: a compute shader per camera that traces the brick grid, lights the hit (sun and sky,
+//! or next-event estimation over the light pool), optionally accumulates frames, and writes the HDR view target.
 //! Runs in Bevy's `Core3d` schedule after the (empty) main passes and before tonemapping.
 
 use super::gpu_world::{GpuWorld, WorldLayout};
 use super::{FramesRendered, GlowbrickShaders, Highlight, VoxelCamera, shader_defs};
-use crate::settings::RenderSettings;
+use crate::lights::upload::{GpuLights, LightsLayout};
+use crate::settings::{Lighting, RenderSettings};
 use bevy::prelude::*;
-use bevy::render::render_resource::binding_types::{texture_storage_2d, uniform_buffer, uniform_buffer_sized};
+use bevy::render::render_resource::binding_types::{
+    storage_buffer_sized, texture_storage_2d, uniform_buffer, uniform_buffer_sized,
+};
 use bevy::render::render_resource::*;
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
-use bevy::render::view::{ViewTarget, ViewUniform, ViewUniformOffset, ViewUniforms};
+use bevy::render::view::{ExtractedView, ViewTarget, ViewUniform, ViewUniformOffset, ViewUniforms};
 use std::num::NonZeroU64;
 use std::sync::atomic::Ordering;
 
-/// Per-frame parameters (`FrameParams` in `shaders/primary.wgsl`).
+/// Per-view, per-frame parameters (`FrameParams` in `shaders/primary.wgsl`).
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct FrameParams {
@@ -23,12 +27,20 @@ pub struct FrameParams {
     pub debug_view: u32,
     pub shadows: u32,
     pub exposure: f32,
+    /// Frame number, seeds the per-pixel random numbers.
     pub frame: u32,
     /// Targeted voxel (xyz) and face + 1 (w; 0 = none).
     pub target: [i32; 4],
     /// Box selection corners, inclusive; `selection_min.w` is 1 when a selection is shown.
     pub selection_min: [i32; 4],
     pub selection_max: [i32; 4],
+    /// 0: sun and sky; 1: next-event estimation over the light pool.
+    pub lighting: u32,
+    /// 1: pick lights by power (alias table); 0: uniformly.
+    pub power_pick: u32,
+    pub light_count: u32,
+    /// Frames averaged including this one; 1 restarts the average.
+    pub accumulated: u32,
 }
 
 impl FrameParams {
@@ -46,6 +58,10 @@ impl FrameParams {
             target: highlight.target.map_or([0; 4], |(v, face)| [v.x, v.y, v.z, face as i32 + 1]),
             selection_min: highlight.selection.map_or([0; 4], |(a, _)| [a.x, a.y, a.z, 1]),
             selection_max: highlight.selection.map_or([0; 4], |(_, b)| [b.x, b.y, b.z, 1]),
+            lighting: (settings.lighting == Lighting::Nee) as u32,
+            power_pick: settings.power_pick as u32,
+            light_count: 0,
+            accumulated: 1,
         }
     }
 }
@@ -55,15 +71,33 @@ impl FrameParams {
 pub struct PrimaryPipeline {
     view_layout: BindGroupLayoutDescriptor,
     pipeline: CachedComputePipelineId,
+}
+
+/// A view's own buffers: its frame parameters and the running sum of accumulated frames.
+#[derive(Component)]
+pub struct PrimaryViewResources {
     frame_params: Buffer,
+    accumulation: Buffer,
+    size: UVec2,
+    /// What the average so far was rendered with; any difference restarts it.
+    last_key: Option<AccumulationKey>,
+    accumulated: u32,
+}
+
+/// Everything that must stay the same for frames to be averaged.
+#[derive(Clone, Debug, PartialEq)]
+struct AccumulationKey {
+    clip_from_world: Mat4,
+    settings: RenderSettings,
+    highlight: Highlight,
 }
 
 pub fn init_primary_pipeline(
     mut commands: Commands,
     pipeline_cache: Res<PipelineCache>,
-    device: Res<RenderDevice>,
     shaders: Res<GlowbrickShaders>,
     world_layout: Res<WorldLayout>,
+    lights_layout: Res<LightsLayout>,
 ) {
     let view_layout = BindGroupLayoutDescriptor::new(
         "glowbrick_primary_view_layout",
@@ -73,24 +107,19 @@ pub fn init_primary_pipeline(
                 texture_storage_2d(TextureFormat::Rgba16Float, StorageTextureAccess::WriteOnly),
                 uniform_buffer::<ViewUniform>(true),
                 uniform_buffer_sized(false, NonZeroU64::new(size_of::<FrameParams>() as u64)),
+                storage_buffer_sized(false, None),
             ),
         ),
     );
     let pipeline = pipeline_cache.queue_compute_pipeline(ComputePipelineDescriptor {
         label: Some("glowbrick_primary".into()),
-        layout: vec![world_layout.0.clone(), view_layout.clone()],
+        layout: vec![world_layout.0.clone(), view_layout.clone(), lights_layout.0.clone()],
         shader: shaders.primary.clone(),
         shader_defs: shader_defs(),
         entry_point: Some("main".into()),
         ..default()
     });
-    let frame_params = device.create_buffer(&BufferDescriptor {
-        label: Some("glowbrick_frame_params"),
-        size: size_of::<FrameParams>() as u64,
-        usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    commands.insert_resource(PrimaryPipeline { view_layout, pipeline, frame_params });
+    commands.insert_resource(PrimaryPipeline { view_layout, pipeline });
 }
 
 /// The primary pipeline's compile error, if it failed (so headless callers fail fast instead of waiting).
@@ -104,33 +133,80 @@ pub fn pipeline_error(render_world: &World) -> Option<String> {
     }
 }
 
-/// Writes this frame's parameters (Render schedule, PrepareResources).
-pub fn prepare_frame_params(
-    pipeline: Option<Res<PrimaryPipeline>>,
+/// Creates each view's buffers and writes its frame parameters, restarting accumulation when anything that
+/// affects the image changed (Render schedule, PrepareResources, after the world and light uploads).
+#[allow(clippy::too_many_arguments)]
+pub fn prepare_view_resources(
+    mut commands: Commands,
+    mut views: Query<(Entity, &ExtractedView, Option<&mut PrimaryViewResources>), With<VoxelCamera>>,
     settings: Option<Res<RenderSettings>>,
     highlight: Option<Res<Highlight>>,
+    gpu_world: Option<Res<GpuWorld>>,
+    gpu_lights: Option<Res<GpuLights>>,
     frames: Res<FramesRendered>,
+    device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
 ) {
-    let Some(pipeline) = pipeline else { return };
     let settings = settings.map(|s| s.clone()).unwrap_or_default();
     let highlight = highlight.map(|h| *h).unwrap_or_default();
-    let params = FrameParams::new(&settings, &highlight, frames.0.load(Ordering::Relaxed));
-    queue.write_buffer(&pipeline.frame_params, 0, bytemuck::bytes_of(&params));
+    let scene_changed =
+        gpu_world.as_ref().is_some_and(|w| w.uploaded_bytes > 0) || gpu_lights.as_ref().is_some_and(|l| l.changed);
+    let mut params = FrameParams::new(&settings, &highlight, frames.0.load(Ordering::Relaxed));
+    params.light_count = gpu_lights.as_ref().map_or(0, |l| l.light_count);
+    for (entity, view, resources) in &mut views {
+        let size = view.viewport.zw();
+        let key = AccumulationKey {
+            clip_from_world: view.clip_from_view * view.world_from_view.to_matrix().inverse(),
+            settings: settings.clone(),
+            highlight,
+        };
+        let fresh = |device: &RenderDevice| PrimaryViewResources {
+            frame_params: device.create_buffer(&BufferDescriptor {
+                label: Some("glowbrick_frame_params"),
+                size: size_of::<FrameParams>() as u64,
+                usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            accumulation: device.create_buffer(&BufferDescriptor {
+                label: Some("glowbrick_accumulation"),
+                size: (size.x.max(1) * size.y.max(1)) as u64 * 16,
+                usage: BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            }),
+            size,
+            last_key: None,
+            accumulated: 0,
+        };
+        let mut created = None;
+        let resources: &mut PrimaryViewResources = match resources {
+            Some(r) if r.size == size => r.into_inner(),
+            _ => created.insert(fresh(&device)),
+        };
+        let same = settings.accumulate && !scene_changed && resources.last_key.as_ref() == Some(&key);
+        resources.accumulated = if same { resources.accumulated.saturating_add(1) } else { 1 };
+        resources.last_key = Some(key);
+        params.accumulated = resources.accumulated;
+        queue.write_buffer(&resources.frame_params, 0, bytemuck::bytes_of(&params));
+        if let Some(new) = created {
+            // A new or resized view: its buffers live on its render-world entity from now on.
+            commands.entity(entity).insert(new);
+        }
+    }
 }
 
 /// Dispatches the primary-ray shader for the current camera.
 pub fn primary_pass(
-    view: ViewQuery<(&ViewTarget, &ViewUniformOffset), With<VoxelCamera>>,
+    view: ViewQuery<(&ViewTarget, &ViewUniformOffset, &PrimaryViewResources), With<VoxelCamera>>,
     pipeline: Option<Res<PrimaryPipeline>>,
     pipeline_cache: Res<PipelineCache>,
     view_uniforms: Res<ViewUniforms>,
     gpu_world: Option<Res<GpuWorld>>,
+    gpu_lights: Option<Res<GpuLights>>,
     frames: Res<FramesRendered>,
     mut ctx: RenderContext,
 ) {
-    let (target, view_offset) = view.into_inner();
-    let (Some(pipeline), Some(gpu_world)) = (pipeline, gpu_world) else { return };
+    let (target, view_offset, resources) = view.into_inner();
+    let (Some(pipeline), Some(gpu_world), Some(gpu_lights)) = (pipeline, gpu_world, gpu_lights) else { return };
     let Some(compute) = pipeline_cache.get_compute_pipeline(pipeline.pipeline) else { return };
     let Some(view_binding) = view_uniforms.uniforms.binding() else { return };
     let output = target.get_unsampled_color_attachment();
@@ -138,7 +214,12 @@ pub fn primary_pass(
     let view_group = ctx.render_device().create_bind_group(
         "glowbrick_primary_view",
         &pipeline_cache.get_bind_group_layout(&pipeline.view_layout),
-        &BindGroupEntries::sequential((output.view, view_binding, pipeline.frame_params.as_entire_binding())),
+        &BindGroupEntries::sequential((
+            output.view,
+            view_binding,
+            resources.frame_params.as_entire_binding(),
+            resources.accumulation.as_entire_binding(),
+        )),
     );
     let mut pass = ctx
         .command_encoder()
@@ -146,6 +227,7 @@ pub fn primary_pass(
     pass.set_pipeline(compute);
     pass.set_bind_group(0, &gpu_world.bind_group, &[]);
     pass.set_bind_group(1, &view_group, &[view_offset.offset]);
+    pass.set_bind_group(2, &gpu_lights.bind_group, &[]);
     pass.dispatch_workgroups(size.width.div_ceil(8), size.height.div_ceil(8), 1);
     frames.0.fetch_add(1, Ordering::Relaxed);
 }

@@ -1,0 +1,133 @@
+// The light pool on the GPU: slots and the power alias table (src/lights), and next-event estimation with one
+// light sample and a shadow ray. Mirrors src/reference (Scene::direct_sample) so GPU and CPU estimate the same
+// integral: pick a light (power or uniform), a uniform point on a cube face that sees the point, one shadow ray.
+#define_import_path glowbrick::lights
+
+#import glowbrick::traversal::trace
+
+struct Light {
+    min: vec3<i32>,
+    // Edge in voxels; 0 marks a free slot.
+    size: i32,
+    radiance: vec3<f32>,
+    generation: u32,
+}
+
+struct AliasEntry {
+    threshold: f32,
+    alias_column: u32,
+    slot: u32,
+    pdf: f32,
+}
+
+@group(2) @binding(0) var<storage, read> lights: array<Light>;
+@group(2) @binding(1) var<storage, read> alias_table: array<AliasEntry>;
+
+const PI: f32 = 3.14159265;
+// Keeps secondary rays off the voxel they start on; src/reference uses the same.
+const RAY_OFFSET: f32 = 1e-3;
+
+// PCG hash (Jarzynski & Olano 2020) for per-pixel random numbers.
+fn pcg(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+struct Rng {
+    state: u32,
+}
+
+fn rng_next(rng: ptr<function, Rng>) -> f32 {
+    (*rng).state = pcg((*rng).state);
+    return f32((*rng).state >> 8u) * (1.0 / 16777216.0);
+}
+
+struct PickedLight {
+    slot: u32,
+    pdf: f32,
+}
+
+// A light by power (alias table) or uniformly over the live lights (the table lists them all).
+fn pick_light(count: u32, power: bool, u_column: f32, u_pick: f32) -> PickedLight {
+    let column = min(u32(u_column * f32(count)), count - 1u);
+    let entry = alias_table[column];
+    if !power {
+        return PickedLight(entry.slot, 1.0 / f32(count));
+    }
+    if u_pick < entry.threshold {
+        return PickedLight(entry.slot, entry.pdf);
+    }
+    let other = alias_table[entry.alias_column];
+    return PickedLight(other.slot, other.pdf);
+}
+
+fn light_contains(light: Light, voxel: vec3<i32>) -> bool {
+    return all(voxel >= light.min) && all(voxel < light.min + vec3(light.size));
+}
+
+// One next-event-estimation sample of the radiance reflected by a diffuse surface at p (normal n).
+fn direct_sample(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, count: u32, power: bool, rng: ptr<function, Rng>) -> vec3<f32> {
+    if count == 0u {
+        return vec3(0.0);
+    }
+    let picked = pick_light(count, power, rng_next(rng), rng_next(rng));
+    let light = lights[picked.slot];
+    if light.size == 0 {
+        return vec3(0.0);
+    }
+    let lo = vec3<f32>(light.min);
+    let size = f32(light.size);
+    let hi = lo + vec3(size);
+    // The cube faces whose front sides see p; choose one uniformly.
+    var axes: array<u32, 3>;
+    var signs: array<f32, 3>;
+    var faces = 0u;
+    for (var a = 0u; a < 3u; a++) {
+        if p[a] > hi[a] {
+            axes[faces] = a;
+            signs[faces] = 1.0;
+            faces++;
+        } else if p[a] < lo[a] {
+            axes[faces] = a;
+            signs[faces] = -1.0;
+            faces++;
+        }
+    }
+    let u_face = rng_next(rng);
+    let u = rng_next(rng);
+    let v = rng_next(rng);
+    if faces == 0u {
+        return vec3(0.0);
+    }
+    let f = min(u32(u_face * f32(faces)), faces - 1u);
+    let axis = axes[f];
+    let sign = signs[f];
+    var q = lo;
+    q[axis] = select(lo[axis], hi[axis], sign > 0.0);
+    q[(axis + 1u) % 3u] = lo[(axis + 1u) % 3u] + u * size;
+    q[(axis + 2u) % 3u] = lo[(axis + 2u) % 3u] + v * size;
+    var light_normal = vec3(0.0);
+    light_normal[axis] = sign;
+    let pdf_area = 1.0 / (f32(faces) * size * size);
+
+    let to_light = q - p;
+    let d2 = dot(to_light, to_light);
+    if d2 <= 1e-12 {
+        return vec3(0.0);
+    }
+    let d = sqrt(d2);
+    let wi = to_light / d;
+    let cos_surface = dot(n, wi);
+    let cos_light = -dot(light_normal, wi);
+    if cos_surface <= 0.0 || cos_light <= 0.0 {
+        return vec3(0.0);
+    }
+    let origin = p + n * RAY_OFFSET;
+    let hit = trace(origin, normalize(q - origin), d + 1.0);
+    if !hit.found || !light_contains(light, hit.voxel) {
+        return vec3(0.0);
+    }
+    let pdf = max(picked.pdf * pdf_area, 1e-30);
+    return albedo * light.radiance * (cos_surface * cos_light / d2 / pdf / PI);
+}
