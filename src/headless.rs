@@ -11,6 +11,7 @@ use bevy::camera::RenderTarget;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::log::LogPlugin;
 use bevy::prelude::*;
+use bevy::render::diagnostic::RenderDiagnosticsPlugin;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::{PollType, TextureFormat, TextureUsages};
@@ -83,7 +84,7 @@ impl HeadlessRenderer {
         )
         .insert_resource(world)
         .insert_resource(options.settings.clone())
-        .add_plugins(crate::GlowbrickCorePlugin);
+        .add_plugins((crate::GlowbrickCorePlugin, RenderDiagnosticsPlugin));
 
         let mut image = Image::new_target_texture(w, h, TextureFormat::Rgba32Float, None);
         image.texture_descriptor.usage |= TextureUsages::COPY_SRC;
@@ -118,6 +119,19 @@ impl HeadlessRenderer {
     /// Frames the primary pass has dispatched so far.
     pub fn frames_rendered(&self) -> u32 {
         self.frames.0.load(Ordering::Relaxed)
+    }
+
+    /// Mean GPU time of the pass called `name` over the recent frames, in milliseconds, when the adapter
+    /// records timestamps.
+    pub fn gpu_pass_ms(&self, name: &str) -> Option<f64> {
+        let store = self.app.world().get_resource::<bevy::diagnostic::DiagnosticsStore>()?;
+        store
+            .iter()
+            .find(|d| {
+                let path = d.path().as_str();
+                path.ends_with(&format!("{name}/elapsed_gpu"))
+            })
+            .and_then(|d| d.average())
     }
 
     /// Runs one frame and waits for the GPU (one frame in flight: on software Vulkan, queued frames would

@@ -3,6 +3,7 @@
 //! Layers, bottom up: `world` (the brick grid and its files), `render` (GPU upload and passes as Bevy systems),
 //! `game` (the playable app), `headless` (rendering to files without a window).
 
+pub mod bench;
 pub mod game;
 pub mod headless;
 pub mod image_io;

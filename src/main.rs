@@ -38,6 +38,17 @@ enum Command {
         #[arg(long)]
         diff: Option<PathBuf>,
     },
+    /// Measure run time against error for scenes x settings; writes results.csv, report.md and plot.png.
+    Bench {
+        /// Comma-separated scene names (default: all thesis-like scenes, or a small set with --quick).
+        #[arg(long, value_delimiter = ',')]
+        scenes: Vec<String>,
+        /// A small, fast run (96x64, few frames, 256-spp references) for CI.
+        #[arg(long)]
+        quick: bool,
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Validate a world file or scene recipe and print a summary (exit code 1 on error).
     CheckWorld { path: PathBuf },
 }
@@ -155,6 +166,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render(args),
         Command::Reference(args) => reference(args),
         Command::Compare { image, reference, diff } => compare(image, reference, diff),
+        Command::Bench { scenes, quick, out } => bench(scenes, quick, out),
         Command::CheckWorld { path } => check_world(path),
     };
     match result {
@@ -267,6 +279,16 @@ fn compare(image: PathBuf, reference: PathBuf, diff: Option<PathBuf>) -> Result<
         write_png_plain(&metrics::error_image(&a, &b, (4.0 * m.mae).max(1e-6) as f32), &path)?;
     }
     println!("{m}");
+    Ok(())
+}
+
+fn bench(scenes: Vec<String>, quick: bool, out: PathBuf) -> Result<(), String> {
+    use glowbrick::bench::{ALL_SCENES, BenchConfig, QUICK_SCENES, run_bench};
+    let defaults = if quick { QUICK_SCENES } else { ALL_SCENES };
+    let scenes = if scenes.is_empty() { defaults.iter().map(|s| s.to_string()).collect() } else { scenes };
+    let config = if quick { BenchConfig::quick() } else { BenchConfig::full() };
+    let rows = run_bench(&scenes, &config, &out)?;
+    println!("wrote {} rows to {}/results.csv, report.md, plot.png", rows.len(), out.display());
     Ok(())
 }
 

@@ -7,6 +7,7 @@ use super::{FramesRendered, GlowbrickShaders, Highlight, VoxelCamera, shader_def
 use crate::lights::upload::{GpuLights, LightsLayout};
 use crate::settings::{Lighting, RenderSettings};
 use bevy::prelude::*;
+use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::binding_types::{
     storage_buffer_sized, texture_storage_2d, uniform_buffer, uniform_buffer_sized,
 };
@@ -65,6 +66,9 @@ impl FrameParams {
         }
     }
 }
+
+/// The name the pass's GPU time is recorded under.
+pub const PRIMARY_PASS_NAME: &str = "glowbrick_primary";
 
 /// The pipeline and its per-view layout.
 #[derive(Resource)]
@@ -221,13 +225,18 @@ pub fn primary_pass(
             resources.accumulation.as_entire_binding(),
         )),
     );
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
     let mut pass = ctx
         .command_encoder()
         .begin_compute_pass(&ComputePassDescriptor { label: Some("glowbrick_primary"), timestamp_writes: None });
+    // GPU time under "render/glowbrick_primary/elapsed_gpu" when RenderDiagnosticsPlugin is on (the bench).
+    let span = diagnostics.pass_span(&mut pass, PRIMARY_PASS_NAME);
     pass.set_pipeline(compute);
     pass.set_bind_group(0, &gpu_world.bind_group, &[]);
     pass.set_bind_group(1, &view_group, &[view_offset.offset]);
     pass.set_bind_group(2, &gpu_lights.bind_group, &[]);
     pass.dispatch_workgroups(size.width.div_ceil(8), size.height.div_ceil(8), 1);
+    span.end(&mut pass);
     frames.0.fetch_add(1, Ordering::Relaxed);
 }

@@ -1,4 +1,4 @@
-//! A 5 x 7 bitmap font for the `Text` scene op: A-Z, 0-9 and space. Each glyph is seven rows, top first; bit 4 is
+//! A 5 x 7 bitmap font for the `Text` scene op and the bench plot: A-Z, 0-9, '.', '-' and space. Each glyph is seven rows, top first; bit 4 is
 //! the leftmost column.
 
 /// The rows of `c` (case-insensitive), or `None` for characters the font lacks.
@@ -40,6 +40,8 @@ pub fn glyph(c: char) -> Option<[u8; 7]> {
         '7' => [0b11111, 0b00001, 0b00010, 0b00100, 0b01000, 0b01000, 0b01000],
         '8' => [0b01110, 0b10001, 0b10001, 0b01110, 0b10001, 0b10001, 0b01110],
         '9' => [0b01110, 0b10001, 0b10001, 0b01111, 0b00001, 0b00010, 0b01100],
+        '.' => [0, 0, 0, 0, 0, 0b01100, 0b01100],
+        '-' => [0, 0, 0, 0b11111, 0, 0, 0],
         ' ' => [0; 7],
         _ => return None,
     };

@@ -1,0 +1,213 @@
+//! Run time against error (`glowbrick bench`): every scene x setting is rendered headless with a fixed camera;
+//! the bench records the frame time and the primary pass's GPU time (timestamp queries, where the adapter has
+//! them) and the error of one frame against the CPU reference, cached under the target folder. It writes
+//! `results.csv`, `report.md` and `plot.png` (error against frame time, one panel per scene).
+//!
+//! Settings cover what the renderer has: the next-event-estimation baseline, one light sample per pixel with
+//! power or uniform light picking. ReSTIR and the GI cache join the list as they land.
+
+pub mod plot;
+
+use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::image_io::{LinearImage, read_image, write_image};
+use crate::reference::metrics::{Metrics, compare};
+use crate::reference::{ReferenceOptions, render_reference};
+use crate::render::primary::PRIMARY_PASS_NAME;
+use crate::settings::RenderSettings;
+use crate::world::format::world_to_string;
+use crate::world::scene::load_scene;
+use crate::world::{CameraView, VoxelWorld};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// A named group of `--set` pairs.
+#[derive(Clone, Debug)]
+pub struct BenchSetting {
+    pub name: &'static str,
+    pub pairs: &'static [&'static str],
+}
+
+/// The settings benchmarked today.
+pub const SETTINGS: &[BenchSetting] = &[
+    BenchSetting { name: "nee-power", pairs: &["lighting=nee", "pick=power"] },
+    BenchSetting { name: "nee-uniform", pairs: &["lighting=nee", "pick=uniform"] },
+];
+
+/// Scenes of a full run and of `--quick`.
+pub const ALL_SCENES: &[&str] = &["cornell", "letters", "apartments", "mountain", "window-room"];
+pub const QUICK_SCENES: &[&str] = &["cornell", "letters"];
+
+/// How big and how long.
+#[derive(Clone, Debug)]
+pub struct BenchConfig {
+    pub width: u32,
+    pub height: u32,
+    /// Frames rendered before timing (pipelines, caches).
+    pub warmup_frames: u32,
+    /// Frames timed.
+    pub timed_frames: u32,
+    pub reference_spp: u32,
+}
+
+impl BenchConfig {
+    pub fn full() -> Self {
+        BenchConfig { width: 320, height: 180, warmup_frames: 16, timed_frames: 64, reference_spp: 2048 }
+    }
+
+    pub fn quick() -> Self {
+        BenchConfig { width: 96, height: 64, warmup_frames: 4, timed_frames: 8, reference_spp: 256 }
+    }
+}
+
+/// One scene x setting.
+#[derive(Clone, Debug)]
+pub struct BenchRow {
+    pub scene: String,
+    pub setting: String,
+    pub frame_ms: f64,
+    pub gpu_ms: Option<f64>,
+    pub metrics: Metrics,
+}
+
+/// Where references are cached: `$GLOWBRICK_CACHE`, else `$CARGO_TARGET_DIR/glowbrick-reference`, else
+/// `target/glowbrick-reference` in the crate.
+pub fn cache_dir() -> PathBuf {
+    if let Some(dir) = std::env::var_os("GLOWBRICK_CACHE") {
+        return PathBuf::from(dir);
+    }
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("target"));
+    target.join("glowbrick-reference")
+}
+
+/// FNV-1a, stable across runs and platforms (the cache key must not change between builds).
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+}
+
+/// The direct-light reference of a scene view, computed once and cached by world, view, size and spp.
+pub fn cached_reference(world: &VoxelWorld, view: &CameraView, config: &BenchConfig) -> Result<LinearImage, String> {
+    let key = format!(
+        "{}|{:?}|{}x{}|{}spp|direct",
+        world_to_string(world),
+        view,
+        config.width,
+        config.height,
+        config.reference_spp
+    );
+    let path = cache_dir().join(format!("{:016x}.exr", fnv1a(key.as_bytes())));
+    if let Ok(image) = read_image(&path)
+        && (image.width, image.height) == (config.width, config.height)
+    {
+        return Ok(image);
+    }
+    let options = ReferenceOptions {
+        width: config.width,
+        height: config.height,
+        spp: config.reference_spp,
+        ..Default::default()
+    };
+    let reference = render_reference(world, view, &options)?;
+    std::fs::create_dir_all(cache_dir()).map_err(|e| format!("{}: {e}", cache_dir().display()))?;
+    write_image(&reference.image, &path)?;
+    eprintln!(
+        "bench: reference {} in {:.1} s ({} spp)",
+        path.display(),
+        reference.elapsed.as_secs_f64(),
+        reference.spp
+    );
+    Ok(reference.image)
+}
+
+/// Renders one scene under one setting and measures it.
+fn measure(
+    world: &VoxelWorld,
+    view: &CameraView,
+    setting: &BenchSetting,
+    config: &BenchConfig,
+    reference: &LinearImage,
+) -> Result<(f64, Option<f64>, Metrics), String> {
+    let pairs: Vec<String> = setting.pairs.iter().map(|p| p.to_string()).collect();
+    let settings = RenderSettings::default().with_pairs(&pairs)?;
+    let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
+    let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;
+    renderer.render(config.warmup_frames.max(1))?;
+    let start = Instant::now();
+    for _ in 0..config.timed_frames {
+        renderer.step();
+    }
+    let frame_ms = start.elapsed().as_secs_f64() * 1000.0 / config.timed_frames.max(1) as f64;
+    let gpu_ms = renderer.gpu_pass_ms(PRIMARY_PASS_NAME);
+    let image = renderer.render(1)?;
+    Ok((frame_ms, gpu_ms, compare(&image, reference)?))
+}
+
+/// Runs every scene x setting and writes the three outputs to `out`.
+pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<Vec<BenchRow>, String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let mut rows = Vec::new();
+    for name in scenes {
+        let world = load_scene(name).map_err(|e| e.to_string())?;
+        let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
+        let reference = cached_reference(&world, &view, config)?;
+        for setting in SETTINGS {
+            let (frame_ms, gpu_ms, metrics) = measure(&world, &view, setting, config, &reference)?;
+            eprintln!("bench: {name} {}: {frame_ms:.2} ms/frame, {metrics}", setting.name);
+            rows.push(BenchRow { scene: name.clone(), setting: setting.name.to_string(), frame_ms, gpu_ms, metrics });
+        }
+    }
+    write_csv(&rows, &out.join("results.csv"))?;
+    write_markdown(&rows, config, &out.join("report.md"))?;
+    plot::write_plot(&rows, &out.join("plot.png"))?;
+    Ok(rows)
+}
+
+fn gpu_text(ms: Option<f64>) -> String {
+    ms.map_or("n/a".to_string(), |v| format!("{v:.3}"))
+}
+
+fn write_csv(rows: &[BenchRow], path: &Path) -> Result<(), String> {
+    let mut text = String::from("scene,setting,frame_ms,primary_gpu_ms,mae,mse,relmse,bias\n");
+    for r in rows {
+        let m = r.metrics;
+        text += &format!(
+            "{},{},{:.4},{},{:.6},{:.6},{:.6},{:.6}\n",
+            r.scene,
+            r.setting,
+            r.frame_ms,
+            gpu_text(r.gpu_ms),
+            m.mae,
+            m.mse,
+            m.relmse,
+            m.bias
+        );
+    }
+    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn write_markdown(rows: &[BenchRow], config: &BenchConfig, path: &Path) -> Result<(), String> {
+    let mut text = format!(
+        "# Run time against error\n\n{}x{}, one frame (1 sample per pixel, no accumulation) against a {}-spp \
+         direct-light CPU reference; frame time averaged over {} frames after {} warm-up frames. `primary GPU ms` \
+         is the primary pass's timestamp-query time (n/a where the adapter has no timestamps).\n\n\
+         | scene | setting | frame ms | primary GPU ms | MAE | MSE | relMSE | bias |\n|---|---|---|---|---|---|---|---|\n",
+        config.width, config.height, config.reference_spp, config.timed_frames, config.warmup_frames
+    );
+    for r in rows {
+        let m = r.metrics;
+        text += &format!(
+            "| {} | {} | {:.2} | {} | {:.5} | {:.5} | {:.4} | {:+.5} |\n",
+            r.scene,
+            r.setting,
+            r.frame_ms,
+            gpu_text(r.gpu_ms),
+            m.mae,
+            m.mse,
+            m.relmse,
+            m.bias
+        );
+    }
+    text += "\n![error against frame time](plot.png)\n";
+    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+}

@@ -1,0 +1,36 @@
+//! `glowbrick bench --quick` runs headless on any adapter and writes its three outputs with sane contents.
+
+use std::process::Command;
+
+#[test]
+fn quick_bench_writes_csv_markdown_and_plot() {
+    if std::env::var("GLOWBRICK_REQUIRE_GPU").as_deref() != Ok("1") {
+        eprintln!("skipping: set GLOWBRICK_REQUIRE_GPU=1 to run the bench on the GPU");
+        return;
+    }
+    let out = std::env::temp_dir().join(format!("glowbrick-bench-{}", std::process::id()));
+    let cache = out.join("cache");
+    let run = Command::new(env!("CARGO_BIN_EXE_glowbrick"))
+        .args(["bench", "--quick", "--out", out.to_str().unwrap()])
+        .env("GLOWBRICK_CACHE", &cache)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], "scene,setting,frame_ms,primary_gpu_ms,mae,mse,relmse,bias");
+    assert_eq!(lines.len(), 1 + 2 * 2, "two scenes x two settings:\n{csv}");
+    for line in &lines[1..] {
+        let fields: Vec<&str> = line.split(',').collect();
+        let frame_ms: f64 = fields[2].parse().unwrap();
+        let mae: f64 = fields[4].parse().unwrap();
+        assert!(frame_ms > 0.0 && mae.is_finite() && mae > 0.0, "{line}");
+    }
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("| cornell | nee-power |") && report.contains("plot.png"));
+    let plot = image::open(out.join("plot.png")).unwrap();
+    assert!(plot.width() >= 400 && plot.height() >= 300);
+    // The references were cached: a second run reuses them.
+    let cached = std::fs::read_dir(&cache).unwrap().count();
+    assert_eq!(cached, 2);
+}
