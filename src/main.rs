@@ -53,16 +53,24 @@ enum Command {
     CheckWorld { path: PathBuf },
 }
 
+/// A world, a camera view of it and an image size: what `render` and `reference` both take.
 #[derive(Args)]
-struct ReferenceArgs {
+struct ShotArgs {
     #[command(flatten)]
     world: WorldArgs,
+    /// A named camera view of the world (default: its first view, or an overview).
     #[arg(long)]
     view: Option<String>,
     #[arg(long, default_value_t = 320)]
     width: u32,
     #[arg(long, default_value_t = 180)]
     height: u32,
+}
+
+#[derive(Args)]
+struct ReferenceArgs {
+    #[command(flatten)]
+    shot: ShotArgs,
     /// Samples per pixel.
     #[arg(long, default_value_t = 256)]
     spp: u32,
@@ -119,14 +127,7 @@ struct SettingArgs {
 #[derive(Args)]
 struct RenderArgs {
     #[command(flatten)]
-    world: WorldArgs,
-    /// A named camera view of the world (default: its first view, or an overview).
-    #[arg(long)]
-    view: Option<String>,
-    #[arg(long, default_value_t = 320)]
-    width: u32,
-    #[arg(long, default_value_t = 180)]
-    height: u32,
+    shot: ShotArgs,
     /// Frames to render before writing the last one.
     #[arg(long, default_value_t = 1)]
     frames: u32,
@@ -221,10 +222,15 @@ fn check_output(path: &std::path::Path, allowed: &[&str]) -> Result<(), String> 
 
 fn render(args: RenderArgs) -> Result<(), String> {
     let settings = RenderSettings::default().with_pairs(&args.settings.pairs)?;
-    let (world, view) = world_and_view(&args.world, args.view.as_deref(), "render")?;
+    let (world, view) = world_and_view(&args.shot.world, args.shot.view.as_deref(), "render")?;
     check_output(&args.out, &["png", "exr"])?;
-    let options =
-        HeadlessOptions { width: args.width, height: args.height, frames: args.frames, settings, ..Default::default() };
+    let options = HeadlessOptions {
+        width: args.shot.width,
+        height: args.shot.height,
+        frames: args.frames,
+        settings,
+        ..Default::default()
+    };
     let start = std::time::Instant::now();
     let image = render_headless(world, &view, &options)?;
     write_image(&image, &args.out)?;
@@ -241,14 +247,14 @@ fn render(args: RenderArgs) -> Result<(), String> {
 }
 
 fn reference(args: ReferenceArgs) -> Result<(), String> {
-    let (world, view) = world_and_view(&args.world, args.view.as_deref(), "reference")?;
+    let (world, view) = world_and_view(&args.shot.world, args.shot.view.as_deref(), "reference")?;
     check_output(&args.out, &["exr", "png"])?;
     if let Some(s) = args.seconds.filter(|s| !(s.is_finite() && *s > 0.0)) {
         return Err(format!("--seconds {s} must be a positive number"));
     }
     let options = ReferenceOptions {
-        width: args.width,
-        height: args.height,
+        width: args.shot.width,
+        height: args.shot.height,
         spp: args.spp,
         bounces: args.bounces,
         seed: args.seed,
@@ -259,8 +265,8 @@ fn reference(args: ReferenceArgs) -> Result<(), String> {
     println!(
         "wrote {} ({}x{}, view '{}', {} spp, {} bounces, {:.1} s)",
         args.out.display(),
-        args.width,
-        args.height,
+        args.shot.width,
+        args.shot.height,
         view.name,
         result.spp,
         args.bounces,

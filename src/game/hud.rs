@@ -168,7 +168,7 @@ fn update_hotbar(
     }
 }
 
-#[allow(clippy::too_many_arguments)]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn update_texts(
     time: Res<Time>,
     mut smoothed_dt: Local<f32>,
@@ -179,9 +179,11 @@ fn update_texts(
     pool: Res<LightPool>,
     player: Query<&Player>,
     mut status: ResMut<StatusLine>,
-    mut stats: Query<&mut Text, (With<StatsText>, Without<MaterialText>, Without<StatusText>)>,
-    mut material_text: Query<&mut Text, (With<MaterialText>, Without<StatusText>)>,
-    mut status_text: Query<&mut Text, With<StatusText>>,
+    mut texts: ParamSet<(
+        Query<&mut Text, With<StatsText>>,
+        Query<&mut Text, With<MaterialText>>,
+        Query<&mut Text, With<StatusText>>,
+    )>,
 ) {
     let dt = time.delta_secs();
     *smoothed_dt = if *smoothed_dt == 0.0 { dt } else { *smoothed_dt * 0.9 + dt * 0.1 };
@@ -193,7 +195,7 @@ fn update_texts(
     };
     let target = target.0.map_or("-".to_string(), |h| format!("{} {} {}", h.voxel.x, h.voxel.y, h.voxel.z));
     let (voxel_lights, brick_lights) = pool.counts();
-    if let Ok(mut t) = stats.single_mut() {
+    if let Ok(mut t) = texts.p0().single_mut() {
         t.0 = format!(
             "{:.0} fps  {:.1} ms\nlights {} (voxel {voxel_lights}, brick {brick_lights})\n{mode} | brush {brush}\ntarget {target}",
             1.0 / smoothed_dt.max(1e-6),
@@ -201,7 +203,7 @@ fn update_texts(
             pool.len(),
         );
     }
-    if let Ok(mut t) = material_text.single_mut() {
+    if let Ok(mut t) = texts.p1().single_mut() {
         t.0 = match world.palette.get(hotbar.material()) {
             Some(m) if m.is_emissive() => {
                 let [r, g, b] = m.emission;
@@ -212,7 +214,7 @@ fn update_texts(
         };
     }
     status.remaining -= dt;
-    if let Ok(mut t) = status_text.single_mut() {
+    if let Ok(mut t) = texts.p2().single_mut() {
         let shown = if status.remaining > 0.0 { status.text.as_str() } else { "" };
         if t.0 != shown {
             t.0 = shown.to_string();

@@ -156,7 +156,7 @@ fn steer_player(
     if player.walking {
         // Walk in the horizontal plane whatever the pitch.
         let forward = Vec3::new(-player.yaw.sin(), 0.0, -player.yaw.cos());
-        let right = Vec3::new(forward.z * -1.0, 0.0, forward.x);
+        let right = Vec3::new(-forward.z, 0.0, forward.x);
         let horizontal = (forward * forward_axis + right * right_axis).normalize_or_zero() * WALK_SPEED * boost;
         if player.on_ground && keys.just_pressed(KeyCode::Space) {
             player.fall_speed = JUMP_SPEED;

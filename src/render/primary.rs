@@ -199,6 +199,7 @@ pub fn prepare_view_resources(
 }
 
 /// Dispatches the primary-ray shader for the current camera.
+#[allow(clippy::too_many_arguments)]
 pub fn primary_pass(
     view: ViewQuery<(&ViewTarget, &ViewUniformOffset, &PrimaryViewResources), With<VoxelCamera>>,
     pipeline: Option<Res<PrimaryPipeline>>,
