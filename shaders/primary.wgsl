@@ -71,7 +71,7 @@ fn highlight(colour: vec3<f32>, hit_voxel: vec3<i32>, face: u32, point: vec3<f32
     let uv = vec2(local[(axis + 1u) % 3u], local[(axis + 2u) % 3u]);
     let edge = min(min(uv.x, 1.0 - uv.x), min(uv.y, 1.0 - uv.y));
     // About two pixels wide at typical fields of view, whatever the distance.
-    let width = clamp(0.004 * distance, 0.02, 0.2);
+    let width = clamp(0.003 * distance, 0.006, 0.2);
     if edge < width {
         return vec3(0.02);
     }

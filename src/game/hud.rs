@@ -86,7 +86,14 @@ fn spawn_hud(mut commands: Commands) {
     }
     // Frame rate, lights, mode: top left.
     commands.spawn((
-        Node { position_type: PositionType::Absolute, left: Val::Px(10.0), top: Val::Px(8.0), ..default() },
+        Node {
+            position_type: PositionType::Absolute,
+            left: Val::Px(6.0),
+            top: Val::Px(6.0),
+            padding: UiRect::all(Val::Px(4.0)),
+            ..default()
+        },
+        BackgroundColor(Color::srgba(0.0, 0.0, 0.0, 0.45)),
         text("", 16.0),
         StatsText,
     ));
@@ -99,7 +106,7 @@ fn spawn_hud(mut commands: Commands) {
             justify_content: JustifyContent::Center,
             ..default()
         },
-        children![(text("", 18.0), StatusText)],
+        children![(text("", 18.0), BackgroundColor(Color::srgba(0.0, 0.0, 0.0, 0.45)), StatusText)],
     ));
     // Hotbar, material name and hint: bottom centre.
     commands
@@ -113,7 +120,7 @@ fn spawn_hud(mut commands: Commands) {
             ..default()
         })
         .with_children(|bottom| {
-            bottom.spawn((text("", 16.0), MaterialText));
+            bottom.spawn((text("", 16.0), BackgroundColor(Color::srgba(0.0, 0.0, 0.0, 0.45)), MaterialText));
             bottom.spawn(Node { column_gap: Val::Px(4.0), ..default() }).with_children(|row| {
                 for i in 0..9 {
                     row.spawn((
@@ -129,7 +136,7 @@ fn spawn_hud(mut commands: Commands) {
                     ));
                 }
             });
-            bottom.spawn(text(HINT, 13.0));
+            bottom.spawn((text(HINT, 13.0), BackgroundColor(Color::srgba(0.0, 0.0, 0.0, 0.45))));
         });
     // Help panel, hidden until F1.
     commands.spawn((
