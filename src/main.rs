@@ -195,6 +195,20 @@ fn play(args: PlayArgs) -> Result<(), String> {
     Ok(())
 }
 
+/// Runs GPU work, turning a panic inside the renderer (Bevy panics when no adapter exists) into one error.
+fn on_gpu<T>(work: impl FnOnce() -> Result<T, String>) -> Result<T, String> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)).unwrap_or_else(|panic| {
+        let reason = panic
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| panic.downcast_ref::<&str>().copied())
+            .unwrap_or("unknown panic");
+        Err(format!(
+            "the renderer stopped: {reason} (no GPU? on Debian `apt-get install mesa-vulkan-drivers` gives software Vulkan)"
+        ))
+    })
+}
+
 /// Loads the world of `--world`/`--scene` and picks the view named `view` (or its first, or an overview).
 fn world_and_view(world: &WorldArgs, view: Option<&str>, command: &str) -> Result<(VoxelWorld, CameraView), String> {
     let source = world.source().ok_or_else(|| format!("{command} needs --world PATH or --scene NAME"))?;
@@ -232,7 +246,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         ..Default::default()
     };
     let start = std::time::Instant::now();
-    let image = render_headless(world, &view, &options)?;
+    let image = on_gpu(|| render_headless(world, &view, &options))?;
     write_image(&image, &args.out)?;
     println!(
         "wrote {} ({}x{}, view '{}', {} frames, {:.2} s)",
@@ -293,7 +307,7 @@ fn bench(scenes: Vec<String>, quick: bool, out: PathBuf) -> Result<(), String> {
     let defaults = if quick { QUICK_SCENES } else { ALL_SCENES };
     let scenes = if scenes.is_empty() { defaults.iter().map(|s| s.to_string()).collect() } else { scenes };
     let config = if quick { BenchConfig::quick() } else { BenchConfig::full() };
-    let rows = run_bench(&scenes, &config, &out)?;
+    let rows = on_gpu(|| run_bench(&scenes, &config, &out))?;
     println!("wrote {} rows to {}/results.csv, report.md, plot.png", rows.len(), out.display());
     Ok(())
 }

@@ -68,6 +68,8 @@ pub struct LightPool {
     changed: BTreeSet<u32>,
     alias: AliasTable,
     alias_stale: bool,
+    /// Voxel lights per brick, so edits can skip bricks that have none and can have none.
+    voxel_lights_per_brick: HashMap<IVec3, u32>,
 }
 
 /// Rec. 709 luminance of linear RGB.
@@ -182,8 +184,22 @@ impl LightPool {
         }
     }
 
-    /// Re-evaluates the voxel lights of every voxel in `[lo, hi]` (inclusive, inside the world).
+    /// Re-evaluates the voxel lights of every voxel in `[lo, hi]` (inclusive, inside the world). Bricks that hold
+    /// no voxel light and cannot hold one (no emissive voxel, or uniform and whole) are skipped: a large fill
+    /// costs per brick, not per voxel.
     fn update_voxels(&mut self, world: &VoxelWorld, lo: IVec3, hi: IVec3) {
+        for b in brick_range(lo, hi) {
+            let has_lights = self.voxel_lights_per_brick.contains_key(&b);
+            if !has_lights && !brick_may_hold_voxel_lights(world, b) {
+                continue;
+            }
+            let brick_lo = (b * BRICK_SIZE).max(lo);
+            let brick_hi = (b * BRICK_SIZE + IVec3::splat(BRICK_SIZE - 1)).min(hi);
+            self.update_voxels_in(world, brick_lo, brick_hi);
+        }
+    }
+
+    fn update_voxels_in(&mut self, world: &VoxelWorld, lo: IVec3, hi: IVec3) {
         for z in lo.z..=hi.z {
             for y in lo.y..=hi.y {
                 for x in lo.x..=hi.x {
@@ -203,6 +219,15 @@ impl LightPool {
         match (self.by_key.get(&key).copied(), light) {
             (None, None) => {}
             (Some(slot), None) => {
+                if let LightKey::Voxel(p) = key {
+                    let brick = p >> 3_i32;
+                    if let Some(n) = self.voxel_lights_per_brick.get_mut(&brick) {
+                        *n -= 1;
+                        if *n == 0 {
+                            self.voxel_lights_per_brick.remove(&brick);
+                        }
+                    }
+                }
                 let s = &mut self.slots[slot as usize];
                 s.light = None;
                 s.generation = s.generation.wrapping_add(1);
@@ -223,6 +248,9 @@ impl LightPool {
                 });
                 self.slots[slot as usize].light = Some(light);
                 self.by_key.insert(key, slot);
+                if let LightKey::Voxel(p) = key {
+                    *self.voxel_lights_per_brick.entry(p >> 3_i32).or_insert(0) += 1;
+                }
                 self.mark(slot);
             }
         }
@@ -298,6 +326,16 @@ impl LightPool {
         let lights: Vec<(u32, f32)> = self.lights().map(|(slot, l)| (slot, l.power)).collect();
         self.alias = AliasTable::build(&lights);
         self.alias_stale = false;
+    }
+}
+
+/// Whether brick `b` could hold a voxel light: it has an emissive voxel and is not a whole uniform brick (a whole
+/// uniform emissive brick is a brick light or enclosed; either way none of its voxels is a voxel light).
+fn brick_may_hold_voxel_lights(world: &VoxelWorld, b: IVec3) -> bool {
+    match world.grid.cell(b) {
+        BrickCell::Empty => false,
+        BrickCell::Homogeneous(m) => world.palette.is_emissive(m) && brick_light_material(world, b).is_none(),
+        BrickCell::Pooled(slot) => world.grid.pool_brick(slot).iter().any(|&v| world.palette.is_emissive(v)),
     }
 }
 
