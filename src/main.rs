@@ -59,12 +59,35 @@ struct ShotArgs {
     #[command(flatten)]
     world: WorldArgs,
     /// A named camera view of the world (default: its first view, or an overview).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "camera")]
     view: Option<String>,
+    /// A camera in voxel units, y up: OX,OY,OZ,DX,DY,DZ[,FOV_DEG] (vertical field of view, default 60).
+    #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
+    camera: Option<CameraView>,
     #[arg(long, default_value_t = 320)]
     width: u32,
     #[arg(long, default_value_t = 180)]
     height: u32,
+}
+
+fn parse_camera(text: &str) -> Result<CameraView, String> {
+    let numbers: Vec<f32> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f32>().map_err(|_| format!("'{s}' is not a number")))
+        .collect::<Result<_, _>>()?;
+    if !(6..=7).contains(&numbers.len()) {
+        return Err(format!("'{text}' is not OX,OY,OZ,DX,DY,DZ[,FOV_DEG]"));
+    }
+    let view = CameraView {
+        name: "camera".into(),
+        origin: [numbers[0], numbers[1], numbers[2]],
+        direction: [numbers[3], numbers[4], numbers[5]],
+        fov_deg: numbers.get(6).copied().unwrap_or(60.0),
+    };
+    match view.problem() {
+        Some(problem) => Err(problem),
+        None => Ok(view),
+    }
 }
 
 #[derive(Args)]
@@ -209,10 +232,21 @@ fn on_gpu<T>(work: impl FnOnce() -> Result<T, String>) -> Result<T, String> {
     })
 }
 
-/// Loads the world of `--world`/`--scene` and picks the view named `view` (or its first, or an overview).
-fn world_and_view(world: &WorldArgs, view: Option<&str>, command: &str) -> Result<(VoxelWorld, CameraView), String> {
-    let source = world.source().ok_or_else(|| format!("{command} needs --world PATH or --scene NAME"))?;
-    let world = source.load().map_err(|e| e.to_string())?;
+impl ShotArgs {
+    /// Loads the world of `--world`/`--scene` and its camera: `--camera`, the view named `--view`, or the
+    /// world's first view, or an overview.
+    fn world_and_view(&self, command: &str) -> Result<(VoxelWorld, CameraView), String> {
+        let source = self.world.source().ok_or_else(|| format!("{command} needs --world PATH or --scene NAME"))?;
+        let world = source.load().map_err(|e| e.to_string())?;
+        if let Some(camera) = &self.camera {
+            return Ok((world, camera.clone()));
+        }
+        pick_view(world, self.view.as_deref())
+    }
+}
+
+/// The view named `view`, or the world's first, or an overview.
+fn pick_view(world: VoxelWorld, view: Option<&str>) -> Result<(VoxelWorld, CameraView), String> {
     let view = match view {
         Some(name) => world.view(Some(name)).cloned().ok_or_else(|| {
             let names: Vec<&str> = world.views.iter().map(|v| v.name.as_str()).collect();
@@ -236,7 +270,7 @@ fn check_output(path: &std::path::Path, allowed: &[&str]) -> Result<(), String> 
 
 fn render(args: RenderArgs) -> Result<(), String> {
     let settings = RenderSettings::default().with_pairs(&args.settings.pairs)?;
-    let (world, view) = world_and_view(&args.shot.world, args.shot.view.as_deref(), "render")?;
+    let (world, view) = args.shot.world_and_view("render")?;
     check_output(&args.out, &["png", "exr"])?;
     let options = HeadlessOptions {
         width: args.shot.width,
@@ -261,7 +295,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
 }
 
 fn reference(args: ReferenceArgs) -> Result<(), String> {
-    let (world, view) = world_and_view(&args.shot.world, args.shot.view.as_deref(), "reference")?;
+    let (world, view) = args.shot.world_and_view("reference")?;
     check_output(&args.out, &["exr", "png"])?;
     if let Some(s) = args.seconds.filter(|s| !(s.is_finite() && *s > 0.0)) {
         return Err(format!("--seconds {s} must be a positive number"));

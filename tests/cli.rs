@@ -58,7 +58,7 @@ fn bad_settings_and_arguments_fail_cleanly() {
     assert!(text(&out.stderr).contains("image size 0x180"), "{}", text(&out.stderr));
     let out = glowbrick(&["play", "--new", "--size", "4,4,4"]);
     assert!(!out.status.success());
-    assert!(text(&out.stderr).contains("must be within 8..=1024"), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("must be within 8..=2048"), "{}", text(&out.stderr));
 }
 
 /// `render` writes linear float EXR (values above 1 survive) and an 8-bit PNG, headless.

@@ -14,8 +14,8 @@ pub const BRICK_SIZE: i32 = 8;
 pub const BRICK_VOXELS: usize = 512;
 /// Top-cell flag marking a pooled brick; the low bits are its pool slot.
 pub const POOLED_FLAG: u32 = 0x8000_0000;
-/// The largest world edge, in voxels, on every axis (positions pack into 10 bits per axis).
-pub const MAX_WORLD_EDGE: u32 = 1024;
+/// The largest world edge, in voxels, on every axis (the thesis scenes are 1027 wide; the top grid stays small).
+pub const MAX_WORLD_EDGE: u32 = 2048;
 
 /// A material id; 0 is air.
 pub type Voxel = u16;

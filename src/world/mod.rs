@@ -5,6 +5,7 @@ pub mod events;
 pub mod font;
 pub mod format;
 pub mod grid;
+pub mod import;
 pub mod palette;
 pub mod scene;
 pub mod source;

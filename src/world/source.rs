@@ -27,15 +27,18 @@ impl WorldSource {
     }
 }
 
-/// Loads a path holding a world file or a scene recipe (told apart by the world file's `format` tag).
+/// Loads a path: a `.ron` world file or scene recipe (told apart by the world file's `format` tag), a thesis
+/// `.vx` scene or a MagicaVoxel `.vox` model.
 pub fn load_path(path: &std::path::Path) -> Result<VoxelWorld, LoadError> {
     let location = path.display().to_string();
-    match path.extension().and_then(|e| e.to_str()) {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("ron") => {}
+        Some("vx") => return super::import::vx::load_vx(path),
+        Some("vox") => return super::import::vox::load_vox(path),
         other => {
             return Err(LoadError {
                 location,
-                message: format!("unsupported world file type {:?} (expected .ron)", other.unwrap_or("")),
+                message: format!("unsupported world file type {:?} (expected .ron, .vx or .vox)", other.unwrap_or("")),
             });
         }
     }

@@ -1,0 +1,100 @@
+//! Importing scenes nobody here built: the thesis' `.vx` files give exactly the counts of
+//! `../shared/scenes/README.md`, `.vox` models give the sizes and voxel counts their files state (read by an
+//! independent script), and truncated or corrupt files are one clear error, never a panic.
+
+use glowbrick::lights::LightPool;
+use glowbrick::world::import::vox::parse_vox;
+use glowbrick::world::source::load_path;
+use std::path::{Path, PathBuf};
+
+fn shared(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes").join(path)
+}
+
+#[test]
+fn thesis_scenes_have_the_readme_counts() {
+    let letters = load_path(&shared("thesis/letters.vx")).unwrap();
+    let s = letters.summary();
+    assert_eq!((s.voxels, s.emitters), (387_734, 1_249), "{s}");
+    // Emitters by strength: 15: 834, 4: 266, 8: 149 (strength s is stored as s / pi).
+    let mut by_strength = std::collections::BTreeMap::new();
+    letters.grid.for_each_solid(|_, m| {
+        let material = letters.palette.get(m).unwrap();
+        if material.is_emissive() {
+            *by_strength.entry((material.strength * std::f32::consts::PI).round() as u32).or_insert(0) += 1;
+        }
+    });
+    assert_eq!(by_strength.into_iter().collect::<Vec<_>>(), vec![(4, 266), (8, 149), (15, 834)]);
+    assert!(letters.view(Some("letters1")).is_some() && letters.view(Some("letters2")).is_some());
+
+    let cornell = load_path(&shared("thesis/cornellbox.vx")).unwrap();
+    let s = cornell.summary();
+    assert_eq!((s.voxels, s.emitters), (544_416, 131_072), "{s}");
+    let pool = LightPool::from_world(&cornell);
+    assert_eq!(pool.counts(), (0, 256), "the ceiling light is 256 aligned emissive bricks");
+    // x 64..191 in the thesis' left-handed axes is 832..959 here (x -> 1023 - x).
+    assert!(
+        pool.lights().all(|(_, l)| l.min.y == 248 && (832..960).contains(&l.min.x) && (64..192).contains(&l.min.z))
+    );
+    assert!(cornell.view(Some("cornell1")).is_some());
+}
+
+#[test]
+fn vox_models_have_the_sizes_and_counts_their_files_state() {
+    // (file, models, first model's size as stored (x, y, z; z up), total voxels).
+    let expected = [
+        ("corvette", 1, [237, 38, 50], 129_220),
+        ("deer", 4, [26, 9, 27], 1_415),
+        ("monolith", 1, [24, 32, 120], 92_160),
+        ("pillar", 1, [100, 100, 100], 12_354),
+        ("rock", 32, [48, 48, 48], 89_451),
+        ("ship", 1, [20, 20, 20], 410),
+        ("teapot", 1, [126, 80, 61], 28_411),
+    ];
+    for (name, models, size, voxels) in expected {
+        let path = shared(&format!("vox/{name}.vox"));
+        let file = parse_vox(&std::fs::read(&path).unwrap()).unwrap();
+        assert_eq!(file.models.len(), models, "{name}");
+        assert_eq!(file.models[0].size, size, "{name}");
+        assert_eq!(file.models.iter().map(|m| m.voxels.len()).sum::<usize>(), voxels, "{name}");
+        // In the world, z-up becomes y-up: the first model's height is its stored z.
+        let world = load_path(&path).unwrap();
+        assert_eq!(world.summary().voxels, voxels as u64, "{name}");
+        assert!(world.grid.size().y >= size[2], "{name}");
+    }
+}
+
+#[test]
+fn truncated_or_corrupt_files_are_one_clear_error() {
+    let dir = std::env::temp_dir().join(format!("glowbrick-imports-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let vx = std::fs::read(shared("thesis/letters.vx")).unwrap();
+    let vox = std::fs::read(shared("vox/ship.vox")).unwrap();
+    let mut cases: Vec<(String, Vec<u8>)> = vec![
+        ("empty.vx".into(), Vec::new()),
+        ("cut-header.vx".into(), vx[..20].to_vec()),
+        ("cut-middle.vx".into(), vx[..vx.len() / 3].to_vec()),
+        ("not-gzip.vx".into(), b"this is not a gzip stream at all".to_vec()),
+        ("not-vox.vox".into(), b"RIFF....".to_vec()),
+    ];
+    // Cuts through a small .vox file (a cut exactly between two chunks would leave a smaller valid file; none of
+    // these offsets is one).
+    for cut in (0..vox.len()).step_by(97) {
+        cases.push((format!("cut-{cut}.vox"), vox[..cut].to_vec()));
+    }
+    // A chunk whose declared size runs past the end of the file (bytes 24..28: the first child chunk's size).
+    let mut bad = vox.clone();
+    bad[24..28].copy_from_slice(&u32::MAX.to_le_bytes());
+    cases.push(("huge-chunk.vox".into(), bad));
+    // A voxel outside its model's size.
+    let mut outside = vox.clone();
+    let xyzi = outside.windows(4).position(|w| w == b"XYZI").unwrap();
+    outside[xyzi + 16] = 250;
+    cases.push(("voxel-outside.vox".into(), outside));
+    for (name, bytes) in cases {
+        let path = dir.join(&name);
+        std::fs::write(&path, &bytes).unwrap();
+        let err = load_path(&path).expect_err(&name).to_string();
+        assert!(err.starts_with(&path.display().to_string()) && !err.contains('\n'), "{name}: {err}");
+    }
+}
