@@ -2,10 +2,12 @@
 
 use bevy::math::UVec3;
 use clap::{Args, Parser, Subcommand};
+use glowbrick::game::models::ModelToPlace;
 use glowbrick::headless::{HeadlessOptions, render_headless};
 use glowbrick::image_io::{read_image, write_image, write_png_plain};
 use glowbrick::reference::{ReferenceOptions, metrics, render_reference};
 use glowbrick::settings::{RenderSettings, SETTING_KEYS};
+use glowbrick::world::import::vox::parse_vox;
 use glowbrick::world::source::{WorldSource, load_path};
 use glowbrick::world::{CameraView, VoxelWorld};
 use std::path::PathBuf;
@@ -123,6 +125,9 @@ struct PlayArgs {
     /// Size of the generated world in voxels, X,Y,Z.
     #[arg(long, default_value = "192,64,192", value_parser = parse_size)]
     size: UVec3,
+    /// A MagicaVoxel model (.vox) that V drops in front of the player.
+    #[arg(long)]
+    model: Option<PathBuf>,
     /// Where F5 saves and F9 loads (default: saves/<name of --world>.ron, or saves/world.ron).
     #[arg(long)]
     save: Option<PathBuf>,
@@ -213,8 +218,17 @@ fn play(args: PlayArgs) -> Result<(), String> {
         let name = args.world.world.as_ref().and_then(|p| p.file_stem()).map(|s| s.to_string_lossy().into_owned());
         PathBuf::from("saves").join(format!("{}.ron", name.as_deref().unwrap_or("world")))
     });
+    let model = match &args.model {
+        Some(path) => {
+            let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+            let file = parse_vox(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+            let name = path.file_stem().map_or("model".into(), |s| s.to_string_lossy().into_owned());
+            Some(ModelToPlace::from_vox(&name, &file).ok_or_else(|| format!("{}: no model", path.display()))?)
+        }
+        None => None,
+    };
     let world = source.load().map_err(|e| e.to_string())?;
-    glowbrick::game::run_game(world, settings, save);
+    glowbrick::game::run_game(world, settings, save, model);
     Ok(())
 }
 

@@ -232,3 +232,27 @@ fn walking_falls_onto_the_floor_and_walls_stop_it() {
     assert!(blocked.x);
     assert!(stopped.x - 0.3 >= 1.0 && stopped.x - 0.3 < 1.01, "stopped at x = {}", stopped.x);
 }
+
+#[test]
+fn a_vox_model_drops_in_front_of_the_player_as_one_undoable_edit() {
+    use glowbrick::game::models::{ModelToPlace, PlaceModel};
+    use glowbrick::world::import::vox::parse_vox;
+    let bytes = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/scenes/vox/ship.vox")).unwrap();
+    let model = ModelToPlace::from_vox("ship", &parse_vox(&bytes).unwrap()).unwrap();
+    let mut app = game(Vec3::new(32.5, 40.0, 32.5), Vec3::NEG_Y, temp_path("model"));
+    let mut big = VoxelWorld::new(UVec3::splat(64), load_scene("test-room").unwrap().palette);
+    big.apply(Edit::FillBox { min: IVec3::ZERO, max: IVec3::new(63, 0, 63), material: 1 }).unwrap();
+    app.insert_resource(big).insert_resource(model);
+    app.update();
+    let before = world(&app).clone();
+    let voxels_before = world(&app).summary().voxels;
+    app.world_mut().write_message(PlaceModel);
+    app.update();
+    // The ship's 410 voxels stand on the floor, centred under the crosshair.
+    assert_eq!(world(&app).summary().voxels, voxels_before + 410);
+    assert!(world(&app).grid.get(IVec3::new(32, 0, 32)) == 1, "the floor is untouched");
+    app.world_mut().write_message(HistoryAction::Undo);
+    app.update();
+    // Undo removes the whole model in one step (its colours stay in the palette, unused).
+    assert!(differences(&before, world(&app)).is_empty());
+}

@@ -48,6 +48,7 @@ const HELP: &str = "glowbrick controls\n\n\
     wheel, 1-9     choose a hotbar slot\n\
     B              box brush: click two corners to fill (right) or clear (left)\n\
     Ctrl+Z, Ctrl+Y undo, redo\n\
+    V              drop the --model .vox model in front of you\n\
     F3             debug views (lit, albedo, normal, depth)\n\
     F5, F9         save, load\n\
     F1             this help";

@@ -5,6 +5,7 @@
 
 pub mod hud;
 pub mod interaction;
+pub mod models;
 pub mod player;
 pub mod save_load;
 pub mod undo;
@@ -23,39 +24,45 @@ impl Plugin for GameLogicPlugin {
     fn build(&self, app: &mut App) {
         app.init_resource::<hud::StatusLine>().add_plugins((
             interaction::InteractionPlugin,
+            models::ModelPlugin,
             undo::UndoPlugin,
             save_load::SaveLoadPlugin,
         ));
     }
 }
 
-/// Opens the game window on `world` and runs until the window closes. F5 and F9 use `save_path`.
-pub fn run_game(world: VoxelWorld, settings: RenderSettings, save_path: PathBuf) -> AppExit {
+/// Opens the game window on `world` and runs until the window closes. F5 and F9 use `save_path`; V drops
+/// `model`, when given.
+pub fn run_game(
+    world: VoxelWorld,
+    settings: RenderSettings,
+    save_path: PathBuf,
+    model: Option<models::ModelToPlace>,
+) -> AppExit {
     let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
-    App::new()
-        .add_plugins(DefaultPlugins.set(WindowPlugin {
-            primary_window: Some(Window {
-                title: "glowbrick".into(),
-                resolution: (1280u32, 720u32).into(),
-                ..default()
-            }),
-            ..default()
-        }))
-        .insert_resource(world)
-        .insert_resource(settings)
-        .insert_resource(save_load::SavePath(save_path))
-        .add_plugins((
-            crate::GlowbrickCorePlugin,
-            GameLogicPlugin,
-            player::PlayerPlugin,
-            interaction::InteractionInputPlugin,
-            hud::HudPlugin,
-        ))
-        .add_systems(Startup, move |mut commands: Commands| {
-            commands.spawn((voxel_camera_bundle(&view), Tonemapping::AcesFitted, player::Player::looking(&view)));
-        })
-        .add_systems(Update, (undo::history_keys, save_load::save_load_keys, toggle_debug_view))
-        .run()
+    let mut app = App::new();
+    if let Some(model) = model {
+        app.insert_resource(model);
+    }
+    app.add_plugins(DefaultPlugins.set(WindowPlugin {
+        primary_window: Some(Window { title: "glowbrick".into(), resolution: (1280u32, 720u32).into(), ..default() }),
+        ..default()
+    }))
+    .insert_resource(world)
+    .insert_resource(settings)
+    .insert_resource(save_load::SavePath(save_path))
+    .add_plugins((
+        crate::GlowbrickCorePlugin,
+        GameLogicPlugin,
+        player::PlayerPlugin,
+        interaction::InteractionInputPlugin,
+        hud::HudPlugin,
+    ))
+    .add_systems(Startup, move |mut commands: Commands| {
+        commands.spawn((voxel_camera_bundle(&view), Tonemapping::AcesFitted, player::Player::looking(&view)));
+    })
+    .add_systems(Update, (undo::history_keys, save_load::save_load_keys, models::model_key, toggle_debug_view))
+    .run()
 }
 
 /// F3 cycles the debug views (lit, albedo, normal, depth).
