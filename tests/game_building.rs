@@ -237,7 +237,7 @@ fn walking_falls_onto_the_floor_and_walls_stop_it() {
 fn a_vox_model_drops_in_front_of_the_player_as_one_undoable_edit() {
     use glowbrick::game::models::{ModelToPlace, PlaceModel};
     use glowbrick::world::import::vox::parse_vox;
-    let bytes = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/scenes/vox/ship.vox")).unwrap();
+    let bytes = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/vox/ship.vox")).unwrap();
     let model = ModelToPlace::from_vox("ship", &parse_vox(&bytes).unwrap()).unwrap();
     let mut app = game(Vec3::new(32.5, 40.0, 32.5), Vec3::NEG_Y, temp_path("model"));
     let mut big = VoxelWorld::new(UVec3::splat(64), load_scene("test-room").unwrap().palette);
