@@ -167,21 +167,25 @@ fn gpu_text(ms: Option<f64>) -> String {
     ms.map_or("n/a".to_string(), |v| format!("{v:.3}"))
 }
 
+/// A row's cells, in the column order of both outputs.
+fn cells(r: &BenchRow) -> [String; 8] {
+    let m = r.metrics;
+    [
+        r.scene.clone(),
+        r.setting.clone(),
+        format!("{:.3}", r.frame_ms),
+        gpu_text(r.gpu_ms),
+        format!("{:.6}", m.mae),
+        format!("{:.6}", m.mse),
+        format!("{:.6}", m.relmse),
+        format!("{:+.6}", m.bias),
+    ]
+}
+
 fn write_csv(rows: &[BenchRow], path: &Path) -> Result<(), String> {
     let mut text = String::from("scene,setting,frame_ms,primary_gpu_ms,mae,mse,relmse,bias\n");
     for r in rows {
-        let m = r.metrics;
-        text += &format!(
-            "{},{},{:.4},{},{:.6},{:.6},{:.6},{:.6}\n",
-            r.scene,
-            r.setting,
-            r.frame_ms,
-            gpu_text(r.gpu_ms),
-            m.mae,
-            m.mse,
-            m.relmse,
-            m.bias
-        );
+        text += &(cells(r).join(",") + "\n");
     }
     std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
 }
@@ -195,18 +199,7 @@ fn write_markdown(rows: &[BenchRow], config: &BenchConfig, path: &Path) -> Resul
         config.width, config.height, config.reference_spp, config.timed_frames, config.warmup_frames
     );
     for r in rows {
-        let m = r.metrics;
-        text += &format!(
-            "| {} | {} | {:.2} | {} | {:.5} | {:.5} | {:.4} | {:+.5} |\n",
-            r.scene,
-            r.setting,
-            r.frame_ms,
-            gpu_text(r.gpu_ms),
-            m.mae,
-            m.mse,
-            m.relmse,
-            m.bias
-        );
+        text += &format!("| {} |\n", cells(r).join(" | "));
     }
     text += "\n![error against frame time](plot.png)\n";
     std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
