@@ -6,7 +6,7 @@ use super::hud::StatusLine;
 use super::interaction::{Target, place_position};
 use super::player::Player;
 use crate::world::events::{ApplyEdits, EditRequest};
-use crate::world::import::vox::VoxFile;
+use crate::world::import::vox::{VoxFile, srgb_to_linear};
 use crate::world::{Edit, Material, VoxelWorld};
 use bevy::prelude::*;
 use std::sync::Arc;
@@ -23,17 +23,16 @@ impl ModelToPlace {
     /// The first model of a `.vox` file, z-up turned y-up.
     pub fn from_vox(name: &str, file: &VoxFile) -> Option<Self> {
         let model = file.models.first()?;
-        let to_linear = |c: u8| {
-            let c = c as f32 / 255.0;
-            if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
-        };
         let voxels = model
             .voxels
             .iter()
             .filter(|v| v[3] > 0)
             .map(|v| {
                 let [r, g, b, _] = file.palette[v[3] as usize - 1];
-                (IVec3::new(v[0] as i32, v[2] as i32, v[1] as i32), [to_linear(r), to_linear(g), to_linear(b)])
+                (
+                    IVec3::new(v[0] as i32, v[2] as i32, v[1] as i32),
+                    [srgb_to_linear(r), srgb_to_linear(g), srgb_to_linear(b)],
+                )
             })
             .collect();
         let [sx, sy, sz] = model.size;

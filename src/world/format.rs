@@ -20,7 +20,7 @@
 //! temporary file next to the target and renames it over the target, so a failed save leaves the old file intact.
 
 use super::grid::{BRICK_VOXELS, BrickCell, MAX_WORLD_EDGE, Voxel};
-use super::palette::{MAX_MATERIALS, Palette};
+use super::palette::{MAX_MATERIALS, Material, Palette};
 use super::{CameraView, VoxelWorld};
 use bevy::math::{IVec3, UVec3};
 use serde::{Deserialize, Serialize};
@@ -133,30 +133,7 @@ impl WorldFile {
             return Err(fail(format!("version {} is not supported (this build reads {FORMAT_VERSION})", self.version)));
         }
         let (sx, sy, sz) = self.size;
-        for (axis, v) in [("x", sx), ("y", sy), ("z", sz)] {
-            if v == 0 || v > MAX_WORLD_EDGE {
-                return Err(fail(format!("size.{axis} = {v} must be within 1..={MAX_WORLD_EDGE}")));
-            }
-        }
-        if self.palette.materials.len() > MAX_MATERIALS {
-            return Err(fail(format!(
-                "palette has {} materials, at most {MAX_MATERIALS} allowed",
-                self.palette.materials.len()
-            )));
-        }
-        for (i, m) in self.palette.materials.iter().enumerate() {
-            if let Some(problem) = m.problem() {
-                return Err(fail(format!("palette[{i}]: {problem}")));
-            }
-        }
-        if self.views.len() > MAX_VIEWS {
-            return Err(fail(format!("{} views, at most {MAX_VIEWS} allowed", self.views.len())));
-        }
-        for (i, v) in self.views.iter().enumerate() {
-            if let Some(problem) = v.problem() {
-                return Err(fail(format!("views[{i}]: {problem}")));
-            }
-        }
+        check_world_header(self.size, &self.palette.materials, "palette", &self.views).map_err(fail)?;
         let mut world = VoxelWorld::new(UVec3::new(sx, sy, sz), self.palette);
         world.views = self.views;
         let dims = world.grid.brick_dims();
@@ -208,13 +185,46 @@ impl WorldFile {
     }
 }
 
-/// Parses world-file text (already read) into a world. `location` names the source in messages.
-pub fn parse_world(text: &str, location: &str) -> Result<VoxelWorld, LoadError> {
-    let file: WorldFile = ron::Options::default()
+/// Checks what world files and scene recipes share: size, materials (the list called `materials_key` in
+/// messages) and camera views. Returns the first problem.
+pub(crate) fn check_world_header(
+    size: (u32, u32, u32),
+    materials: &[Material],
+    materials_key: &str,
+    views: &[CameraView],
+) -> Result<(), String> {
+    let (sx, sy, sz) = size;
+    for (axis, v) in [("x", sx), ("y", sy), ("z", sz)] {
+        if v == 0 || v > MAX_WORLD_EDGE {
+            return Err(format!("size.{axis} = {v} must be within 1..={MAX_WORLD_EDGE}"));
+        }
+    }
+    if materials.len() > MAX_MATERIALS {
+        return Err(format!("{materials_key} has {} materials, at most {MAX_MATERIALS} allowed", materials.len()));
+    }
+    if let Some((i, problem)) = materials.iter().enumerate().find_map(|(i, m)| m.problem().map(|p| (i, p))) {
+        return Err(format!("{materials_key}[{i}]: {problem}"));
+    }
+    if views.len() > MAX_VIEWS {
+        return Err(format!("{} views, at most {MAX_VIEWS} allowed", views.len()));
+    }
+    if let Some((i, problem)) = views.iter().enumerate().find_map(|(i, v)| v.problem().map(|p| (i, p))) {
+        return Err(format!("views[{i}]: {problem}"));
+    }
+    Ok(())
+}
+
+/// Parses RON text with the loaders' nesting limit; a syntax or type error is located as `location:line:col`.
+pub(crate) fn parse_ron<T: serde::de::DeserializeOwned>(text: &str, location: &str) -> Result<T, LoadError> {
+    ron::Options::default()
         .with_recursion_limit(32)
         .from_str(text)
-        .map_err(|e| LoadError { location: format!("{location}:{}", e.span.start), message: e.code.to_string() })?;
-    file.into_world(location)
+        .map_err(|e| LoadError { location: format!("{location}:{}", e.span.start), message: e.code.to_string() })
+}
+
+/// Parses world-file text (already read) into a world. `location` names the source in messages.
+pub fn parse_world(text: &str, location: &str) -> Result<VoxelWorld, LoadError> {
+    parse_ron::<WorldFile>(text, location)?.into_world(location)
 }
 
 /// Reads text from a file with a size limit, never modifying it.

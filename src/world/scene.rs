@@ -13,9 +13,9 @@
 //! Boxes are `[min, max)` in voxels. Material names refer to `materials`; `"air"` clears.
 
 use super::font::glyph;
-use super::format::{LoadError, read_limited};
+use super::format::{LoadError, check_world_header, parse_ron, read_limited};
 use super::grid::{AIR, MAX_WORLD_EDGE, Voxel};
-use super::palette::{MAX_MATERIALS, Material, Palette};
+use super::palette::{Material, Palette};
 use super::terrain::{TerrainParams, fill_terrain, hash_u32, surface_height};
 use super::{CameraView, VoxelWorld};
 use bevy::math::{IVec3, UVec3};
@@ -80,28 +80,11 @@ impl SceneRecipe {
     /// Validates the recipe and expands it into a world. `location` names the source in messages.
     pub fn build(&self, location: &str) -> Result<VoxelWorld, LoadError> {
         let fail = |message: String| LoadError { location: location.to_string(), message };
-        let (sx, sy, sz) = self.size;
-        for (axis, v) in [("x", sx), ("y", sy), ("z", sz)] {
-            if v == 0 || v > MAX_WORLD_EDGE {
-                return Err(fail(format!("size.{axis} = {v} must be within 1..={MAX_WORLD_EDGE}")));
-            }
-        }
-        if self.materials.len() > MAX_MATERIALS {
-            return Err(fail(format!("{} materials, at most {MAX_MATERIALS} allowed", self.materials.len())));
-        }
+        check_world_header(self.size, &self.materials, "materials", &self.views).map_err(&fail)?;
         if self.ops.len() > MAX_OPS {
             return Err(fail(format!("{} ops, at most {MAX_OPS} allowed", self.ops.len())));
         }
-        for (i, m) in self.materials.iter().enumerate() {
-            if let Some(problem) = m.problem() {
-                return Err(fail(format!("materials[{i}]: {problem}")));
-            }
-        }
-        for (i, v) in self.views.iter().enumerate() {
-            if let Some(problem) = v.problem() {
-                return Err(fail(format!("views[{i}]: {problem}")));
-            }
-        }
+        let (sx, sy, sz) = self.size;
         let palette = Palette::new(self.materials.clone());
         let mut world = VoxelWorld::new(UVec3::new(sx, sy, sz), palette);
         world.views = self.views.clone();
@@ -250,11 +233,7 @@ const NEIGHBOURS: [IVec3; 6] = [IVec3::X, IVec3::NEG_X, IVec3::Y, IVec3::NEG_Y, 
 
 /// Parses recipe text into a world.
 pub fn parse_recipe(text: &str, location: &str) -> Result<VoxelWorld, LoadError> {
-    let recipe: SceneRecipe = ron::Options::default()
-        .with_recursion_limit(32)
-        .from_str(text)
-        .map_err(|e| LoadError { location: format!("{location}:{}", e.span.start), message: e.code.to_string() })?;
-    recipe.build(location)
+    parse_ron::<SceneRecipe>(text, location)?.build(location)
 }
 
 /// Folder of the bundled scene recipes: `$GLOWBRICK_ASSETS/scenes`, else `assets/scenes` next to the crate.

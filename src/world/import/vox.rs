@@ -114,7 +114,8 @@ fn default_palette() -> Vec<[u8; 4]> {
         .collect()
 }
 
-fn srgb_to_linear(c: u8) -> f32 {
+/// An 8-bit sRGB channel as a linear value.
+pub fn srgb_to_linear(c: u8) -> f32 {
     let c = c as f32 / 255.0;
     if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
 }
