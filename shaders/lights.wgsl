@@ -7,8 +7,9 @@
 
 struct Light {
     min: vec3<i32>,
-    // Edge in voxels; 0 marks a free slot.
-    size: i32,
+    // Edge in voxels (bits 0-7; 0 marks a free slot) and the faces that touch air (bits 8-13, bit f = face f
+    // numbered as the traversal numbers faces: 0 +X, 1 -X, ...). Read through light_size and face_exposed.
+    size_faces: i32,
     radiance: vec3<f32>,
     generation: u32,
 }
@@ -62,8 +63,16 @@ fn pick_light(count: u32, power: bool, u_column: f32, u_pick: f32) -> PickedLigh
     return PickedLight(other.slot, other.pdf);
 }
 
+fn light_size(light: Light) -> i32 {
+    return light.size_faces & 255;
+}
+
+fn face_exposed(light: Light, face: u32) -> bool {
+    return ((u32(light.size_faces) >> (8u + face)) & 1u) == 1u;
+}
+
 fn light_contains(light: Light, voxel: vec3<i32>) -> bool {
-    return all(voxel >= light.min) && all(voxel < light.min + vec3(light.size));
+    return all(voxel >= light.min) && all(voxel < light.min + vec3(light_size(light)));
 }
 
 // One next-event-estimation sample of the radiance reflected by a diffuse surface at p (normal n).
@@ -73,22 +82,22 @@ fn direct_sample(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, count: u32, powe
     }
     let picked = pick_light(count, power, rng_next(rng), rng_next(rng));
     let light = lights[picked.slot];
-    if light.size == 0 {
+    if light_size(light) == 0 {
         return vec3(0.0);
     }
     let lo = vec3<f32>(light.min);
-    let size = f32(light.size);
+    let size = f32(light_size(light));
     let hi = lo + vec3(size);
-    // The cube faces whose front sides see p; choose one uniformly.
+    // The exposed cube faces whose front sides see p; choose one uniformly.
     var axes: array<u32, 3>;
     var signs: array<f32, 3>;
     var faces = 0u;
     for (var a = 0u; a < 3u; a++) {
-        if p[a] > hi[a] {
+        if p[a] > hi[a] && face_exposed(light, a * 2u) {
             axes[faces] = a;
             signs[faces] = 1.0;
             faces++;
-        } else if p[a] < lo[a] {
+        } else if p[a] < lo[a] && face_exposed(light, a * 2u + 1u) {
             axes[faces] = a;
             signs[faces] = -1.0;
             faces++;

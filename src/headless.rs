@@ -173,7 +173,10 @@ impl HeadlessRenderer {
                     .id();
                 readback = Some(entity);
             }
-            if let Some(error) = crate::render::primary::pipeline_error(self.app.sub_app(RenderApp).world()) {
+            let render_world = self.app.sub_app(RenderApp).world();
+            let error = crate::render::primary::pipeline_error(render_world)
+                .or_else(|| crate::render::restir::pipeline_error(render_world));
+            if let Some(error) = error {
                 return Err(error);
             }
             if start.elapsed() > self.timeout {

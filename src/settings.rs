@@ -43,7 +43,55 @@ pub enum Lighting {
     /// Emitters only (the thesis' convention, no sky): one next-event-estimation light sample per pixel with a
     /// shadow ray. The baseline ReSTIR is measured against, and what the CPU reference converges to.
     Nee,
+    /// Emitters only, by Voxel ReSTIR: candidates, temporal and spatial reuse, then one shadow ray per pixel.
+    Restir,
 }
+
+impl Lighting {
+    pub const NAMES: [(&'static str, Lighting); 3] =
+        [("sun", Lighting::Sun), ("nee", Lighting::Nee), ("restir", Lighting::Restir)];
+
+    pub fn name(self) -> &'static str {
+        Lighting::NAMES.iter().find(|(_, l)| *l == self).map_or("?", |(n, _)| n)
+    }
+}
+
+/// Voxel ReSTIR's knobs (seed 000's defaults).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RestirSettings {
+    /// Initial candidates per pixel (M_init).
+    pub candidates: u32,
+    /// Spatial neighbours merged per pixel (k).
+    pub taps: u32,
+    /// Spatial disk radius in pixels (r).
+    pub radius: f32,
+    pub temporal: bool,
+    pub spatial: bool,
+    /// Sample the centre of each light cube instead of a point on a face (hard shadows, less noise).
+    pub point_lights: bool,
+    /// 1/Z normalisation with a visibility ray per neighbour instead of the thesis' biased 1/M.
+    pub unbiased: bool,
+}
+
+impl Default for RestirSettings {
+    fn default() -> Self {
+        RestirSettings {
+            candidates: 32,
+            taps: 5,
+            radius: 30.0,
+            temporal: true,
+            spatial: true,
+            point_lights: false,
+            unbiased: false,
+        }
+    }
+}
+
+/// Valid ranges, shared by `--set` (which rejects) and the in-game keys (which clamp).
+pub const CANDIDATES_RANGE: (u32, u32) = (1, 64);
+pub const TAPS_RANGE: (u32, u32) = (0, 16);
+pub const RADIUS_RANGE: (f32, f32) = (0.0, 100.0);
+pub const EXPOSURE_RANGE: (f32, f32) = (0.001, 1000.0);
 
 /// Settings every pass reads.
 #[derive(Resource, ExtractResource, Clone, Debug, PartialEq)]
@@ -60,6 +108,7 @@ pub struct RenderSettings {
     pub shadows: bool,
     /// Linear scale applied before tonemapping.
     pub exposure: f32,
+    pub restir: RestirSettings,
 }
 
 impl Default for RenderSettings {
@@ -72,19 +121,63 @@ impl Default for RenderSettings {
             sun: true,
             shadows: true,
             exposure: 1.0,
+            restir: RestirSettings::default(),
         }
     }
 }
 
 /// The keys `--set` accepts, with their values, for error messages and `--help`.
-pub const SETTING_KEYS: &str = "lighting=sun|nee, pick=power|uniform, accumulate=on|off, \
-                                 debug=none|albedo|normal|hit|depth, sun=on|off, shadows=on|off, exposure=<0.001..1000>";
+pub const SETTING_KEYS: &str = "lighting=sun|nee|restir, pick=power|uniform, accumulate=on|off, \
+     debug=none|albedo|normal|hit|depth, sun=on|off, shadows=on|off, exposure=<0.001..1000>, \
+     candidates=<1..64>, taps=<0..16>, radius=<0..100>, temporal=on|off, spatial=on|off, \
+     sample=area|point, reuse=biased|unbiased";
 
 fn parse_switch(key: &str, value: &str) -> Result<bool, String> {
     match value {
         "on" | "true" | "1" => Ok(true),
         "off" | "false" | "0" => Ok(false),
         _ => Err(format!("setting {key}: '{value}' is not one of on|off")),
+    }
+}
+
+fn parse_number(key: &str, value: &str, (lo, hi): (f32, f32)) -> Result<f32, String> {
+    let v: f32 = value.parse().map_err(|_| format!("setting {key}: '{value}' is not a number (valid: {lo}..{hi})"))?;
+    if !(v.is_finite() && (lo..=hi).contains(&v)) {
+        return Err(format!("setting {key}: {value} is out of range (valid: {lo}..{hi})"));
+    }
+    Ok(v)
+}
+
+fn parse_count(key: &str, value: &str, (lo, hi): (u32, u32)) -> Result<u32, String> {
+    let v: i64 =
+        value.parse().map_err(|_| format!("setting {key}: '{value}' is not a whole number (valid: {lo}..{hi})"))?;
+    if v < lo as i64 || v > hi as i64 {
+        return Err(format!("setting {key}: {value} is out of range (valid: {lo}..{hi})"));
+    }
+    Ok(v as u32)
+}
+
+impl RestirSettings {
+    /// Brings every field into its valid range (the in-game keys step past the ends).
+    pub fn clamped(mut self) -> Self {
+        self.candidates = self.candidates.clamp(CANDIDATES_RANGE.0, CANDIDATES_RANGE.1);
+        self.taps = self.taps.clamp(TAPS_RANGE.0, TAPS_RANGE.1);
+        self.radius = if self.radius.is_finite() { self.radius.clamp(RADIUS_RANGE.0, RADIUS_RANGE.1) } else { 30.0 };
+        self
+    }
+
+    /// One line for the HUD.
+    pub fn summary(&self) -> String {
+        format!(
+            "M={} taps={} r={} {}{} {} {}",
+            self.candidates,
+            self.taps,
+            self.radius,
+            if self.temporal { "T" } else { "-" },
+            if self.spatial { "S" } else { "-" },
+            if self.point_lights { "point" } else { "area" },
+            if self.unbiased { "unbiased" } else { "biased" }
+        )
     }
 }
 
@@ -103,11 +196,11 @@ impl RenderSettings {
                     })?;
             }
             "lighting" => {
-                self.lighting = match value {
-                    "sun" => Lighting::Sun,
-                    "nee" => Lighting::Nee,
-                    _ => return Err(format!("setting lighting: '{value}' is not one of sun|nee")),
-                }
+                self.lighting = Lighting::NAMES
+                    .iter()
+                    .find(|(n, _)| *n == value)
+                    .map(|(_, l)| *l)
+                    .ok_or_else(|| format!("setting lighting: '{value}' is not one of sun|nee|restir"))?;
             }
             "pick" => {
                 self.power_pick = match value {
@@ -119,12 +212,25 @@ impl RenderSettings {
             "accumulate" => self.accumulate = parse_switch(key, value)?,
             "sun" => self.sun = parse_switch(key, value)?,
             "shadows" => self.shadows = parse_switch(key, value)?,
-            "exposure" => {
-                let v: f32 = value.parse().map_err(|_| format!("setting exposure: '{value}' is not a number"))?;
-                if !(v.is_finite() && (0.001..=1000.0).contains(&v)) {
-                    return Err(format!("setting exposure: {v} must be within 0.001..1000"));
+            "exposure" => self.exposure = parse_number(key, value, EXPOSURE_RANGE)?,
+            "candidates" => self.restir.candidates = parse_count(key, value, CANDIDATES_RANGE)?,
+            "taps" => self.restir.taps = parse_count(key, value, TAPS_RANGE)?,
+            "radius" => self.restir.radius = parse_number(key, value, RADIUS_RANGE)?,
+            "temporal" => self.restir.temporal = parse_switch(key, value)?,
+            "spatial" => self.restir.spatial = parse_switch(key, value)?,
+            "sample" => {
+                self.restir.point_lights = match value {
+                    "area" => false,
+                    "point" => true,
+                    _ => return Err(format!("setting sample: '{value}' is not one of area|point")),
                 }
-                self.exposure = v;
+            }
+            "reuse" => {
+                self.restir.unbiased = match value {
+                    "biased" => false,
+                    "unbiased" => true,
+                    _ => return Err(format!("setting reuse: '{value}' is not one of biased|unbiased")),
+                }
             }
             _ => return Err(format!("unknown setting '{key}' (valid: {SETTING_KEYS})")),
         }

@@ -64,9 +64,11 @@ fn error_falls_like_one_over_spp() {
     let truth = cornell_reference(8192, 99);
     let mse_64 = compare(&cornell_reference(64, 1), &truth).unwrap().mse;
     let mse_1024 = compare(&cornell_reference(1024, 2), &truth).unwrap().mse;
-    // Independent noise: (1/64 + 1/8192) / (1/1024 + 1/8192) = 14.2 expected.
+    // Independent noise: (1/64 + 1/8192) / (1/1024 + 1/8192) = 14.2 expected. The estimator is heavy-tailed where
+    // walls meet the light (cos cos / d^2), so one image's MSE swings by about 2x: 8..40 still fails an estimator
+    // whose error does not fall (ratio 1) or falls like 1/sqrt(spp) (ratio 4).
     let ratio = mse_64 / mse_1024;
-    assert!((8.0..24.0).contains(&ratio), "MSE 64 spp {mse_64:.3e}, 1024 spp {mse_1024:.3e}, ratio {ratio:.1}");
+    assert!((8.0..40.0).contains(&ratio), "MSE 64 spp {mse_64:.3e}, 1024 spp {mse_1024:.3e}, ratio {ratio:.1}");
     // The mean does not drift with the sample count: the estimator is unbiased.
     let bias = compare(&cornell_reference(1024, 2), &truth).unwrap().bias;
     let mean = compare(&truth, &LinearImage { pixels: vec![[0.0; 4]; 32 * 18], ..truth.clone() }).unwrap().bias;

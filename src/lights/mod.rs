@@ -41,6 +41,9 @@ pub struct Light {
     pub radiance: [f32; 3],
     /// Area of the cube's faces that touch air, in voxel faces.
     pub exposed_area: f32,
+    /// Bit f set when face f (0 +X, 1 -X, 2 +Y, 3 -Y, 4 +Z, 5 -Z) touches air somewhere: a buried face can never
+    /// light anything, so samplers skip it.
+    pub faces: u8,
     /// Sampling weight: luminance(radiance) x exposed area.
     pub power: f32,
 }
@@ -93,13 +96,15 @@ fn make_light(
     size: i32,
     material: Voxel,
     exposed: u32,
+    faces: u8,
 ) -> Option<Light> {
     if exposed == 0 {
         return None;
     }
     let radiance = world.palette.get(material)?.radiance();
     let exposed_area = exposed as f32;
-    Some(Light { key, min, size, material, radiance, exposed_area, power: luminance(radiance) * exposed_area })
+    let power = luminance(radiance) * exposed_area;
+    Some(Light { key, min, size, material, radiance, exposed_area, faces, power })
 }
 
 /// The light voxel `p` should be, if any (never one inside a brick light).
@@ -108,8 +113,8 @@ pub fn voxel_light_at(world: &VoxelWorld, p: IVec3) -> Option<Light> {
     if material == AIR || !world.palette.is_emissive(material) || brick_light_material(world, p >> 3_i32).is_some() {
         return None;
     }
-    let exposed = NEIGHBOURS.iter().filter(|&&n| world.grid.get(p + n) == AIR).count() as u32;
-    make_light(world, LightKey::Voxel(p), p, 1, material, exposed)
+    let faces = (0..6).filter(|&f| world.grid.get(p + NEIGHBOURS[f]) == AIR).fold(0u8, |m, f| m | 1 << f);
+    make_light(world, LightKey::Voxel(p), p, 1, material, faces.count_ones(), faces)
 }
 
 /// The light brick `b` should be, if any.
@@ -117,21 +122,26 @@ pub fn brick_light_at(world: &VoxelWorld, b: IVec3) -> Option<Light> {
     let material = brick_light_material(world, b)?;
     let lo = b * BRICK_SIZE;
     let mut exposed = 0;
+    let mut faces = 0u8;
     for axis in 0..3 {
         let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-        for plane in [lo[axis] - 1, lo[axis] + BRICK_SIZE] {
+        // The +axis face is face 2 axis, the -axis face 2 axis + 1.
+        for (plane, face) in [(lo[axis] + BRICK_SIZE, 2 * axis), (lo[axis] - 1, 2 * axis + 1)] {
+            let mut face_exposed = 0;
             for i in 0..BRICK_SIZE {
                 for j in 0..BRICK_SIZE {
                     let mut p = lo;
                     p[axis] = plane;
                     p[u] += i;
                     p[v] += j;
-                    exposed += (world.grid.get(p) == AIR) as u32;
+                    face_exposed += (world.grid.get(p) == AIR) as u32;
                 }
             }
+            exposed += face_exposed;
+            faces |= ((face_exposed > 0) as u8) << face;
         }
     }
-    make_light(world, LightKey::Brick(b), lo, BRICK_SIZE, material, exposed)
+    make_light(world, LightKey::Brick(b), lo, BRICK_SIZE, material, exposed, faces)
 }
 
 impl LightPool {

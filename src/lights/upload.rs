@@ -18,7 +18,8 @@ use std::sync::Arc;
 #[repr(C)]
 pub struct GpuLight {
     pub min: [i32; 3],
-    pub size: i32,
+    /// Edge in voxels (bits 0-7; 0 marks a free slot) and the exposed-face mask (bits 8-13).
+    pub size_faces: i32,
     pub radiance: [f32; 3],
     pub generation: u32,
 }
@@ -26,7 +27,12 @@ pub struct GpuLight {
 impl GpuLight {
     pub fn new(light: Option<&Light>, generation: u32) -> Self {
         match light {
-            Some(l) => GpuLight { min: l.min.to_array(), size: l.size, radiance: l.radiance, generation },
+            Some(l) => GpuLight {
+                min: l.min.to_array(),
+                size_faces: l.size | (l.faces as i32) << 8,
+                radiance: l.radiance,
+                generation,
+            },
             None => GpuLight { generation, ..default() },
         }
     }

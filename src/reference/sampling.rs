@@ -53,8 +53,8 @@ pub struct LightPoint {
     pub pdf_area: f32,
 }
 
-/// Chooses uniformly one of the cube faces whose front side sees `p`, then a uniform point on it. A face that
-/// cannot see `p` contributes nothing, so leaving it out keeps the estimator unbiased. `None` when `p` is inside
+/// Chooses uniformly one of the cube faces whose front side sees `p` and that touch air, then a uniform point on
+/// it. A face that cannot see `p` or is buried contributes nothing, so leaving it out keeps the estimator unbiased. `None` when `p` is inside
 /// the cube's slab on every axis (it is then inside the light).
 pub fn sample_light_point(light: &Light, p: Vec3, u_face: f32, u: f32, v: f32) -> Option<LightPoint> {
     let lo = light.min.as_vec3();
@@ -63,10 +63,11 @@ pub fn sample_light_point(light: &Light, p: Vec3, u_face: f32, u: f32, v: f32) -
     let mut faces = [(0usize, 0f32); 3];
     let mut count = 0;
     for axis in 0..3 {
-        if p[axis] > hi[axis] {
+        let exposed = |face: usize| light.faces & (1 << face) != 0;
+        if p[axis] > hi[axis] && exposed(2 * axis) {
             faces[count] = (axis, 1.0);
             count += 1;
-        } else if p[axis] < lo[axis] {
+        } else if p[axis] < lo[axis] && exposed(2 * axis + 1) {
             faces[count] = (axis, -1.0);
             count += 1;
         }

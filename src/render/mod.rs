@@ -5,11 +5,14 @@
 //! 2. extract: `upload::extract_world_upload` copies it to the render world;
 //! 3. Render / PrepareResources: `gpu_world::prepare_gpu_world` writes it to GPU buffers,
 //!    `primary::prepare_view_resources` writes each view's parameters and restarts accumulation on change;
-//! 4. Core3d / MainPass, per camera with `VoxelCamera`: `primary::primary_pass`; then Bevy's tonemapping.
+//! 4. Core3d / MainPass, per camera with `VoxelCamera`: `primary::primary_pass` (G-buffer, and the image unless
+//!    ReSTIR shades it), then `restir::restir_passes` (candidates + temporal, spatial, shade); then Bevy's
+//!    tonemapping.
 
 pub mod camera;
 pub mod gpu_world;
 pub mod primary;
+pub mod restir;
 pub mod upload;
 
 pub use camera::{VoxelCamera, camera_ray};
@@ -32,7 +35,12 @@ pub struct GlowbrickShaders {
     pub world: Handle<Shader>,
     pub traversal: Handle<Shader>,
     pub lights: Handle<Shader>,
+    pub frame: Handle<Shader>,
     pub primary: Handle<Shader>,
+    pub restir_common: Handle<Shader>,
+    pub restir_initial: Handle<Shader>,
+    pub restir_spatial: Handle<Shader>,
+    pub restir_shade: Handle<Shader>,
 }
 
 /// What the primary pass outlines: the player's target voxel and face, and a pending box selection
@@ -67,7 +75,12 @@ impl Plugin for VoxelRenderPlugin {
             world: add(include_str!("../../shaders/world.wgsl"), "glowbrick/world.wgsl"),
             traversal: add(include_str!("../../shaders/traversal.wgsl"), "glowbrick/traversal.wgsl"),
             lights: add(include_str!("../../shaders/lights.wgsl"), "glowbrick/lights.wgsl"),
+            frame: add(include_str!("../../shaders/frame.wgsl"), "glowbrick/frame.wgsl"),
             primary: add(include_str!("../../shaders/primary.wgsl"), "glowbrick/primary.wgsl"),
+            restir_common: add(include_str!("../../shaders/restir_common.wgsl"), "glowbrick/restir_common.wgsl"),
+            restir_initial: add(include_str!("../../shaders/restir_initial.wgsl"), "glowbrick/restir_initial.wgsl"),
+            restir_spatial: add(include_str!("../../shaders/restir_spatial.wgsl"), "glowbrick/restir_spatial.wgsl"),
+            restir_shade: add(include_str!("../../shaders/restir_shade.wgsl"), "glowbrick/restir_shade.wgsl"),
         };
         let frames = app.world().get_resource::<FramesRendered>().cloned().unwrap_or_default();
         app.insert_resource(handles.clone())
@@ -99,5 +112,6 @@ impl Plugin for VoxelRenderPlugin {
                     .in_set(RenderSystems::PrepareResources),
             )
             .add_systems(Core3d, primary::primary_pass.after(main_transparent_pass_3d).in_set(Core3dSystems::MainPass));
+        restir::add_restir_passes(render_app);
     }
 }

@@ -21,6 +21,10 @@ use std::sync::atomic::Ordering;
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct FrameParams {
+    /// Last frame's clip_from_world (temporal reprojection).
+    pub prev_clip_from_world: [[f32; 4]; 4],
+    /// Last frame's camera position; w = 1 when last frame's G-buffer and reservoirs may be reused.
+    pub prev_camera: [f32; 4],
     pub sun: [f32; 4],
     pub sun_radiance: [f32; 4],
     pub sky_zenith: [f32; 4],
@@ -42,12 +46,27 @@ pub struct FrameParams {
     pub light_count: u32,
     /// Frames averaged including this one; 1 restarts the average.
     pub accumulated: u32,
+    /// Voxel ReSTIR: M_init, spatial taps, radius in pixels, `RESTIR_*` flags.
+    pub candidates: u32,
+    pub taps: u32,
+    pub radius: f32,
+    pub restir_flags: u32,
 }
+
+/// `restir_flags` bits (shaders/frame.wgsl).
+const RESTIR_TEMPORAL: u32 = 1;
+const RESTIR_SPATIAL: u32 = 2;
+const RESTIR_POINT: u32 = 4;
+const RESTIR_UNBIASED: u32 = 8;
 
 impl FrameParams {
     pub fn new(settings: &RenderSettings, highlight: &Highlight, frame: u32) -> Self {
         let sun = Vec3::new(0.45, 0.8, 0.3).normalize();
+        let restir = settings.restir.clone().clamped();
+        let flag = |on: bool, bit: u32| if on { bit } else { 0 };
         FrameParams {
+            prev_clip_from_world: Mat4::IDENTITY.to_cols_array_2d(),
+            prev_camera: [0.0; 4],
             sun: [sun.x, sun.y, sun.z, if settings.sun { 1.0 } else { 0.0 }],
             sun_radiance: [1.1, 1.0, 0.9, 0.0],
             sky_zenith: [0.35, 0.55, 0.95, 0.0],
@@ -59,10 +78,21 @@ impl FrameParams {
             target: highlight.target.map_or([0; 4], |(v, face)| [v.x, v.y, v.z, face as i32 + 1]),
             selection_min: highlight.selection.map_or([0; 4], |(a, _)| [a.x, a.y, a.z, 1]),
             selection_max: highlight.selection.map_or([0; 4], |(_, b)| [b.x, b.y, b.z, 1]),
-            lighting: (settings.lighting == Lighting::Nee) as u32,
+            lighting: match settings.lighting {
+                Lighting::Sun => 0,
+                Lighting::Nee => 1,
+                Lighting::Restir => 2,
+            },
             power_pick: settings.power_pick as u32,
             light_count: 0,
             accumulated: 1,
+            candidates: restir.candidates,
+            taps: restir.taps,
+            radius: restir.radius,
+            restir_flags: flag(restir.temporal, RESTIR_TEMPORAL)
+                | flag(restir.spatial, RESTIR_SPATIAL)
+                | flag(restir.point_lights, RESTIR_POINT)
+                | flag(restir.unbiased, RESTIR_UNBIASED),
         }
     }
 }
@@ -70,22 +100,37 @@ impl FrameParams {
 /// The name the pass's GPU time is recorded under.
 pub const PRIMARY_PASS_NAME: &str = "glowbrick_primary";
 
-/// The pipeline and its per-view layout.
+/// The pipeline and the per-view layout every voxel pass shares (group 1, `shaders/frame.wgsl`).
 #[derive(Resource)]
 pub struct PrimaryPipeline {
-    view_layout: BindGroupLayoutDescriptor,
+    pub view_layout: BindGroupLayoutDescriptor,
     pipeline: CachedComputePipelineId,
 }
 
-/// A view's own buffers: its frame parameters and the running sum of accumulated frames.
+/// Bytes per pixel of the G-buffer and of a reservoir (`shaders/frame.wgsl`, `shaders/restir_common.wgsl`).
+const GBUFFER_TEXEL_BYTES: u64 = 16;
+pub const RESERVOIR_BYTES: u64 = 32;
+
+/// A view's own buffers: frame parameters, the running sum of accumulated frames, this and last frame's
+/// G-buffer, and the two reservoir buffers of Voxel ReSTIR.
 #[derive(Component)]
 pub struct PrimaryViewResources {
     frame_params: Buffer,
     accumulation: Buffer,
+    gbuffer: Buffer,
+    prev_gbuffer: Buffer,
+    reservoirs_temporal: Buffer,
+    reservoirs_final: Buffer,
     size: UVec2,
     /// What the average so far was rendered with; any difference restarts it.
     last_key: Option<AccumulationKey>,
     accumulated: u32,
+    /// Last frame's camera, and whether it ran ReSTIR (its reservoirs are reusable).
+    prev_clip_from_world: Mat4,
+    prev_camera: Vec3,
+    prev_restir: bool,
+    /// Whether this frame runs the ReSTIR passes (set in prepare, read by the passes).
+    pub run_restir: bool,
 }
 
 /// Everything that must stay the same for frames to be averaged.
@@ -111,6 +156,10 @@ pub fn init_primary_pipeline(
                 texture_storage_2d(TextureFormat::Rgba16Float, StorageTextureAccess::WriteOnly),
                 uniform_buffer::<ViewUniform>(true),
                 uniform_buffer_sized(false, NonZeroU64::new(size_of::<FrameParams>() as u64)),
+                storage_buffer_sized(false, None),
+                storage_buffer_sized(false, None),
+                storage_buffer_sized(false, None),
+                storage_buffer_sized(false, None),
                 storage_buffer_sized(false, None),
             ),
         ),
@@ -159,27 +208,42 @@ pub fn prepare_view_resources(
     params.light_count = gpu_lights.as_ref().map_or(0, |l| l.light_count);
     for (entity, view, resources) in &mut views {
         let size = view.viewport.zw();
-        let key = AccumulationKey {
-            clip_from_world: view.clip_from_view * view.world_from_view.to_matrix().inverse(),
-            settings: settings.clone(),
-            highlight,
+        let clip_from_world = view.clip_from_view * view.world_from_view.to_matrix().inverse();
+        let key = AccumulationKey { clip_from_world, settings: settings.clone(), highlight };
+        let pixels = (size.x.max(1) * size.y.max(1)) as u64;
+        let buffer = |device: &RenderDevice, label: &'static str, size: u64, usage: BufferUsages| {
+            device.create_buffer(&BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
         };
+        let storage = BufferUsages::STORAGE;
         let fresh = |device: &RenderDevice| PrimaryViewResources {
-            frame_params: device.create_buffer(&BufferDescriptor {
-                label: Some("glowbrick_frame_params"),
-                size: size_of::<FrameParams>() as u64,
-                usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
-            accumulation: device.create_buffer(&BufferDescriptor {
-                label: Some("glowbrick_accumulation"),
-                size: (size.x.max(1) * size.y.max(1)) as u64 * 16,
-                usage: BufferUsages::STORAGE,
-                mapped_at_creation: false,
-            }),
+            frame_params: buffer(
+                device,
+                "glowbrick_frame_params",
+                size_of::<FrameParams>() as u64,
+                BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+            ),
+            accumulation: buffer(device, "glowbrick_accumulation", pixels * 16, storage),
+            gbuffer: buffer(
+                device,
+                "glowbrick_gbuffer",
+                pixels * GBUFFER_TEXEL_BYTES,
+                storage | BufferUsages::COPY_SRC,
+            ),
+            prev_gbuffer: buffer(
+                device,
+                "glowbrick_prev_gbuffer",
+                pixels * GBUFFER_TEXEL_BYTES,
+                storage | BufferUsages::COPY_DST,
+            ),
+            reservoirs_temporal: buffer(device, "glowbrick_reservoirs_temporal", pixels * RESERVOIR_BYTES, storage),
+            reservoirs_final: buffer(device, "glowbrick_reservoirs_final", pixels * RESERVOIR_BYTES, storage),
             size,
             last_key: None,
             accumulated: 0,
+            prev_clip_from_world: Mat4::IDENTITY,
+            prev_camera: Vec3::ZERO,
+            prev_restir: false,
+            run_restir: false,
         };
         let mut created = None;
         let resources: &mut PrimaryViewResources = match resources {
@@ -190,12 +254,47 @@ pub fn prepare_view_resources(
         resources.accumulated = if same { resources.accumulated.saturating_add(1) } else { 1 };
         resources.last_key = Some(key);
         params.accumulated = resources.accumulated;
+        // ReSTIR runs only where it has something to sample; its history is valid if last frame ran it too.
+        resources.run_restir = settings.lighting == Lighting::Restir
+            && settings.debug == crate::settings::DebugView::None
+            && params.light_count > 0;
+        params.prev_clip_from_world = resources.prev_clip_from_world.to_cols_array_2d();
+        let p = resources.prev_camera;
+        params.prev_camera = [p.x, p.y, p.z, if resources.prev_restir && resources.run_restir { 1.0 } else { 0.0 }];
+        resources.prev_clip_from_world = clip_from_world;
+        resources.prev_camera = view.world_from_view.translation();
+        resources.prev_restir = resources.run_restir;
         queue.write_buffer(&resources.frame_params, 0, bytemuck::bytes_of(&params));
         if let Some(new) = created {
             // A new or resized view: its buffers live on its render-world entity from now on.
             commands.entity(entity).insert(new);
         }
     }
+}
+
+/// The per-view bind group (group 1) every voxel pass uses.
+pub fn view_bind_group(
+    ctx: &RenderContext,
+    pipeline_cache: &PipelineCache,
+    layout: &BindGroupLayoutDescriptor,
+    target: &ViewTarget,
+    view_binding: BindingResource,
+    resources: &PrimaryViewResources,
+) -> BindGroup {
+    ctx.render_device().create_bind_group(
+        "glowbrick_view",
+        &pipeline_cache.get_bind_group_layout(layout),
+        &BindGroupEntries::sequential((
+            target.get_unsampled_color_attachment().view,
+            view_binding,
+            resources.frame_params.as_entire_binding(),
+            resources.accumulation.as_entire_binding(),
+            resources.gbuffer.as_entire_binding(),
+            resources.prev_gbuffer.as_entire_binding(),
+            resources.reservoirs_temporal.as_entire_binding(),
+            resources.reservoirs_final.as_entire_binding(),
+        )),
+    )
 }
 
 /// Dispatches the primary-ray shader for the current camera.
@@ -207,24 +306,26 @@ pub fn primary_pass(
     view_uniforms: Res<ViewUniforms>,
     gpu_world: Option<Res<GpuWorld>>,
     gpu_lights: Option<Res<GpuLights>>,
+    restir: Option<Res<super::restir::RestirPipelines>>,
     frames: Res<FramesRendered>,
     mut ctx: RenderContext,
 ) {
     let (target, view_offset, resources) = view.into_inner();
     let (Some(pipeline), Some(gpu_world), Some(gpu_lights)) = (pipeline, gpu_world, gpu_lights) else { return };
+    if resources.run_restir && !super::restir::ready(restir.as_deref(), &pipeline_cache) {
+        return;
+    }
     let Some(compute) = pipeline_cache.get_compute_pipeline(pipeline.pipeline) else { return };
     let Some(view_binding) = view_uniforms.uniforms.binding() else { return };
-    let output = target.get_unsampled_color_attachment();
     let size = target.main_texture().size();
-    let view_group = ctx.render_device().create_bind_group(
-        "glowbrick_primary_view",
-        &pipeline_cache.get_bind_group_layout(&pipeline.view_layout),
-        &BindGroupEntries::sequential((
-            output.view,
-            view_binding,
-            resources.frame_params.as_entire_binding(),
-            resources.accumulation.as_entire_binding(),
-        )),
+    let view_group = view_bind_group(&ctx, &pipeline_cache, &pipeline.view_layout, target, view_binding, resources);
+    // Keep last frame's G-buffer for temporal reprojection before this frame overwrites it.
+    ctx.command_encoder().copy_buffer_to_buffer(
+        &resources.gbuffer,
+        0,
+        &resources.prev_gbuffer,
+        0,
+        resources.gbuffer.size(),
     );
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();

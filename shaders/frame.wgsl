@@ -1,0 +1,122 @@
+// What every per-view pass shares: the frame parameters, the view's buffers (group 1), the G-buffer encoding,
+// the selection highlight and the final write with progressive accumulation.
+#define_import_path glowbrick::frame
+
+#import bevy_render::view::View
+
+struct FrameParams {
+    // Last frame's clip_from_world, for temporal reprojection.
+    prev_clip_from_world: mat4x4<f32>,
+    // Last frame's camera position (xyz); w is 1 when last frame's G-buffer and reservoirs may be reused.
+    prev_camera: vec4<f32>,
+    // xyz: unit direction towards the sun; w: 1 when the sun is on.
+    sun: vec4<f32>,
+    sun_radiance: vec4<f32>,
+    sky_zenith: vec4<f32>,
+    sky_horizon: vec4<f32>,
+    // Index of settings::DebugView.
+    debug_view: u32,
+    shadows: u32,
+    exposure: f32,
+    frame: u32,
+    // Targeted voxel (xyz) and face + 1 (w; 0 = none).
+    highlight_target: vec4<i32>,
+    // Box selection, inclusive corners; selection_min.w is 1 when shown.
+    selection_min: vec4<i32>,
+    selection_max: vec4<i32>,
+    // 0: sun and sky; 1: next-event estimation; 2: Voxel ReSTIR (both emitters only, no sky).
+    lighting: u32,
+    power_pick: u32,
+    light_count: u32,
+    // Frames averaged including this one; 1 restarts the average.
+    accumulated: u32,
+    // ReSTIR: candidates per pixel, spatial taps, spatial radius in pixels, RESTIR_* flags.
+    candidates: u32,
+    taps: u32,
+    radius: f32,
+    restir_flags: u32,
+}
+
+const LIGHTING_SUN: u32 = 0u;
+const LIGHTING_NEE: u32 = 1u;
+const LIGHTING_RESTIR: u32 = 2u;
+
+const RESTIR_TEMPORAL: u32 = 1u;
+const RESTIR_SPATIAL: u32 = 2u;
+const RESTIR_POINT: u32 = 4u;
+const RESTIR_UNBIASED: u32 = 8u;
+
+@group(1) @binding(0) var output: texture_storage_2d<rgba16float, write>;
+@group(1) @binding(1) var<uniform> view: View;
+@group(1) @binding(2) var<uniform> frame: FrameParams;
+// Running sum of accumulated frames per pixel (rgb; a unused).
+@group(1) @binding(3) var<storage, read_write> accumulation: array<vec4<f32>>;
+// Per pixel: hit point (xyz) and the packed hit (w, see pack_surface); this frame's and last frame's.
+@group(1) @binding(4) var<storage, read_write> gbuffer: array<vec4<f32>>;
+@group(1) @binding(5) var<storage, read_write> prev_gbuffer: array<vec4<f32>>;
+
+// The G-buffer's w: bit 0 hit, bits 1-3 face, bits 4+ material. Zero (a cleared buffer) reads as a miss.
+fn pack_surface(face: u32, material: u32) -> f32 {
+    return bitcast<f32>(1u | (face << 1u) | (material << 4u));
+}
+
+struct Surface {
+    found: bool,
+    point: vec3<f32>,
+    face: u32,
+    material: u32,
+}
+
+fn unpack_surface(texel: vec4<f32>) -> Surface {
+    let bits = bitcast<u32>(texel.w);
+    return Surface((bits & 1u) == 1u, texel.xyz, (bits >> 1u) & 7u, bits >> 4u);
+}
+
+fn pixel_index(pixel: vec2<u32>) -> u32 {
+    return pixel.x + u32(view.viewport.z) * pixel.y;
+}
+
+// Outlines the targeted voxel's edges, brightens its targeted face, and tints voxels in the box selection.
+fn highlight(colour: vec3<f32>, hit_voxel: vec3<i32>, face: u32, point: vec3<f32>, distance: f32) -> vec3<f32> {
+    var c = colour;
+    if frame.selection_min.w == 1 && all(hit_voxel >= frame.selection_min.xyz) && all(hit_voxel <= frame.selection_max.xyz) {
+        c = mix(c, vec3(0.25, 0.6, 1.0), 0.35);
+    }
+    if frame.highlight_target.w == 0 || any(hit_voxel != frame.highlight_target.xyz) {
+        return c;
+    }
+    // Position on the hit face in [0, 1]^2: the two axes other than the face's.
+    let local = point - vec3<f32>(hit_voxel);
+    let axis = face / 2u;
+    let uv = vec2(local[(axis + 1u) % 3u], local[(axis + 2u) % 3u]);
+    let edge = min(min(uv.x, 1.0 - uv.x), min(uv.y, 1.0 - uv.y));
+    // About two pixels wide at typical fields of view, whatever the distance.
+    let width = clamp(0.003 * distance, 0.006, 0.2);
+    if edge < width {
+        return vec3(0.02);
+    }
+    if u32(frame.highlight_target.w) == face + 1u {
+        c = c * 1.2 + vec3(0.04);
+    }
+    return c;
+}
+
+// The voxel a surface point lies on: step back from the face it was entered through.
+fn surface_voxel(s: Surface) -> vec3<i32> {
+    var n = vec3(0.0);
+    n[s.face / 2u] = select(1.0, -1.0, (s.face & 1u) == 1u);
+    return vec3<i32>(floor(s.point - n * 0.5));
+}
+
+// Progressive accumulation (the running mean of the frames since anything changed), then the HDR target.
+fn write_output(pixel: vec2<u32>, colour: vec4<f32>) {
+    let index = pixel_index(pixel);
+    // A non-finite value would poison the running sum until the next restart: write black instead.
+    let c = select(vec3(0.0), colour.rgb, all(colour.rgb == colour.rgb) && all(abs(colour.rgb) < vec3(3.0e38)));
+    var sum = c;
+    if frame.accumulated > 1u {
+        sum += accumulation[index].rgb;
+    }
+    accumulation[index] = vec4(sum, 1.0);
+    textureStore(output, vec2<i32>(pixel), vec4(sum / f32(max(frame.accumulated, 1u)), colour.a));
+}

@@ -1,0 +1,271 @@
+// Voxel ReSTIR's shared pieces (seed 000, DESIGN.md "Voxel ReSTIR"): the reservoir, light samples in area
+// measure (a point on one face of a light's cube) or point measure (the cube's centre), the target function, the
+// visibility test and the resampling steps. The passes: restir_initial (candidates + temporal),
+// restir_spatial, restir_shade.
+#define_import_path glowbrick::restir
+
+#import glowbrick::world::materials
+#import glowbrick::traversal::trace
+#import glowbrick::lights::{Light, lights, pick_light, light_contains, light_size, face_exposed, Rng, rng_next, pcg, RAY_OFFSET, PI}
+#import glowbrick::frame::{frame, view, Surface, RESTIR_POINT, RESTIR_UNBIASED}
+
+// 32 bytes. `face` is the light cube's face (0 +X, 1 -X, ... as the traversal numbers faces) or POINT_FACE,
+// `uv` the point on it (pack2x16unorm). `w_sum` is only meaningful while a pass streams candidates; `big_w` is the
+// unbiased contribution weight of the sample.
+struct Reservoir {
+    slot: u32,
+    generation: u32,
+    face: u32,
+    uv: u32,
+    w_sum: f32,
+    m: f32,
+    big_w: f32,
+    // Target at the pixel that owns the reservoir (kept for debugging and the stress run).
+    target_value: f32,
+}
+
+// Written by restir_initial (candidates + temporal), read by restir_spatial.
+@group(1) @binding(6) var<storage, read_write> reservoirs_temporal: array<Reservoir>;
+// Written by restir_spatial, read by restir_shade (which zeroes occluded samples) and next frame's temporal reuse.
+@group(1) @binding(7) var<storage, read_write> reservoirs_final: array<Reservoir>;
+
+const NO_LIGHT: u32 = 0xffffffffu;
+const POINT_FACE: u32 = 6u;
+
+fn empty_reservoir() -> Reservoir {
+    return Reservoir(NO_LIGHT, 0u, 0u, 0u, 0.0, 0.0, 0.0, 0.0);
+}
+
+fn finite(x: f32) -> bool {
+    return x == x && abs(x) <= 3.0e38;
+}
+
+// A reservoir read from memory is used only if its fields are sane and its light is still the one it sampled:
+// a freed or reused slot has another generation, so a removed light is never shaded.
+fn validated(r: Reservoir) -> Reservoir {
+    if r.slot == NO_LIGHT || r.slot >= arrayLength(&lights) || !finite(r.w_sum) || !finite(r.m) || !finite(r.big_w)
+        || r.m < 0.0 || r.big_w < 0.0 || r.face > POINT_FACE {
+        return empty_reservoir();
+    }
+    let light = lights[r.slot];
+    if light_size(light) == 0 || light.generation != r.generation {
+        return empty_reservoir();
+    }
+    return r;
+}
+
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
+
+fn face_axis_normal(face: u32) -> vec3<f32> {
+    var n = vec3(0.0);
+    n[face / 2u] = select(1.0, -1.0, (face & 1u) == 1u);
+    return n;
+}
+
+// The sampled point: on face `face` of the light's cube at (u, v) along the face's two other axes, or the centre.
+fn light_point(light: Light, face: u32, uv: vec2<f32>) -> vec3<f32> {
+    let lo = vec3<f32>(light.min);
+    let size = f32(light_size(light));
+    if face == POINT_FACE {
+        return lo + vec3(0.5 * size);
+    }
+    let axis = face / 2u;
+    var q = lo;
+    q[axis] = select(lo[axis], lo[axis] + size, (face & 1u) == 0u);
+    q[(axis + 1u) % 3u] += uv.x * size;
+    q[(axis + 2u) % 3u] += uv.y * size;
+    return q;
+}
+
+// Shading point data every pass needs.
+struct Shading {
+    point: vec3<f32>,
+    normal: vec3<f32>,
+    albedo: vec3<f32>,
+}
+
+fn shading(s: Surface) -> Shading {
+    return Shading(s.point, face_axis_normal(s.face), materials[s.material].albedo.rgb);
+}
+
+// Unshadowed reflected radiance from the sample, per unit of the sample's measure: area (albedo/pi Le cos cos/d^2)
+// or, for the centre, per light (the cube's projected area towards the point stands in for A cos_l).
+fn unshadowed(x: Shading, light: Light, face: u32, uv: vec2<f32>) -> vec3<f32> {
+    let q = light_point(light, face, uv);
+    let to_light = q - x.point;
+    let d2 = dot(to_light, to_light);
+    if d2 <= 1e-8 {
+        return vec3(0.0);
+    }
+    let wi = to_light * inverseSqrt(d2);
+    let cos_surface = dot(x.normal, wi);
+    var cos_area = 0.0;
+    if face == POINT_FACE {
+        let size = f32(light_size(light));
+        cos_area = (abs(wi.x) + abs(wi.y) + abs(wi.z)) * size * size;
+    } else {
+        cos_area = -dot(face_axis_normal(face), wi);
+    }
+    if cos_surface <= 0.0 || cos_area <= 0.0 {
+        return vec3(0.0);
+    }
+    return x.albedo * light.radiance * (cos_surface * cos_area / (d2 * PI));
+}
+
+fn target_of(x: Shading, r: Reservoir) -> f32 {
+    if r.slot == NO_LIGHT {
+        return 0.0;
+    }
+    return luminance(unshadowed(x, lights[r.slot], r.face, unpack2x16unorm(r.uv)));
+}
+
+// A shadow ray towards the sample; visible iff the first voxel hit belongs to the light's cube (no step cap).
+fn visible(x: Shading, light: Light, face: u32, uv: vec2<f32>) -> bool {
+    let origin = x.point + x.normal * RAY_OFFSET;
+    let to_light = light_point(light, face, uv) - origin;
+    let d = length(to_light);
+    if d <= 1e-6 {
+        return false;
+    }
+    let hit = trace(origin, to_light / d, d + 1.0);
+    return hit.found && light_contains(light, hit.voxel);
+}
+
+fn reservoir_visible(x: Shading, r: Reservoir) -> bool {
+    return r.slot != NO_LIGHT && visible(x, lights[r.slot], r.face, unpack2x16unorm(r.uv));
+}
+
+// Solid angle of the triangle (a, b, c) seen from the origin (Van Oosterom and Strackee).
+fn triangle_solid_angle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
+    let la = length(a);
+    let lb = length(b);
+    let lc = length(c);
+    let numerator = abs(dot(a, cross(b, c)));
+    let denominator = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+    return 2.0 * atan2(numerator, denominator);
+}
+
+// Exact solid angle of face `face` of the cube [lo, lo + size]^3 seen from p (two triangles).
+fn face_solid_angle(p: vec3<f32>, lo: vec3<f32>, size: f32, face: u32) -> f32 {
+    let axis = face / 2u;
+    let b = (axis + 1u) % 3u;
+    let c = (axis + 2u) % 3u;
+    var corner = lo - p;
+    corner[axis] += select(0.0, size, (face & 1u) == 0u);
+    var eb = vec3(0.0);
+    eb[b] = size;
+    var ec = vec3(0.0);
+    ec[c] = size;
+    let v0 = corner;
+    let v1 = corner + eb;
+    let v2 = corner + eb + ec;
+    let v3 = corner + ec;
+    return triangle_solid_angle(v0, v1, v2) + triangle_solid_angle(v0, v2, v3);
+}
+
+struct Candidate {
+    r: Reservoir,
+    // Source pdf in the sample's measure (area or per light).
+    pdf: f32,
+    target_value: f32,
+}
+
+// One candidate: a light from the alias table (power or uniform), then, in area mode, one of the exposed faces
+// that see the shading point in proportion to its exact solid angle and a uniform point on it; in point mode the centre.
+fn sample_candidate(x: Shading, rng: ptr<function, Rng>) -> Candidate {
+    var c = Candidate(empty_reservoir(), 0.0, 0.0);
+    let picked = pick_light(frame.light_count, frame.power_pick == 1u, rng_next(rng), rng_next(rng));
+    let u_face = rng_next(rng);
+    let uv = vec2(rng_next(rng), rng_next(rng));
+    let light = lights[picked.slot];
+    if light_size(light) == 0 {
+        return c;
+    }
+    c.r.slot = picked.slot;
+    c.r.generation = light.generation;
+    c.r.uv = pack2x16unorm(uv);
+    if (frame.restir_flags & RESTIR_POINT) != 0u {
+        c.r.face = POINT_FACE;
+        c.r.uv = pack2x16unorm(vec2(0.5));
+        c.pdf = picked.pdf;
+    } else {
+        let lo = vec3<f32>(light.min);
+        let size = f32(light_size(light));
+        var omega: array<f32, 3>;
+        var faces: array<u32, 3>;
+        var total = 0.0;
+        for (var axis = 0u; axis < 3u; axis++) {
+            var face = 6u;
+            if x.point[axis] > lo[axis] + size && face_exposed(light, axis * 2u) {
+                face = axis * 2u;
+            } else if x.point[axis] < lo[axis] && face_exposed(light, axis * 2u + 1u) {
+                face = axis * 2u + 1u;
+            }
+            faces[axis] = face;
+            omega[axis] = 0.0;
+            if face != 6u {
+                omega[axis] = max(face_solid_angle(x.point, lo, size, face), 0.0);
+                total += omega[axis];
+            }
+        }
+        if !(total > 0.0) || !finite(total) {
+            return c;
+        }
+        // Pick a face by its share of the total solid angle.
+        var pick = u_face * total;
+        var chosen = 0u;
+        for (var axis = 0u; axis < 3u; axis++) {
+            if omega[axis] > 0.0 {
+                chosen = axis;
+                if pick < omega[axis] {
+                    break;
+                }
+                pick -= omega[axis];
+            }
+        }
+        c.r.face = faces[chosen];
+        // Quantise first so the pdf and target are those of the point actually stored.
+        c.pdf = picked.pdf * (omega[chosen] / total) / (size * size);
+    }
+    c.target_value = luminance(unshadowed(x, light, c.r.face, unpack2x16unorm(c.r.uv)));
+    return c;
+}
+
+// Streams one weighted input into `r`: kept with probability weight / w_sum. Returns whether it was kept.
+fn stream(r: ptr<function, Reservoir>, input: Reservoir, weight: f32, m: f32, u: f32) -> bool {
+    let w = select(0.0, weight, finite(weight) && weight > 0.0);
+    (*r).w_sum += w;
+    (*r).m += m;
+    if w > 0.0 && u * (*r).w_sum < w {
+        let w_sum = (*r).w_sum;
+        let total_m = (*r).m;
+        *r = input;
+        (*r).w_sum = w_sum;
+        (*r).m = total_m;
+        return true;
+    }
+    return false;
+}
+
+// The contribution weight W = w_sum / (Z p_hat(y)), Z the M of the inputs that could have produced y (biased:
+// all of them), and the target stored.
+fn finalize(r: ptr<function, Reservoir>, target_value: f32, z: f32) {
+    let denominator = z * target_value;
+    (*r).big_w = select(0.0, (*r).w_sum / denominator, denominator > 0.0);
+    if !finite((*r).big_w) {
+        (*r).big_w = 0.0;
+    }
+    (*r).target_value = target_value;
+}
+
+fn unbiased() -> bool {
+    return (frame.restir_flags & RESTIR_UNBIASED) != 0u;
+}
+
+// Random numbers per pixel, pass and frame.
+fn pixel_rng(pixel: vec2<u32>, pass_salt: u32) -> Rng {
+    let size = vec2<u32>(view.viewport.zw);
+    return Rng(pcg(pixel.x + size.x * pixel.y) ^ pcg(frame.frame * 0x9E3779B9u + pass_salt));
+}

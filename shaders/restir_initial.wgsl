@@ -1,0 +1,90 @@
+// Voxel ReSTIR pass 1: M_init candidates per pixel by resampled importance sampling, one visibility ray for the
+// chosen one, then temporal reuse of last frame's final reservoir at the reprojected pixel.
+
+#import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index, RESTIR_TEMPORAL}
+#import glowbrick::lights::{Rng, rng_next}
+#import glowbrick::restir::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
+    shading, sample_candidate, stream, finalize, target_of, reservoir_visible, unbiased, pixel_rng}
+
+// Temporal history is capped at this many times M_init (DESIGN.md), so old samples cannot dominate forever.
+const HISTORY_CAP: f32 = 20.0;
+
+// Last frame's pixel that saw `point`, if it is on screen.
+fn reproject(point: vec3<f32>, size: vec2<u32>) -> vec3<i32> {
+    let clip = frame.prev_clip_from_world * vec4(point, 1.0);
+    if clip.w <= 0.0 {
+        return vec3(-1);
+    }
+    let ndc = clip.xy / clip.w;
+    let uv = vec2(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    let pixel = vec2<i32>(floor(uv * vec2<f32>(size)));
+    if any(pixel < vec2(0)) || any(pixel >= vec2<i32>(size)) {
+        return vec3(-1);
+    }
+    return vec3(pixel, 1);
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = vec2<u32>(view.viewport.zw);
+    if any(id.xy >= size) {
+        return;
+    }
+    let index = pixel_index(id.xy);
+    let surface = unpack_surface(gbuffer[index]);
+    if !surface.found {
+        reservoirs_temporal[index] = empty_reservoir();
+        return;
+    }
+    let x = shading(surface);
+    var rng = pixel_rng(id.xy, 1u);
+
+    // Initial candidates (streaming RIS).
+    var r = empty_reservoir();
+    let m_init = f32(frame.candidates);
+    for (var i = 0u; i < frame.candidates; i++) {
+        let c = sample_candidate(x, &rng);
+        let weight = select(0.0, c.target_value / c.pdf, c.pdf > 0.0);
+        stream(&r, c.r, weight, 1.0, rng_next(&rng));
+    }
+    finalize(&r, target_of(x, r), r.m);
+    // Visibility reuse (thesis §4.4): an occluded choice keeps its M but contributes nothing when reused.
+    if r.big_w > 0.0 && !reservoir_visible(x, r) {
+        r.big_w = 0.0;
+        r.w_sum = 0.0;
+    }
+
+    if (frame.restir_flags & RESTIR_TEMPORAL) != 0u && frame.prev_camera.w > 0.0 {
+        let prev_pixel = reproject(x.point, size);
+        if prev_pixel.z == 1 {
+            let prev_index = u32(prev_pixel.x) + size.x * u32(prev_pixel.y);
+            let prev_surface = unpack_surface(prev_gbuffer[prev_index]);
+            // Same face orientation (axis and sign) and depth within 10% seen from last frame's camera.
+            let depth_now = distance(frame.prev_camera.xyz, x.point);
+            let depth_then = distance(frame.prev_camera.xyz, prev_surface.point);
+            if prev_surface.found && prev_surface.face == surface.face && abs(depth_now - depth_then) <= 0.1 * depth_now {
+                var prev = validated(reservoirs_final[prev_index]);
+                prev.m = min(prev.m, HISTORY_CAP * m_init);
+                let current = r;
+                var merged = empty_reservoir();
+                // The current reservoir's resampling weight is p_hat(y) W M = its w_sum.
+                stream(&merged, current, current.w_sum, current.m, rng_next(&rng));
+                let from_prev = stream(&merged, prev, target_of(x, prev) * prev.big_w * prev.m, prev.m, rng_next(&rng));
+                let target_value = target_of(x, merged);
+                var z = merged.m;
+                if unbiased() {
+                    // Count only the inputs that could have produced the chosen sample: the previous pixel's
+                    // reservoir holds only samples it saw unoccluded, so test visibility from there.
+                    let prev_shading = shading(prev_surface);
+                    z = select(0.0, current.m, target_value > 0.0);
+                    if target_of(prev_shading, merged) > 0.0 && (from_prev || reservoir_visible(prev_shading, merged)) {
+                        z += prev.m;
+                    }
+                }
+                finalize(&merged, target_value, z);
+                r = merged;
+            }
+        }
+    }
+    reservoirs_temporal[index] = r;
+}

@@ -1,0 +1,38 @@
+// Voxel ReSTIR pass 3: shading. Emission plus the reservoir's sample: f(y) V(y) W, with a final shadow ray.
+// An occluded sample gets W = 0 and keeps its M (visibility reuse): next frame's temporal reuse does not pick it
+// again, and its M still says how many candidates found this pixel's light occluded. (Emptying it instead, M = 0,
+// forgets that evidence and measurably brightens penumbrae.)
+
+#import glowbrick::world::materials
+#import glowbrick::frame::{frame, view, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output}
+#import glowbrick::restir::{reservoirs_final, validated, shading, unshadowed, reservoir_visible, NO_LIGHT}
+#import glowbrick::lights::lights
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = vec2<u32>(view.viewport.zw);
+    if any(id.xy >= size) {
+        return;
+    }
+    let index = pixel_index(id.xy);
+    let surface = unpack_surface(gbuffer[index]);
+    if !surface.found {
+        // Emitters only, as in the reference: no sky.
+        write_output(id.xy, vec4(0.0));
+        return;
+    }
+    let x = shading(surface);
+    var r = validated(reservoirs_final[index]);
+    var radiance = materials[surface.material].radiance.rgb;
+    if r.slot != NO_LIGHT && r.big_w > 0.0 {
+        if reservoir_visible(x, r) {
+            radiance += unshadowed(x, lights[r.slot], r.face, unpack2x16unorm(r.uv)) * r.big_w;
+        } else {
+            r.big_w = 0.0;
+            r.w_sum = 0.0;
+        }
+    }
+    reservoirs_final[index] = r;
+    let depth = distance(view.world_position, x.point);
+    write_output(id.xy, vec4(highlight(radiance * frame.exposure, surface_voxel(surface), surface.face, x.point, depth), 1.0));
+}
