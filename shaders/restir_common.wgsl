@@ -249,15 +249,23 @@ fn stream(r: ptr<function, Reservoir>, input: Reservoir, weight: f32, m: f32, u:
     return false;
 }
 
-// The contribution weight W = w_sum / (Z p_hat(y)), Z the M of the inputs that could have produced y (biased:
-// all of them), and the target stored.
-fn finalize(r: ptr<function, Reservoir>, target_value: f32, z: f32) {
-    let denominator = z * target_value;
-    (*r).big_w = select(0.0, (*r).w_sum / denominator, denominator > 0.0);
+// The contribution weight W = w_sum mis / p_hat(y), and the target stored. For initial candidates mis = 1 / M.
+// Reuse uses the balance heuristic evaluated for the chosen sample only (Bitterli et al. 2020, sec. 4.3):
+// mis = p_c(y) / sum_i M_i p_i(y), p_i the target at input i's pixel (visibility-tested in the unbiased variant)
+// and c the input y came from. The thesis' 1/M (and 1/Z) do not cancel a neighbour's large W where that
+// neighbour's target was small: a firefly at one pixel then spreads to its neighbours and stays for the whole
+// history (measured: MSE 0.03 -> 1.3 on the cornell box at 96x64 with M_init = 32, 799 with M_init = 4).
+fn finalize(r: ptr<function, Reservoir>, target_value: f32, mis: f32) {
+    let denominator = target_value;
+    (*r).big_w = select(0.0, (*r).w_sum * mis / denominator, denominator > 0.0 && mis > 0.0);
     if !finite((*r).big_w) {
         (*r).big_w = 0.0;
     }
     (*r).target_value = target_value;
+}
+
+fn biased_mis(m: f32) -> f32 {
+    return select(0.0, 1.0 / m, m > 0.0);
 }
 
 fn unbiased() -> bool {

@@ -4,7 +4,7 @@
 #import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index, RESTIR_TEMPORAL}
 #import glowbrick::lights::{Rng, rng_next}
 #import glowbrick::restir::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
-    shading, sample_candidate, stream, finalize, target_of, reservoir_visible, unbiased, pixel_rng}
+    shading, sample_candidate, stream, finalize, biased_mis, target_of, reservoir_visible, unbiased, pixel_rng}
 
 // Temporal history is capped at this many times M_init (DESIGN.md), so old samples cannot dominate forever.
 const HISTORY_CAP: f32 = 20.0;
@@ -47,7 +47,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let weight = select(0.0, c.target_value / c.pdf, c.pdf > 0.0);
         stream(&r, c.r, weight, 1.0, rng_next(&rng));
     }
-    finalize(&r, target_of(x, r), r.m);
+    finalize(&r, target_of(x, r), biased_mis(r.m));
     // Visibility reuse (thesis §4.4): an occluded choice keeps its M but contributes nothing when reused.
     if r.big_w > 0.0 && !reservoir_visible(x, r) {
         r.big_w = 0.0;
@@ -71,17 +71,24 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 stream(&merged, current, current.w_sum, current.m, rng_next(&rng));
                 let from_prev = stream(&merged, prev, target_of(x, prev) * prev.big_w * prev.m, prev.m, rng_next(&rng));
                 let target_value = target_of(x, merged);
-                var z = merged.m;
+                // The balance heuristic for the chosen sample (see finalize): each input's target at it. The
+                // unbiased variant tests visibility from every input that is not the sample's source (an input
+                // holds only samples it saw unoccluded); the biased one skips those rays.
+                let prev_shading = shading(prev_surface);
+                var p_current = target_value;
+                var p_prev = target_of(prev_shading, merged);
                 if unbiased() {
-                    // Count only the inputs that could have produced the chosen sample: the previous pixel's
-                    // reservoir holds only samples it saw unoccluded, so test visibility from there.
-                    let prev_shading = shading(prev_surface);
-                    z = select(0.0, current.m, target_value > 0.0);
-                    if target_of(prev_shading, merged) > 0.0 && (from_prev || reservoir_visible(prev_shading, merged)) {
-                        z += prev.m;
+                    if from_prev && p_current > 0.0 && !reservoir_visible(x, merged) {
+                        p_current = 0.0;
+                    }
+                    if !from_prev && p_prev > 0.0 && !reservoir_visible(prev_shading, merged) {
+                        p_prev = 0.0;
                     }
                 }
-                finalize(&merged, target_value, z);
+                let p_source = select(p_current, p_prev, from_prev);
+                let sum = current.m * p_current + prev.m * p_prev;
+                let mis = select(0.0, p_source / sum, sum > 0.0);
+                finalize(&merged, target_value, mis);
                 r = merged;
             }
         }

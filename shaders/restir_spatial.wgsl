@@ -56,18 +56,27 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         used++;
     }
     let target_value = target_of(x, merged);
-    var z = merged.m;
-    if unbiased() && merged.slot != 0xffffffffu {
-        // 1/Z normalisation (Bitterli et al. 2020, Alg. 6): count the inputs whose own (visibility-tested)
-        // target is non-zero at the chosen sample, one visibility ray per neighbour.
-        z = select(0.0, own.m, target_value > 0.0);
-        for (var j = 0u; j < used; j++) {
-            let neighbour = shading(unpack_surface(gbuffer[taps[j]]));
-            if target_of(neighbour, merged) > 0.0 && (source == i32(j) || reservoir_visible(neighbour, merged)) {
-                z += tap_m[j];
-            }
-        }
+    // The balance heuristic for the chosen sample (see finalize): every input's target at it. The unbiased
+    // variant tests visibility from each input that is not the sample's source (one ray per input); the biased
+    // one skips those rays and darkens a little where inputs see the sample differently.
+    var p_own = target_value;
+    if unbiased() && source != -1 && p_own > 0.0 && !reservoir_visible(x, merged) {
+        p_own = 0.0;
     }
-    finalize(&merged, target_value, z);
+    var sum = own.m * p_own;
+    var p_source = p_own;
+    for (var j = 0u; j < used; j++) {
+        let neighbour = shading(unpack_surface(gbuffer[taps[j]]));
+        var p = target_of(neighbour, merged);
+        if unbiased() && source != i32(j) && p > 0.0 && !reservoir_visible(neighbour, merged) {
+            p = 0.0;
+        }
+        if source == i32(j) {
+            p_source = p;
+        }
+        sum += tap_m[j] * p;
+    }
+    let mis = select(0.0, p_source / sum, sum > 0.0 && merged.slot != 0xffffffffu);
+    finalize(&merged, target_value, mis);
     reservoirs_final[index] = merged;
 }

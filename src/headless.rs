@@ -116,6 +116,16 @@ impl HeadlessRenderer {
         &mut self.app
     }
 
+    /// Moves the camera to `view` (takes effect on the next frame; temporal history is kept).
+    pub fn set_view(&mut self, view: &CameraView) {
+        let transform = crate::render::camera::view_transform(view);
+        let world = self.app.world_mut();
+        let mut cameras = world.query_filtered::<&mut Transform, With<crate::render::VoxelCamera>>();
+        for mut t in cameras.iter_mut(world) {
+            *t = transform;
+        }
+    }
+
     /// Frames the primary pass has dispatched so far.
     pub fn frames_rendered(&self) -> u32 {
         self.frames.0.load(Ordering::Relaxed)

@@ -13,15 +13,13 @@
 
 mod common;
 
-use bevy::math::UVec2;
 use glowbrick::headless::HeadlessOptions;
 use glowbrick::image_io::LinearImage;
 use glowbrick::reference::metrics::compare;
 use glowbrick::reference::{ReferenceOptions, render_reference};
-use glowbrick::render::camera::{camera_ray, view_transform, world_from_clip};
 use glowbrick::settings::RenderSettings;
 use glowbrick::world::scene::load_scene;
-use glowbrick::world::{CameraView, VoxelWorld, trace};
+use glowbrick::world::{CameraView, VoxelWorld};
 
 const W: u32 = 96;
 const H: u32 = 64;
@@ -30,12 +28,6 @@ fn cpu(world: &VoxelWorld, view: &CameraView, spp: u32, seed: u64) -> LinearImag
     render_reference(world, view, &ReferenceOptions { width: W, height: H, spp, bounces: 0, seed, time_budget: None })
         .unwrap()
         .image
-}
-
-/// Keeps only pixels whose primary hit the GPU agrees on (those where the `debug=hit` image equals the CPU).
-fn masked(image: &LinearImage, keep: &[bool]) -> LinearImage {
-    let pixels = image.pixels.iter().zip(keep).filter(|(_, k)| **k).map(|(p, _)| *p).collect::<Vec<_>>();
-    LinearImage { width: pixels.len() as u32, height: 1, pixels }
 }
 
 fn check_scene(name: &str, view_name: &str) {
@@ -49,29 +41,12 @@ fn check_scene(name: &str, view_name: &str) {
     let truth = cpu(&world, &view, 4096, 77);
     let cpu_256 = cpu(&world, &view, 256, 78);
 
-    let transform = view_transform(&view);
-    let m = world_from_clip(&transform, view.fov_deg.to_radians(), W, H);
-    let hit_settings = RenderSettings::default().with_pairs(&["debug=hit".to_string()]).unwrap();
-    let hit_options = HeadlessOptions { width: W, height: H, settings: hit_settings, ..Default::default() };
-    let Some(mut hit_renderer) = common::renderer(world.clone(), &view, &hit_options) else { return };
-    let hits = hit_renderer.render(1).unwrap();
-    let keep: Vec<bool> = (0..W * H)
-        .map(|i| {
-            let ray = camera_ray(m, transform.translation, UVec2::new(i % W, i / W), W, H);
-            let p = hits.pixels[i as usize];
-            match trace(&world.grid, &ray, f32::INFINITY) {
-                Some(h) => {
-                    let same = p[3] > 0.0 && [p[0], p[1], p[2]] == h.voxel.as_vec3().to_array();
-                    same && !touches_emitter(&world, h.voxel)
-                }
-                None => p[3] == 0.0,
-            }
-        })
-        .collect();
+    let Some(keep) = common::comparable_pixels(&world, &view, W, H) else { return };
     let dropped = keep.iter().filter(|k| !**k).count();
     // The cornell box sees its 128 x 128 light head on: those pixels are emitters and are left out.
     assert!(dropped * 5 <= keep.len(), "{name}: {dropped} of {} pixels left out", keep.len());
-    let (gpu, truth, cpu_256) = (masked(&gpu, &keep), masked(&truth, &keep), masked(&cpu_256, &keep));
+    let (gpu, truth, cpu_256) =
+        (common::masked(&gpu, &keep), common::masked(&truth, &keep), common::masked(&cpu_256, &keep));
     let g = compare(&gpu, &truth).unwrap();
     let c = compare(&cpu_256, &truth).unwrap();
     let mean =
@@ -81,14 +56,6 @@ fn check_scene(name: &str, view_name: &str) {
     let ratio = g.mse / c.mse;
     assert!((1.0 / 1.6..1.6).contains(&ratio), "{name}: GPU MSE {} vs CPU MSE {} at equal samples", g.mse, c.mse);
     assert!(g.relmse < 0.05, "{name}: relMSE {}", g.relmse);
-}
-
-/// Whether an emissive voxel lies within one voxel (26-neighbourhood) of `v`, or is `v`.
-fn touches_emitter(world: &VoxelWorld, v: bevy::math::IVec3) -> bool {
-    (-1..=1).any(|z| {
-        (-1..=1)
-            .any(|y| (-1..=1).any(|x| world.palette.is_emissive(world.grid.get(v + bevy::math::IVec3::new(x, y, z)))))
-    })
 }
 
 #[test]

@@ -8,6 +8,7 @@ pub mod interaction;
 pub mod models;
 pub mod player;
 pub mod save_load;
+pub mod settings_panel;
 pub mod undo;
 
 use crate::render::camera::voxel_camera_bundle;
@@ -57,6 +58,7 @@ pub fn run_game(
         player::PlayerPlugin,
         interaction::InteractionInputPlugin,
         hud::HudPlugin,
+        settings_panel::SettingsPanelPlugin,
     ))
     .add_systems(Startup, move |mut commands: Commands| {
         commands.spawn((voxel_camera_bundle(&view), Tonemapping::AcesFitted, player::Player::looking(&view)));

@@ -64,3 +64,48 @@ pub fn compare_hits(world: &VoxelWorld, view: &CameraView, gpu: &LinearImage) ->
     }
     c
 }
+
+/// Pixels fit for comparing lighting with the CPU: the GPU's primary hit (a `debug=hit` render) is the CPU's, and
+/// the hit voxel does not touch an emitter (where a surface meets a light, area sampling has unbounded variance:
+/// neither side converges there and one firefly decides the number). `None` when no adapter exists.
+pub fn comparable_pixels(world: &VoxelWorld, view: &CameraView, w: u32, h: u32) -> Option<Vec<bool>> {
+    let transform = view_transform(view);
+    let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
+    let settings = glowbrick::settings::RenderSettings::default().with_pairs(&["debug=hit".to_string()]).unwrap();
+    let options = HeadlessOptions { width: w, height: h, settings, ..Default::default() };
+    let hits = renderer(world.clone(), view, &options)?.render(1).unwrap();
+    Some(
+        (0..w * h)
+            .map(|i| {
+                let ray = camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h);
+                let p = hits.pixels[i as usize];
+                match trace(&world.grid, &ray, f32::INFINITY) {
+                    Some(hit) => {
+                        let same = p[3] > 0.0 && [p[0], p[1], p[2]] == hit.voxel.as_vec3().to_array();
+                        same && !touches_emitter(world, hit.voxel)
+                    }
+                    None => p[3] == 0.0,
+                }
+            })
+            .collect(),
+    )
+}
+
+/// Whether an emissive voxel lies within one voxel (26-neighbourhood) of `v`, or is `v`.
+pub fn touches_emitter(world: &VoxelWorld, v: IVec3) -> bool {
+    (-1..=1)
+        .any(|z| (-1..=1).any(|y| (-1..=1).any(|x| world.palette.is_emissive(world.grid.get(v + IVec3::new(x, y, z))))))
+}
+
+/// The pixels of `image` where `keep` is true, as a one-row image.
+pub fn masked(image: &LinearImage, keep: &[bool]) -> LinearImage {
+    let pixels = image.pixels.iter().zip(keep).filter(|(_, k)| **k).map(|(p, _)| *p).collect::<Vec<_>>();
+    LinearImage { width: pixels.len() as u32, height: 1, pixels }
+}
+
+/// Mean luminance of an image's pixels.
+pub fn mean_luminance(image: &LinearImage) -> f64 {
+    let sum: f64 =
+        image.pixels.iter().map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64).sum();
+    sum / image.pixels.len().max(1) as f64
+}
