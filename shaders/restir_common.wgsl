@@ -249,23 +249,27 @@ fn stream(r: ptr<function, Reservoir>, input: Reservoir, weight: f32, m: f32, u:
     return false;
 }
 
-// The contribution weight W = w_sum mis / p_hat(y), and the target stored. For initial candidates mis = 1 / M.
-// Reuse uses the balance heuristic evaluated for the chosen sample only (Bitterli et al. 2020, sec. 4.3):
-// mis = p_c(y) / sum_i M_i p_i(y), p_i the target at input i's pixel (visibility-tested in the unbiased variant)
-// and c the input y came from. The thesis' 1/M (and 1/Z) do not cancel a neighbour's large W where that
-// neighbour's target was small: a firefly at one pixel then spreads to its neighbours and stays for the whole
-// history (measured: MSE 0.03 -> 1.3 on the cornell box at 96x64 with M_init = 32, 799 with M_init = 4).
-fn finalize(r: ptr<function, Reservoir>, target_value: f32, mis: f32) {
-    let denominator = target_value;
-    (*r).big_w = select(0.0, (*r).w_sum * mis / denominator, denominator > 0.0 && mis > 0.0);
+// The contribution weight W = w_sum / p_hat(y), and the target stored. Reuse puts its MIS weights into the
+// resampling weights, so w_sum already holds them.
+fn finalize(r: ptr<function, Reservoir>, target_value: f32) {
+    (*r).big_w = select(0.0, (*r).w_sum / target_value, target_value > 0.0);
     if !finite((*r).big_w) {
         (*r).big_w = 0.0;
     }
     (*r).target_value = target_value;
 }
 
-fn biased_mis(m: f32) -> f32 {
-    return select(0.0, 1.0 / m, m > 0.0);
+// Pairwise MIS (after Bitterli's dissertation, sec. 9.1.3), with confidence weights M: the pixel's own reservoir
+// c is the canonical input and each of the k neighbours i is weighed against it alone:
+//   m_i(x) = (M_i + M_c/k) / M_total * M_i p_i(x) / (M_i p_i(x) + (M_c/k) p_c(x)),   m_c(x) = 1 - sum_i m_i(x).
+// The weights sum to 1 wherever some input can produce x and none is negative, so the reuse is unbiased when
+// p_i includes input i's visibility (the unbiased variant: two rays per neighbour) and only slightly biased where
+// visibility differs when it does not (the biased variant: no rays). Unlike the thesis' 1/M, the weight falls
+// with p_i, cancelling a neighbour's large W where its own target was small, so a sample that was a firefly at
+// one pixel does not spread to its neighbours and stay for the whole history (measured in docs/bench/restir.md).
+fn pair_weight(m_i: f32, p_i: f32, m_c_share: f32, p_c: f32, share: f32) -> f32 {
+    let denominator = m_i * p_i + m_c_share * p_c;
+    return select(0.0, share * m_i * p_i / denominator, denominator > 0.0 && finite(denominator));
 }
 
 fn unbiased() -> bool {

@@ -4,7 +4,7 @@
 #import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index, RESTIR_TEMPORAL}
 #import glowbrick::lights::{Rng, rng_next}
 #import glowbrick::restir::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
-    shading, sample_candidate, stream, finalize, biased_mis, target_of, reservoir_visible, unbiased, pixel_rng}
+    shading, sample_candidate, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, pixel_rng}
 
 // Temporal history is capped at this many times M_init (DESIGN.md), so old samples cannot dominate forever.
 const HISTORY_CAP: f32 = 20.0;
@@ -47,7 +47,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let weight = select(0.0, c.target_value / c.pdf, c.pdf > 0.0);
         stream(&r, c.r, weight, 1.0, rng_next(&rng));
     }
-    finalize(&r, target_of(x, r), biased_mis(r.m));
+    let own_target = target_of(x, r);
+    r.big_w = select(0.0, r.w_sum / (r.m * own_target), r.m * own_target > 0.0);
+    r.target_value = own_target;
     // Visibility reuse (thesis §4.4): an occluded choice keeps its M but contributes nothing when reused.
     if r.big_w > 0.0 && !reservoir_visible(x, r) {
         r.big_w = 0.0;
@@ -66,29 +68,28 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 var prev = validated(reservoirs_final[prev_index]);
                 prev.m = min(prev.m, HISTORY_CAP * m_init);
                 let current = r;
-                var merged = empty_reservoir();
-                // The current reservoir's resampling weight is p_hat(y) W M = its w_sum.
-                stream(&merged, current, current.w_sum, current.m, rng_next(&rng));
-                let from_prev = stream(&merged, prev, target_of(x, prev) * prev.big_w * prev.m, prev.m, rng_next(&rng));
-                let target_value = target_of(x, merged);
-                // The balance heuristic for the chosen sample (see finalize): each input's target at it. The
-                // unbiased variant tests visibility from every input that is not the sample's source (an input
-                // holds only samples it saw unoccluded); the biased one skips those rays.
                 let prev_shading = shading(prev_surface);
-                var p_current = target_value;
-                var p_prev = target_of(prev_shading, merged);
+                // Pairwise MIS with one neighbour is the balance heuristic (see pair_weight); the unbiased
+                // variant tests each sample's visibility from the other input (two rays).
+                var p_current_at_prev = target_of(x, prev);
+                let p_prev_at_prev = target_of(prev_shading, prev);
+                var p_prev_at_current = target_of(prev_shading, current);
+                let p_current_at_current = target_of(x, current);
                 if unbiased() {
-                    if from_prev && p_current > 0.0 && !reservoir_visible(x, merged) {
-                        p_current = 0.0;
+                    if p_current_at_prev > 0.0 && !reservoir_visible(x, prev) {
+                        p_current_at_prev = 0.0;
                     }
-                    if !from_prev && p_prev > 0.0 && !reservoir_visible(prev_shading, merged) {
-                        p_prev = 0.0;
+                    if p_prev_at_current > 0.0 && !reservoir_visible(prev_shading, current) {
+                        p_prev_at_current = 0.0;
                     }
                 }
-                let p_source = select(p_current, p_prev, from_prev);
-                let sum = current.m * p_current + prev.m * p_prev;
-                let mis = select(0.0, p_source / sum, sum > 0.0);
-                finalize(&merged, target_value, mis);
+                let m_prev = pair_weight(prev.m, p_prev_at_prev, current.m, p_current_at_prev, 1.0);
+                let m_current = 1.0 - pair_weight(prev.m, p_prev_at_current, current.m, p_current_at_current, 1.0);
+                var merged = empty_reservoir();
+                stream(&merged, current, m_current * p_current_at_current * current.big_w, current.m, rng_next(&rng));
+                // Resample with the same (visibility-tested, when unbiased) target the weights use.
+                stream(&merged, prev, m_prev * p_current_at_prev * prev.big_w, prev.m, rng_next(&rng));
+                finalize(&merged, target_of(x, merged));
                 r = merged;
             }
         }

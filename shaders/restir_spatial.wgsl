@@ -4,7 +4,7 @@
 #import glowbrick::frame::{frame, view, gbuffer, unpack_surface, pixel_index, RESTIR_SPATIAL}
 #import glowbrick::lights::{Rng, rng_next, PI}
 #import glowbrick::restir::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
-    shading, stream, finalize, target_of, reservoir_visible, unbiased, pixel_rng}
+    shading, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, pixel_rng}
 
 // Settings clamp taps to this (src/settings.rs).
 const MAX_TAPS: u32 = 16u;
@@ -26,13 +26,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let depth = distance(view.world_position, x.point);
     var rng = pixel_rng(id.xy, 2u);
 
-    var merged = empty_reservoir();
-    stream(&merged, own, target_of(x, own) * own.big_w * own.m, own.m, rng_next(&rng));
-    // Which input the merged sample came from: -1 this pixel, else the tap number.
-    var source = -1;
+    // Gather the neighbours first: pairwise MIS needs their count k.
     var taps: array<u32, MAX_TAPS>;
-    var tap_m: array<f32, MAX_TAPS>;
     var used = 0u;
+    var m_total = own.m;
     for (var i = 0u; i < min(frame.taps, MAX_TAPS); i++) {
         let angle = 2.0 * PI * rng_next(&rng);
         let radius = frame.radius * sqrt(rng_next(&rng));
@@ -47,36 +44,38 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             || abs(distance(view.world_position, tap_surface.point) - depth) > 0.1 * depth {
             continue;
         }
-        let tap = validated(reservoirs_temporal[tap_index]);
-        if stream(&merged, tap, target_of(x, tap) * tap.big_w * tap.m, tap.m, rng_next(&rng)) {
-            source = i32(used);
-        }
         taps[used] = tap_index;
-        tap_m[used] = tap.m;
+        m_total += validated(reservoirs_temporal[tap_index]).m;
         used++;
     }
-    let target_value = target_of(x, merged);
-    // The balance heuristic for the chosen sample (see finalize): every input's target at it. The unbiased
-    // variant tests visibility from each input that is not the sample's source (one ray per input); the biased
-    // one skips those rays and darkens a little where inputs see the sample differently.
-    var p_own = target_value;
-    if unbiased() && source != -1 && p_own > 0.0 && !reservoir_visible(x, merged) {
-        p_own = 0.0;
-    }
-    var sum = own.m * p_own;
-    var p_source = p_own;
+
+    // Pairwise MIS (pair_weight): each neighbour against this pixel's reservoir, the canonical input.
+    var merged = empty_reservoir();
+    let k = f32(max(used, 1u));
+    let m_share = own.m / k;
+    let p_own_at_own = target_of(x, own);
+    var m_own = 1.0;
     for (var j = 0u; j < used; j++) {
+        let tap = validated(reservoirs_temporal[taps[j]]);
         let neighbour = shading(unpack_surface(gbuffer[taps[j]]));
-        var p = target_of(neighbour, merged);
-        if unbiased() && source != i32(j) && p > 0.0 && !reservoir_visible(neighbour, merged) {
-            p = 0.0;
+        let share = select(0.0, (tap.m + m_share) / m_total, m_total > 0.0);
+        // The neighbour's sample, weighed at both pixels. The unbiased variant resamples with this pixel's
+        // visibility-tested target, as its MIS weights use it: with an unshadowed target, a sample this pixel
+        // cannot see would get the neighbour's full weight with nothing to damp its W, and inflate w_sum.
+        var p_own_at_tap = target_of(x, tap);
+        if unbiased() && p_own_at_tap > 0.0 && !reservoir_visible(x, tap) {
+            p_own_at_tap = 0.0;
         }
-        if source == i32(j) {
-            p_source = p;
+        let m_tap = pair_weight(tap.m, target_of(neighbour, tap), m_share, p_own_at_tap, share);
+        stream(&merged, tap, m_tap * p_own_at_tap * tap.big_w, tap.m, rng_next(&rng));
+        // This pixel's sample, seen from the neighbour.
+        var p_tap_at_own = target_of(neighbour, own);
+        if unbiased() && p_tap_at_own > 0.0 && !reservoir_visible(neighbour, own) {
+            p_tap_at_own = 0.0;
         }
-        sum += tap_m[j] * p;
+        m_own -= pair_weight(tap.m, p_tap_at_own, m_share, p_own_at_own, share);
     }
-    let mis = select(0.0, p_source / sum, sum > 0.0 && merged.slot != 0xffffffffu);
-    finalize(&merged, target_value, mis);
+    stream(&merged, own, max(m_own, 0.0) * p_own_at_own * own.big_w, own.m, rng_next(&rng));
+    finalize(&merged, target_of(x, merged));
     reservoirs_final[index] = merged;
 }

@@ -18,8 +18,17 @@ fn quick_bench_writes_csv_markdown_and_plot() {
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
-    assert_eq!(lines[0], "scene,setting,frame_ms,primary_gpu_ms,mae,mse,relmse,bias");
-    assert_eq!(lines.len(), 1 + 2 * 2, "two scenes x two settings:\n{csv}");
+    assert_eq!(lines[0], "scene,setting,frame_ms,gpu_ms,mae,mse,relmse,bias");
+    let per_scene = glowbrick::bench::SETTINGS.len() + 1;
+    assert_eq!(lines.len(), 1 + 2 * per_scene, "two scenes x the settings and the equal-time row:\n{csv}");
+    // ReSTIR's one frame beats one NEE frame on both scenes (MAE).
+    let mae = |scene: &str, setting: &str| -> f64 {
+        let line = lines.iter().find(|l| l.starts_with(&format!("{scene},{setting},"))).unwrap();
+        line.split(',').nth(4).unwrap().parse().unwrap()
+    };
+    for scene in ["cornell", "letters"] {
+        assert!(mae(scene, "restir") < mae(scene, "nee-power"), "{scene}: ReSTIR no better than NEE:\n{csv}");
+    }
     for line in &lines[1..] {
         let fields: Vec<&str> = line.split(',').collect();
         let frame_ms: f64 = fields[2].parse().unwrap();

@@ -56,6 +56,22 @@ fn bad_settings_and_arguments_fail_cleanly() {
     let out = glowbrick(&["render", "--scene", "test-room", "--width", "0", "--out", "/tmp/x.png"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("image size 0x180"), "{}", text(&out.stderr));
+    // ReSTIR settings: out of range, not a number, or not a choice, each with the valid range in the message.
+    for (pair, expected) in [
+        ("candidates=0", "candidates: 0 is out of range (valid: 1..64)"),
+        ("candidates=1000000000", "candidates: 1000000000 is out of range (valid: 1..64)"),
+        ("candidates=lots", "candidates: 'lots' is not a whole number (valid: 1..64)"),
+        ("taps=17", "taps: 17 is out of range (valid: 0..16)"),
+        ("radius=-1", "radius: -1 is out of range (valid: 0..100)"),
+        ("radius=NaN", "radius: NaN is out of range (valid: 0..100)"),
+        ("sample=sphere", "sample: 'sphere' is not one of area|point"),
+        ("reuse=maybe", "reuse: 'maybe' is not one of biased|unbiased"),
+        ("lighting=path", "lighting: 'path' is not one of sun|nee|restir"),
+    ] {
+        let out = glowbrick(&["render", "--scene", "test-room", "--set", pair, "--out", "/tmp/x.png"]);
+        assert_eq!(out.status.code(), Some(1), "{pair}");
+        assert!(text(&out.stderr).contains(expected), "{pair}: {}", text(&out.stderr));
+    }
     let out = glowbrick(&["play", "--new", "--size", "4,4,4"]);
     assert!(!out.status.success());
     assert!(text(&out.stderr).contains("must be within 8..=2048"), "{}", text(&out.stderr));

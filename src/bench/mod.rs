@@ -3,8 +3,10 @@
 //! them) and the error of one frame against the CPU reference, cached under the target folder. It writes
 //! `results.csv`, `report.md` and `plot.png` (error against frame time, one panel per scene).
 //!
-//! Settings cover what the renderer has: the next-event-estimation baseline, one light sample per pixel with
-//! power or uniform light picking. ReSTIR and the GI cache join the list as they land.
+//! Settings: the next-event-estimation baseline (one light sample per pixel, power or uniform picking) and Voxel
+//! ReSTIR with M_init in {1, 8, 16, 32}, point vs area samples, reuse off, unbiased vs biased, uniform candidates.
+//! The spatial radius scales with the image (the thesis' 30 px at 1600 wide). Last per scene, `nee-equal-time`
+//! accumulates NEE frames for the time one default ReSTIR frame takes: the equal-time comparison.
 
 pub mod plot;
 
@@ -13,6 +15,7 @@ use crate::image_io::{LinearImage, read_image, write_image};
 use crate::reference::metrics::{Metrics, compare};
 use crate::reference::{ReferenceOptions, render_reference};
 use crate::render::primary::PRIMARY_PASS_NAME;
+use crate::render::restir::RESTIR_PASS_NAMES;
 use crate::settings::RenderSettings;
 use crate::world::format::world_to_string;
 use crate::world::scene::load_scene;
@@ -31,7 +34,19 @@ pub struct BenchSetting {
 pub const SETTINGS: &[BenchSetting] = &[
     BenchSetting { name: "nee-power", pairs: &["lighting=nee", "pick=power"] },
     BenchSetting { name: "nee-uniform", pairs: &["lighting=nee", "pick=uniform"] },
+    BenchSetting { name: "restir", pairs: &["lighting=restir"] },
+    BenchSetting { name: "restir-m1", pairs: &["lighting=restir", "candidates=1"] },
+    BenchSetting { name: "restir-m8", pairs: &["lighting=restir", "candidates=8"] },
+    BenchSetting { name: "restir-m16", pairs: &["lighting=restir", "candidates=16"] },
+    BenchSetting { name: "restir-point", pairs: &["lighting=restir", "sample=point"] },
+    BenchSetting { name: "restir-no-reuse", pairs: &["lighting=restir", "temporal=off", "spatial=off"] },
+    BenchSetting { name: "restir-temporal-only", pairs: &["lighting=restir", "spatial=off"] },
+    BenchSetting { name: "restir-unbiased", pairs: &["lighting=restir", "reuse=unbiased"] },
+    BenchSetting { name: "restir-uniform", pairs: &["lighting=restir", "pick=uniform"] },
 ];
+
+/// The setting whose frame time sets the NEE frame budget of the equal-time row.
+const EQUAL_TIME_TO: &str = "restir";
 
 /// Scenes of a full run and of `--quick`.
 pub const ALL_SCENES: &[&str] = &["cornell", "letters", "apartments", "mountain", "window-room"];
@@ -128,7 +143,9 @@ fn measure(
     config: &BenchConfig,
     reference: &LinearImage,
 ) -> Result<(f64, Option<f64>, Metrics), String> {
-    let pairs: Vec<String> = setting.pairs.iter().map(|p| p.to_string()).collect();
+    let mut pairs: Vec<String> = setting.pairs.iter().map(|p| p.to_string()).collect();
+    // The thesis' 30 px radius at 1600 wide, scaled to this image.
+    pairs.insert(0, format!("radius={}", (30.0 * config.width as f32 / 1600.0).round().max(2.0)));
     let settings = RenderSettings::default().with_pairs(&pairs)?;
     let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
     let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;
@@ -138,9 +155,33 @@ fn measure(
         renderer.step();
     }
     let frame_ms = start.elapsed().as_secs_f64() * 1000.0 / config.timed_frames.max(1) as f64;
-    let gpu_ms = renderer.gpu_pass_ms(PRIMARY_PASS_NAME);
+    let gpu_ms = gpu_ms(&renderer);
     let image = renderer.render(1)?;
     Ok((frame_ms, gpu_ms, compare(&image, reference)?))
+}
+
+/// GPU time of all voxel passes that ran (primary, and the ReSTIR passes when they ran).
+fn gpu_ms(renderer: &HeadlessRenderer) -> Option<f64> {
+    let primary = renderer.gpu_pass_ms(PRIMARY_PASS_NAME)?;
+    Some(primary + RESTIR_PASS_NAMES.iter().filter_map(|name| renderer.gpu_pass_ms(name)).sum::<f64>())
+}
+
+/// NEE accumulated over as many frames as fit in `budget_ms` of NEE frame time: (frames, frame ms, metrics).
+fn measure_equal_time(
+    world: &VoxelWorld,
+    view: &CameraView,
+    config: &BenchConfig,
+    reference: &LinearImage,
+    nee_frame_ms: f64,
+    budget_ms: f64,
+) -> Result<(u32, Metrics), String> {
+    let frames = (budget_ms / nee_frame_ms.max(1e-3)).round().clamp(1.0, 4096.0) as u32;
+    let pairs = ["lighting=nee", "pick=power", "accumulate=on"].map(String::from);
+    let settings = RenderSettings::default().with_pairs(&pairs)?;
+    let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
+    let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;
+    let image = renderer.render(frames)?;
+    Ok((frames, compare(&image, reference)?))
 }
 
 /// Runs every scene x setting and writes the three outputs to `out`.
@@ -151,10 +192,23 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
         let world = load_scene(name).map_err(|e| e.to_string())?;
         let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
         let reference = cached_reference(&world, &view, config)?;
+        let first = rows.len();
         for setting in SETTINGS {
             let (frame_ms, gpu_ms, metrics) = measure(&world, &view, setting, config, &reference)?;
             eprintln!("bench: {name} {}: {frame_ms:.2} ms/frame, {metrics}", setting.name);
             rows.push(BenchRow { scene: name.clone(), setting: setting.name.to_string(), frame_ms, gpu_ms, metrics });
+        }
+        let time_of = |setting: &str| rows[first..].iter().find(|r| r.setting == setting).map(|r| r.frame_ms);
+        if let (Some(nee_ms), Some(budget_ms)) = (time_of("nee-power"), time_of(EQUAL_TIME_TO)) {
+            let (frames, metrics) = measure_equal_time(&world, &view, config, &reference, nee_ms, budget_ms)?;
+            eprintln!("bench: {name} nee-equal-time ({frames} frames): {metrics}");
+            rows.push(BenchRow {
+                scene: name.clone(),
+                setting: format!("nee-equal-time ({frames} frames)"),
+                frame_ms: nee_ms * frames as f64,
+                gpu_ms: None,
+                metrics,
+            });
         }
     }
     write_csv(&rows, &out.join("results.csv"))?;
@@ -183,7 +237,7 @@ fn cells(r: &BenchRow) -> [String; 8] {
 }
 
 fn write_csv(rows: &[BenchRow], path: &Path) -> Result<(), String> {
-    let mut text = String::from("scene,setting,frame_ms,primary_gpu_ms,mae,mse,relmse,bias\n");
+    let mut text = String::from("scene,setting,frame_ms,gpu_ms,mae,mse,relmse,bias\n");
     for r in rows {
         text += &(cells(r).join(",") + "\n");
     }
@@ -192,10 +246,12 @@ fn write_csv(rows: &[BenchRow], path: &Path) -> Result<(), String> {
 
 fn write_markdown(rows: &[BenchRow], config: &BenchConfig, path: &Path) -> Result<(), String> {
     let mut text = format!(
-        "# Run time against error\n\n{}x{}, one frame (1 sample per pixel, no accumulation) against a {}-spp \
-         direct-light CPU reference; frame time averaged over {} frames after {} warm-up frames. `primary GPU ms` \
-         is the primary pass's timestamp-query time (n/a where the adapter has no timestamps).\n\n\
-         | scene | setting | frame ms | primary GPU ms | MAE | MSE | relMSE | bias |\n|---|---|---|---|---|---|---|---|\n",
+        "# Run time against error\n\n{}x{}, one frame (no accumulation; ReSTIR with the temporal history of the \
+         frames before it) against a {}-spp direct-light CPU reference; frame time averaged over {} frames after {} \
+         warm-up frames. `GPU ms` is the timestamp-query time of the voxel passes that ran (primary, plus the three \
+         ReSTIR passes; n/a where the adapter has no timestamps). `nee-equal-time` accumulates NEE frames for the \
+         frame time of `restir` (its frame ms is the total).\n\n\
+         | scene | setting | frame ms | GPU ms | MAE | MSE | relMSE | bias |\n|---|---|---|---|---|---|---|---|\n",
         config.width, config.height, config.reference_spp, config.timed_frames, config.warmup_frames
     );
     for r in rows {

@@ -130,3 +130,37 @@ fn panel_keys(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_step_within_the_command_line_ranges() {
+        let mut s = RenderSettings::default();
+        let row = |name: &str| ROWS.iter().position(|r| *r == name).unwrap();
+        for _ in 0..10 {
+            adjust(&mut s, row("candidates"), 1);
+            adjust(&mut s, row("taps"), 1);
+            adjust(&mut s, row("radius"), 1);
+        }
+        assert_eq!((s.restir.candidates, s.restir.taps, s.restir.radius), (64, 15, 80.0));
+        for _ in 0..40 {
+            adjust(&mut s, row("candidates"), -1);
+            adjust(&mut s, row("taps"), -1);
+            adjust(&mut s, row("radius"), -1);
+        }
+        assert_eq!((s.restir.candidates, s.restir.taps, s.restir.radius), (1, 0, 0.0));
+        // Every value the panel reaches is one `--set` accepts.
+        for pair in [format!("candidates={}", s.restir.candidates), format!("radius={}", s.restir.radius)] {
+            RenderSettings::default().set(&pair).unwrap();
+        }
+        adjust(&mut s, row("lighting"), 1);
+        assert_eq!(s.lighting, Lighting::Nee);
+        adjust(&mut s, row("lighting"), 1);
+        assert_eq!(s.lighting, Lighting::Restir);
+        adjust(&mut s, row("lighting"), 1);
+        assert_eq!(s.lighting, Lighting::Sun);
+        assert!(panel_text(&s, &SettingsPanel { open: true, row: 1 }).contains("> candidates  1"));
+    }
+}
