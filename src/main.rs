@@ -48,6 +48,16 @@ enum Command {
         /// A small, fast run (96x64, few frames, 256-spp references) for CI.
         #[arg(long)]
         quick: bool,
+        /// The thesis protocol instead: its .vx scenes and views, 32 frames, M = 32, area and point, the cornell
+        /// box with brick lights on and off; writes thesis.md beside the thesis' Table 3.
+        #[arg(long)]
+        thesis: bool,
+        /// With --thesis: image size as a fraction of the thesis' 1600x1024.
+        #[arg(long, default_value_t = 0.2)]
+        scale: f32,
+        /// With --thesis: samples per pixel of the CPU reference.
+        #[arg(long, default_value_t = 1024)]
+        spp: u32,
         #[arg(long)]
         out: PathBuf,
     },
@@ -195,7 +205,10 @@ fn main() -> ExitCode {
         Command::Render(args) => render(args),
         Command::Reference(args) => reference(args),
         Command::Compare { image, reference, diff } => compare(image, reference, diff),
-        Command::Bench { scenes, quick, out } => bench(scenes, quick, out),
+        Command::Bench { thesis: true, scale, spp, out, .. } => {
+            on_gpu(|| glowbrick::bench::thesis::run_thesis_bench(scale, spp, &out)).map(|text| println!("{text}"))
+        }
+        Command::Bench { scenes, quick, out, .. } => bench(scenes, quick, out),
         Command::CheckWorld { path } => check_world(path),
     };
     match result {

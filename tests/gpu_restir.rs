@@ -181,3 +181,32 @@ fn point_lights_give_hard_shadows_and_area_lights_converge() {
     assert!(p.mae > 2.0 * a.mae, "point lights are biased: MAE {} vs area {}", p.mae, a.mae);
     assert!(point_dark > 4 * area_dark.max(1), "point lights cut hard shadows: {point_dark} vs {area_dark} pixels");
 }
+
+#[test]
+fn without_lights_no_restir_pass_runs() {
+    let mut palette = Palette::new(vec![]);
+    let white = palette.push(Material::solid("white", [0.8, 0.8, 0.8]));
+    let lamp = palette.push(Material::emissive("lamp", [0.9; 3], [1.0; 3], 5.0));
+    let mut world = VoxelWorld::new(UVec3::splat(16), palette);
+    world.grid.fill_box(IVec3::ZERO, IVec3::new(16, 1, 16), white).unwrap();
+    let top = view("top", [8.0, 12.0, 8.0], [0.1, -1.0, 0.1]);
+    let Some(mut renderer) = restir(&world, &top, &["lighting=restir"]) else { return };
+    let image = renderer.render(4).unwrap();
+    assert!(image.pixels.iter().all(|p| p[0] == 0.0), "no light, no sky in this mode: black");
+    // The primary pass ran and was timed (lavapipe, which CI requires, has timestamp queries); no ReSTIR pass was.
+    let primary = renderer.gpu_pass_ms(glowbrick::render::primary::PRIMARY_PASS_NAME);
+    assert!(primary.is_some() || !common::require_gpu(), "the primary pass records its GPU time");
+    for name in glowbrick::render::restir::RESTIR_PASS_NAMES {
+        assert_eq!(renderer.gpu_pass_ms(name), None, "{name} ran in a world without lights");
+    }
+    // With one lamp the same passes run and are timed.
+    let place = Edit::Place { at: IVec3::new(8, 4, 8), material: lamp };
+    renderer.app_mut().world_mut().write_message(EditRequest::player(place));
+    let lit = renderer.render(4).unwrap();
+    assert!(common::mean_luminance(&lit) > 0.0);
+    if primary.is_some() {
+        for name in glowbrick::render::restir::RESTIR_PASS_NAMES {
+            assert!(renderer.gpu_pass_ms(name).is_some(), "{name} did not run with a light");
+        }
+    }
+}

@@ -9,6 +9,7 @@
 //! accumulates NEE frames for the time one default ReSTIR frame takes: the equal-time comparison.
 
 pub mod plot;
+pub mod thesis;
 
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::{LinearImage, read_image, write_image};
@@ -81,6 +82,8 @@ pub struct BenchRow {
     pub setting: String,
     pub frame_ms: f64,
     pub gpu_ms: Option<f64>,
+    /// GPU ms of each voxel pass that ran (primary, then the ReSTIR passes).
+    pub passes: PassTimes,
     pub metrics: Metrics,
 }
 
@@ -135,6 +138,9 @@ pub fn cached_reference(world: &VoxelWorld, view: &CameraView, config: &BenchCon
     Ok(reference.image)
 }
 
+/// GPU ms per pass that ran, by pass name.
+pub type PassTimes = Vec<(&'static str, f64)>;
+
 /// Renders one scene under one setting and measures it.
 fn measure(
     world: &VoxelWorld,
@@ -142,7 +148,7 @@ fn measure(
     setting: &BenchSetting,
     config: &BenchConfig,
     reference: &LinearImage,
-) -> Result<(f64, Option<f64>, Metrics), String> {
+) -> Result<(f64, PassTimes, Metrics), String> {
     let mut pairs: Vec<String> = setting.pairs.iter().map(|p| p.to_string()).collect();
     // The thesis' 30 px radius at 1600 wide, scaled to this image.
     pairs.insert(0, format!("radius={}", (30.0 * config.width as f32 / 1600.0).round().max(2.0)));
@@ -155,15 +161,17 @@ fn measure(
         renderer.step();
     }
     let frame_ms = start.elapsed().as_secs_f64() * 1000.0 / config.timed_frames.max(1) as f64;
-    let gpu_ms = gpu_ms(&renderer);
+    let passes = pass_times(&renderer);
     let image = renderer.render(1)?;
-    Ok((frame_ms, gpu_ms, compare(&image, reference)?))
+    Ok((frame_ms, passes, compare(&image, reference)?))
 }
 
-/// GPU time of all voxel passes that ran (primary, and the ReSTIR passes when they ran).
-fn gpu_ms(renderer: &HeadlessRenderer) -> Option<f64> {
-    let primary = renderer.gpu_pass_ms(PRIMARY_PASS_NAME)?;
-    Some(primary + RESTIR_PASS_NAMES.iter().filter_map(|name| renderer.gpu_pass_ms(name)).sum::<f64>())
+/// GPU time of each voxel pass that ran (the primary pass, and the ReSTIR passes when they ran).
+fn pass_times(renderer: &HeadlessRenderer) -> PassTimes {
+    std::iter::once(PRIMARY_PASS_NAME)
+        .chain(RESTIR_PASS_NAMES)
+        .filter_map(|name| renderer.gpu_pass_ms(name).map(|ms| (name, ms)))
+        .collect()
 }
 
 /// NEE accumulated over as many frames as fit in `budget_ms` of NEE frame time: (frames, frame ms, metrics).
@@ -194,9 +202,11 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
         let reference = cached_reference(&world, &view, config)?;
         let first = rows.len();
         for setting in SETTINGS {
-            let (frame_ms, gpu_ms, metrics) = measure(&world, &view, setting, config, &reference)?;
+            let (frame_ms, passes, metrics) = measure(&world, &view, setting, config, &reference)?;
             eprintln!("bench: {name} {}: {frame_ms:.2} ms/frame, {metrics}", setting.name);
-            rows.push(BenchRow { scene: name.clone(), setting: setting.name.to_string(), frame_ms, gpu_ms, metrics });
+            let gpu_ms = (!passes.is_empty()).then(|| passes.iter().map(|(_, ms)| ms).sum());
+            let setting = setting.name.to_string();
+            rows.push(BenchRow { scene: name.clone(), setting, frame_ms, gpu_ms, passes, metrics });
         }
         let time_of = |setting: &str| rows[first..].iter().find(|r| r.setting == setting).map(|r| r.frame_ms);
         if let (Some(nee_ms), Some(budget_ms)) = (time_of("nee-power"), time_of(EQUAL_TIME_TO)) {
@@ -207,6 +217,7 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
                 setting: format!("nee-equal-time ({frames} frames)"),
                 frame_ms: nee_ms * frames as f64,
                 gpu_ms: None,
+                passes: Vec::new(),
                 metrics,
             });
         }
@@ -256,6 +267,12 @@ fn write_markdown(rows: &[BenchRow], config: &BenchConfig, path: &Path) -> Resul
     );
     for r in rows {
         text += &format!("| {} |\n", cells(r).join(" | "));
+    }
+    text += "\n## GPU time per pass (ms)\n\n| scene | setting | passes |\n|---|---|---|\n";
+    for r in rows.iter().filter(|r| !r.passes.is_empty()) {
+        let passes: Vec<String> =
+            r.passes.iter().map(|(name, ms)| format!("{} {ms:.2}", name.trim_start_matches("glowbrick_"))).collect();
+        text += &format!("| {} | {} | {} |\n", r.scene, r.setting, passes.join(", "));
     }
     text += "\n![error against frame time](plot.png)\n";
     std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))

@@ -84,6 +84,9 @@ const NEIGHBOURS: [IVec3; 6] = [IVec3::X, IVec3::NEG_X, IVec3::Y, IVec3::NEG_Y, 
 
 /// The material of brick `b` when it is a brick-light candidate: homogeneous, emissive, and fully inside the world.
 fn brick_light_material(world: &VoxelWorld, b: IVec3) -> Option<Voxel> {
+    if !world.brick_lights {
+        return None;
+    }
     let BrickCell::Homogeneous(m) = world.grid.cell(b) else { return None };
     let inside = ((b + IVec3::ONE) * BRICK_SIZE).cmple(world.grid.size().as_ivec3()).all();
     (inside && world.palette.is_emissive(m)).then_some(m)

@@ -68,6 +68,9 @@ pub struct VoxelWorld {
     pub grid: BrickGrid,
     pub palette: Palette,
     pub views: Vec<CameraView>,
+    /// Whether homogeneous emissive bricks become one brick light (the default) or 512 voxel lights; the thesis
+    /// measures its cornell box both ways. Not saved: a rule of the light pool, set by the bench.
+    pub brick_lights: bool,
     /// Identifies this world among those created in this process, so the renderer knows when the world was
     /// replaced (loaded or generated) rather than edited.
     pub instance: u64,
@@ -78,7 +81,7 @@ static NEXT_WORLD_INSTANCE: std::sync::atomic::AtomicU64 = std::sync::atomic::At
 impl VoxelWorld {
     pub fn new(size: UVec3, palette: Palette) -> Self {
         let instance = NEXT_WORLD_INSTANCE.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        VoxelWorld { grid: BrickGrid::new(size), palette, views: Vec::new(), instance }
+        VoxelWorld { grid: BrickGrid::new(size), palette, views: Vec::new(), brick_lights: true, instance }
     }
 
     /// The view called `name`, or the first view when `name` is `None`.
