@@ -11,6 +11,7 @@ const DEBUG_ALBEDO: u32 = 1u;
 const DEBUG_NORMAL: u32 = 2u;
 const DEBUG_HIT: u32 = 3u;
 const DEBUG_DEPTH: u32 = 4u;
+const DEBUG_RESERVOIR: u32 = 5u;
 
 // The camera ray through the centre of `pixel`; render::camera::camera_ray computes the same on the CPU.
 fn primary_ray_dir(pixel: vec2<u32>, size: vec2<f32>) -> vec3<f32> {
@@ -39,7 +40,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     gbuffer[pixel_index(id.xy)] = select(vec4(0.0), vec4(point, pack_surface(hit.face, hit.material)), hit.found);
     // Voxel ReSTIR shades in its own passes when there is a light to sample; without one it is emission only.
     let restir = frame.lighting == LIGHTING_RESTIR;
-    if restir && frame.light_count > 0u && frame.debug_view == DEBUG_NONE {
+    if restir && frame.light_count > 0u && (frame.debug_view == DEBUG_NONE || frame.debug_view == DEBUG_RESERVOIR) {
         return;
     }
     let nee = frame.lighting == LIGHTING_NEE || restir;

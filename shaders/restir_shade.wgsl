@@ -4,8 +4,8 @@
 // forgets that evidence and measurably brightens penumbrae.)
 
 #import glowbrick::world::materials
-#import glowbrick::frame::{frame, view, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output}
-#import glowbrick::restir::{reservoirs_final, validated, shading, unshadowed, reservoir_visible, NO_LIGHT}
+#import glowbrick::frame::{frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output}
+#import glowbrick::restir::{reservoirs_final, validated, finite, shading, unshadowed, reservoir_visible, NO_LIGHT}
 #import glowbrick::lights::lights
 
 @compute @workgroup_size(8, 8, 1)
@@ -22,7 +22,15 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let x = shading(surface);
-    var r = validated(reservoirs_final[index]);
+    let raw = reservoirs_final[index];
+    var r = validated(raw);
+    if frame.debug_view == 5u {
+        // The stress run's view of the reservoir: raw W, M, w_sum, and whether validation had to reset it for a
+        // non-finite field (counted, never shaded).
+        let bad = !(finite(raw.w_sum) && finite(raw.m) && finite(raw.big_w) && finite(raw.target_value));
+        textureStore(output, vec2<i32>(id.xy), vec4(r.big_w, r.m, r.w_sum, select(0.0, 1.0, bad)));
+        return;
+    }
     var radiance = materials[surface.material].radiance.rgb;
     if r.slot != NO_LIGHT && r.big_w > 0.0 {
         if reservoir_visible(x, r) {

@@ -11,6 +11,7 @@ pub mod lights;
 pub mod reference;
 pub mod render;
 pub mod settings;
+pub mod stress;
 pub mod world;
 
 /// Everything a running world needs besides a window: the edit path, the light pool and the renderer.

@@ -58,8 +58,28 @@ enum Command {
         /// With --thesis: samples per pixel of the CPU reference.
         #[arg(long, default_value_t = 1024)]
         spp: u32,
+        /// Comma-separated bench settings to run (default: all), e.g. restir,nee-power.
+        #[arg(long, value_delimiter = ',')]
+        settings: Vec<String>,
+        /// A camera for every scene instead of its first view: OX,OY,OZ,DX,DY,DZ[,FOV_DEG] (voxel units, y up).
+        #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
+        camera: Option<CameraView>,
         #[arg(long)]
         out: PathBuf,
+    },
+    /// Soak the renderer: random edits, lights and camera jumps every frame, extreme settings; report non-finite
+    /// values, reservoir ranges and drift (exit code 1 when any check fails).
+    Stress {
+        /// A short run (240 frames at 64x48) for CI.
+        #[arg(long)]
+        quick: bool,
+        /// Frames of the soak (default 5000, or 240 with --quick).
+        #[arg(long)]
+        frames: Option<u32>,
+        #[arg(long, default_value = "test-room")]
+        scene: String,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
     },
     /// Validate a world file or scene recipe and print a summary (exit code 1 on error).
     CheckWorld { path: PathBuf },
@@ -208,7 +228,8 @@ fn main() -> ExitCode {
         Command::Bench { thesis: true, scale, spp, out, .. } => {
             on_gpu(|| glowbrick::bench::thesis::run_thesis_bench(scale, spp, &out)).map(|text| println!("{text}"))
         }
-        Command::Bench { scenes, quick, out, .. } => bench(scenes, quick, out),
+        Command::Bench { scenes, quick, out, camera, settings, .. } => bench(scenes, quick, camera, settings, out),
+        Command::Stress { quick, frames, scene, seed } => stress(quick, frames, scene, seed),
         Command::CheckWorld { path } => check_world(path),
     };
     match result {
@@ -363,14 +384,41 @@ fn compare(image: PathBuf, reference: PathBuf, diff: Option<PathBuf>) -> Result<
     Ok(())
 }
 
-fn bench(scenes: Vec<String>, quick: bool, out: PathBuf) -> Result<(), String> {
+fn bench(
+    scenes: Vec<String>,
+    quick: bool,
+    camera: Option<CameraView>,
+    only: Vec<String>,
+    out: PathBuf,
+) -> Result<(), String> {
     use glowbrick::bench::{ALL_SCENES, BenchConfig, QUICK_SCENES, run_bench};
     let defaults = if quick { QUICK_SCENES } else { ALL_SCENES };
     let scenes = if scenes.is_empty() { defaults.iter().map(|s| s.to_string()).collect() } else { scenes };
-    let config = if quick { BenchConfig::quick() } else { BenchConfig::full() };
+    let mut config = if quick { BenchConfig::quick() } else { BenchConfig::full() };
+    config.camera = camera;
+    config.only = only;
     let rows = on_gpu(|| run_bench(&scenes, &config, &out))?;
     println!("wrote {} rows to {}/results.csv, report.md, plot.png", rows.len(), out.display());
     Ok(())
+}
+
+fn stress(quick: bool, frames: Option<u32>, scene: String, seed: u64) -> Result<(), String> {
+    use glowbrick::stress::{StressConfig, run_stress};
+    let mut config = if quick { StressConfig::quick() } else { StressConfig::full() };
+    config.frames = frames.unwrap_or(config.frames);
+    if config.frames == 0 || config.frames > 1_000_000 {
+        return Err(format!("--frames {} must be within 1..=1000000", config.frames));
+    }
+    config.scene = scene;
+    config.seed = seed;
+    let start = std::time::Instant::now();
+    let report = on_gpu(|| run_stress(&config))?;
+    println!("{report}
+({:.1} s)", start.elapsed().as_secs_f64());
+    match report.failure() {
+        Some(why) => Err(format!("stress failed: {why}")),
+        None => Ok(()),
+    }
 }
 
 fn check_world(path: PathBuf) -> Result<(), String> {

@@ -17,15 +17,19 @@ pub enum DebugView {
     Hit,
     /// Hit distance in voxels.
     Depth,
+    /// Voxel ReSTIR's final reservoir per pixel, raw: (W, M, w_sum, 1 if a field was non-finite and was reset).
+    /// For the stress run; only meaningful with `lighting=restir`.
+    Reservoir,
 }
 
 impl DebugView {
-    pub const NAMES: [(&'static str, DebugView); 5] = [
+    pub const NAMES: [(&'static str, DebugView); 6] = [
         ("none", DebugView::None),
         ("albedo", DebugView::Albedo),
         ("normal", DebugView::Normal),
         ("hit", DebugView::Hit),
         ("depth", DebugView::Depth),
+        ("reservoir", DebugView::Reservoir),
     ];
 
     /// The value the shader switches on.
@@ -128,7 +132,7 @@ impl Default for RenderSettings {
 
 /// The keys `--set` accepts, with their values, for error messages and `--help`.
 pub const SETTING_KEYS: &str = "lighting=sun|nee|restir, pick=power|uniform, accumulate=on|off, \
-     debug=none|albedo|normal|hit|depth, sun=on|off, shadows=on|off, exposure=<0.001..1000>, \
+     debug=none|albedo|normal|hit|depth|reservoir, sun=on|off, shadows=on|off, exposure=<0.001..1000>, \
      candidates=<1..64>, taps=<0..16>, radius=<0..100>, temporal=on|off, spatial=on|off, \
      sample=area|point, reuse=biased|unbiased";
 
@@ -192,7 +196,7 @@ impl RenderSettings {
             "debug" => {
                 self.debug =
                     DebugView::NAMES.iter().find(|(n, _)| *n == value).map(|(_, v)| *v).ok_or_else(|| {
-                        format!("setting debug: '{value}' is not one of none|albedo|normal|hit|depth")
+                        format!("setting debug: '{value}' is not one of none|albedo|normal|hit|depth|reservoir")
                     })?;
             }
             "lighting" => {

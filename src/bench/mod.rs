@@ -63,15 +63,27 @@ pub struct BenchConfig {
     /// Frames timed.
     pub timed_frames: u32,
     pub reference_spp: u32,
+    /// A camera for every scene instead of each scene's first view.
+    pub camera: Option<CameraView>,
+    /// Only these settings (by name); empty: all.
+    pub only: Vec<String>,
 }
 
 impl BenchConfig {
     pub fn full() -> Self {
-        BenchConfig { width: 320, height: 180, warmup_frames: 16, timed_frames: 64, reference_spp: 2048 }
+        BenchConfig {
+            width: 320,
+            height: 180,
+            warmup_frames: 16,
+            timed_frames: 64,
+            reference_spp: 2048,
+            camera: None,
+            only: Vec::new(),
+        }
     }
 
     pub fn quick() -> Self {
-        BenchConfig { width: 96, height: 64, warmup_frames: 4, timed_frames: 8, reference_spp: 256 }
+        BenchConfig { width: 96, height: 64, warmup_frames: 4, timed_frames: 8, reference_spp: 256, camera: None, only: Vec::new() }
     }
 }
 
@@ -194,14 +206,18 @@ fn measure_equal_time(
 
 /// Runs every scene x setting and writes the three outputs to `out`.
 pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<Vec<BenchRow>, String> {
+    if let Some(unknown) = config.only.iter().find(|o| !SETTINGS.iter().any(|s| s.name == o.as_str())) {
+        let names: Vec<&str> = SETTINGS.iter().map(|s| s.name).collect();
+        return Err(format!("unknown bench setting '{unknown}' (valid: {})", names.join(", ")));
+    }
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let mut rows = Vec::new();
     for name in scenes {
         let world = load_scene(name).map_err(|e| e.to_string())?;
-        let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
+        let view = config.camera.clone().or_else(|| world.view(None).cloned()).unwrap_or_else(|| world.overview());
         let reference = cached_reference(&world, &view, config)?;
         let first = rows.len();
-        for setting in SETTINGS {
+        for setting in SETTINGS.iter().filter(|s| config.only.is_empty() || config.only.iter().any(|o| o == s.name)) {
             let (frame_ms, passes, metrics) = measure(&world, &view, setting, config, &reference)?;
             eprintln!("bench: {name} {}: {frame_ms:.2} ms/frame, {metrics}", setting.name);
             let gpu_ms = (!passes.is_empty()).then(|| passes.iter().map(|(_, ms)| ms).sum());

@@ -117,6 +117,8 @@ pub fn run_thesis_bench(scale: f32, reference_spp: u32, out: &Path) -> Result<St
         warmup_frames: 0,
         timed_frames: 0,
         reference_spp,
+        camera: None,
+        only: Vec::new(),
     };
     let mut rows = Vec::new();
     let mut loaded: Option<(&str, VoxelWorld)> = None;

@@ -255,8 +255,9 @@ pub fn prepare_view_resources(
         resources.last_key = Some(key);
         params.accumulated = resources.accumulated;
         // ReSTIR runs only where it has something to sample; its history is valid if last frame ran it too.
+        use crate::settings::DebugView;
         resources.run_restir = settings.lighting == Lighting::Restir
-            && settings.debug == crate::settings::DebugView::None
+            && matches!(settings.debug, DebugView::None | DebugView::Reservoir)
             && params.light_count > 0;
         params.prev_clip_from_world = resources.prev_clip_from_world.to_cols_array_2d();
         let p = resources.prev_camera;

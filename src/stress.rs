@@ -1,0 +1,283 @@
+//! `glowbrick stress`: a headless soak of the renderer. Every frame edits the world (lamps placed, broken and
+//! recoloured, blocks placed), the camera jumps or teleports, and the ReSTIR settings cycle through their
+//! extremes; every frame's image is read back and checked for non-finite pixels, and every tenth frame reads the
+//! reservoirs (`debug=reservoir`) for non-finite fields, M and W ranges. Then a static phase (fixed camera, no
+//! edits) measures how the mean luminance of a view drifts over time against the CPU reference of that view.
+
+use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::image_io::LinearImage;
+use crate::reference::sampling::Pcg;
+use crate::reference::{ReferenceOptions, render_reference};
+use crate::settings::{DebugView, RenderSettings};
+use crate::world::events::EditRequest;
+use crate::world::{CameraView, Edit, VoxelWorld};
+use bevy::math::{IVec3, Vec3};
+use std::fmt;
+
+/// How long and how big.
+#[derive(Clone, Debug)]
+pub struct StressConfig {
+    pub scene: String,
+    pub frames: u32,
+    /// Frames of the static phase that measures drift.
+    pub static_frames: u32,
+    pub width: u32,
+    pub height: u32,
+    pub seed: u64,
+}
+
+impl StressConfig {
+    pub fn full() -> Self {
+        StressConfig { scene: "test-room".into(), frames: 5000, static_frames: 600, width: 96, height: 64, seed: 1 }
+    }
+
+    pub fn quick() -> Self {
+        StressConfig { scene: "test-room".into(), frames: 240, static_frames: 120, width: 64, height: 48, seed: 1 }
+    }
+}
+
+/// What a run saw. Non-finite counts must be zero; drift must stay within the noise of the reference.
+#[derive(Clone, Debug, Default)]
+pub struct StressReport {
+    pub frames: u32,
+    pub edits: u32,
+    pub lamps_placed: u32,
+    pub lamps_recoloured: u32,
+    pub broken: u32,
+    pub camera_jumps: u32,
+    pub settings_changes: u32,
+    pub nonfinite_pixels: u64,
+    pub reservoir_reads: u32,
+    pub nonfinite_reservoirs: u64,
+    pub max_m: f32,
+    pub max_w: f32,
+    pub min_w: f32,
+    /// Static phase: mean luminance over its first and last quarter, and the CPU reference's.
+    pub static_mean_start: f64,
+    pub static_mean_end: f64,
+    pub reference_mean: f64,
+    /// Standard deviation of one static frame's mean luminance (the noise drift is judged against).
+    pub frame_noise: f64,
+}
+
+impl StressReport {
+    /// |end - start| of the static phase, relative to the reference mean.
+    pub fn drift(&self) -> f64 {
+        (self.static_mean_end - self.static_mean_start).abs() / self.reference_mean.max(1e-9)
+    }
+
+    /// Relative difference of the static phase's mean from the CPU reference.
+    pub fn error_vs_reference(&self) -> f64 {
+        let mean = 0.5 * (self.static_mean_start + self.static_mean_end);
+        (mean - self.reference_mean) / self.reference_mean.max(1e-9)
+    }
+}
+
+impl StressReport {
+    /// Why the run failed, if it did: any non-finite value, or a static view that drifts by more than 5% of the
+    /// reference or sits more than 10% from it.
+    pub fn failure(&self) -> Option<String> {
+        if self.nonfinite_pixels > 0 || self.nonfinite_reservoirs > 0 {
+            return Some(format!(
+                "{} non-finite pixels, {} non-finite reservoirs",
+                self.nonfinite_pixels, self.nonfinite_reservoirs
+            ));
+        }
+        if self.drift() > 0.05 {
+            return Some(format!("the static view drifted by {:.1}%", 100.0 * self.drift()));
+        }
+        if self.error_vs_reference().abs() > 0.10 {
+            return Some(format!("the static view is {:+.1}% from the reference", 100.0 * self.error_vs_reference()));
+        }
+        None
+    }
+}
+
+impl fmt::Display for StressReport {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        writeln!(
+            f,
+            "frames {}: edits {} (lamps placed {}, recoloured {}, broken {}), camera jumps {}, settings changes {}",
+            self.frames,
+            self.edits,
+            self.lamps_placed,
+            self.lamps_recoloured,
+            self.broken,
+            self.camera_jumps,
+            self.settings_changes
+        )?;
+        writeln!(f, "non-finite pixels: {}", self.nonfinite_pixels)?;
+        writeln!(
+            f,
+            "reservoirs: {} reads, non-finite {}, max M {:.0}, W in [{:.3e}, {:.3e}]",
+            self.reservoir_reads, self.nonfinite_reservoirs, self.max_m, self.min_w, self.max_w
+        )?;
+        write!(
+            f,
+            "static view: mean luminance {:.5} -> {:.5} (drift {:.2}% of the reference {:.5}; one frame's noise \
+             {:.2}%), {:+.2}% from the reference",
+            self.static_mean_start,
+            self.static_mean_end,
+            100.0 * self.drift(),
+            self.reference_mean,
+            100.0 * self.frame_noise / self.reference_mean.max(1e-9),
+            100.0 * self.error_vs_reference()
+        )
+    }
+}
+
+/// The settings the soak cycles through: defaults and the extremes of every range.
+const SETTING_CYCLE: [&[&str]; 7] = [
+    &[],
+    &["candidates=1"],
+    &["candidates=64", "taps=16", "radius=100"],
+    &["radius=0"],
+    &["reuse=unbiased", "taps=16"],
+    &["sample=point", "temporal=off"],
+    &["spatial=off", "pick=uniform"],
+];
+
+fn luminance_mean(image: &LinearImage) -> f64 {
+    let sum: f64 =
+        image.pixels.iter().map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64).sum();
+    sum / image.pixels.len().max(1) as f64
+}
+
+fn settings(pairs: &[&str], debug: DebugView) -> Result<RenderSettings, String> {
+    let mut all = vec!["lighting=restir".to_string()];
+    all.extend(pairs.iter().map(|p| p.to_string()));
+    let mut s = RenderSettings::default().with_pairs(&all)?;
+    s.debug = debug;
+    Ok(s)
+}
+
+/// A random point inside the world's air near the middle, and a random direction.
+fn random_camera(world: &VoxelWorld, rng: &mut Pcg) -> CameraView {
+    let size = world.grid.size().as_vec3();
+    let origin = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * (size - 2.0) + 1.0;
+    let direction = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5);
+    let direction = direction.try_normalize().unwrap_or(Vec3::Z);
+    CameraView { name: "stress".into(), origin: origin.to_array(), direction: direction.to_array(), fov_deg: 60.0 }
+}
+
+/// Runs the soak on `config.scene` and returns what it saw.
+pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
+    let world = crate::world::scene::load_scene(&config.scene).map_err(|e| e.to_string())?;
+    let home = world.view(None).cloned().unwrap_or_else(|| world.overview());
+    let lamps: Vec<u16> = (0..world.palette.id_count() as u16).filter(|&id| world.palette.is_emissive(id)).collect();
+    let blocks: Vec<u16> =
+        (1..world.palette.id_count() as u16).filter(|&id| !world.palette.is_emissive(id)).collect();
+    if lamps.is_empty() {
+        return Err(format!("scene {}: the soak needs an emissive material", config.scene));
+    }
+    let size = world.grid.size().as_ivec3();
+    let options = HeadlessOptions {
+        width: config.width,
+        height: config.height,
+        settings: settings(&[], DebugView::None)?,
+        ..Default::default()
+    };
+    let mut renderer = HeadlessRenderer::new(world.clone(), &home, &options)?;
+    let mut rng = Pcg::new(config.seed, 0x5747);
+    let mut report = StressReport { min_w: f32::INFINITY, ..Default::default() };
+    let mut placed: Vec<IVec3> = Vec::new();
+    let mut camera = home.clone();
+    let mut cycle = 0usize;
+
+    for frame in 0..config.frames {
+        // Edits: every frame one or two, of every kind.
+        for _ in 0..1 + (rng.next_u32() % 2) {
+            let at = IVec3::new(
+                (rng.next_u32() % size.x as u32) as i32,
+                (rng.next_u32() % size.y as u32) as i32,
+                (rng.next_u32() % size.z as u32) as i32,
+            );
+            let edit = match rng.next_u32() % 4 {
+                0 => {
+                    report.lamps_placed += 1;
+                    placed.push(at);
+                    Edit::Place { at, material: lamps[rng.next_u32() as usize % lamps.len()] }
+                }
+                1 if !placed.is_empty() => {
+                    // Recolour a lamp placed earlier (same slot, new radiance) or another lamp material.
+                    report.lamps_recoloured += 1;
+                    let at = placed[rng.next_u32() as usize % placed.len()];
+                    Edit::Place { at, material: lamps[rng.next_u32() as usize % lamps.len()] }
+                }
+                2 if !placed.is_empty() => {
+                    report.broken += 1;
+                    let at = placed.swap_remove(rng.next_u32() as usize % placed.len());
+                    Edit::Break { at }
+                }
+                _ if !blocks.is_empty() => Edit::Place { at, material: blocks[rng.next_u32() as usize % blocks.len()] },
+                _ => Edit::Break { at },
+            };
+            report.edits += 1;
+            renderer.app_mut().world_mut().write_message(EditRequest::unrecorded(edit));
+        }
+        // Camera: teleports now and then, small jumps otherwise.
+        if frame % 7 == 0 {
+            camera = random_camera(&world, &mut rng);
+            report.camera_jumps += 1;
+        } else {
+            let mut o = Vec3::from(camera.origin);
+            o += Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5) * 2.0;
+            camera.origin = o.clamp(Vec3::ONE, size.as_vec3() - 1.0).to_array();
+        }
+        renderer.set_view(&camera);
+        // Settings: a new extreme every 30 frames; every tenth frame reads the reservoirs instead of the image.
+        if frame % 30 == 0 {
+            cycle = (cycle + 1) % SETTING_CYCLE.len();
+            report.settings_changes += 1;
+        }
+        let debug = if frame % 10 == 9 { DebugView::Reservoir } else { DebugView::None };
+        *renderer.app_mut().world_mut().resource_mut::<RenderSettings>() = settings(SETTING_CYCLE[cycle], debug)?;
+        let image = renderer.render(1)?;
+        if debug == DebugView::Reservoir {
+            report.reservoir_reads += 1;
+            for p in &image.pixels {
+                let [w, m, w_sum, bad] = *p;
+                report.nonfinite_reservoirs += (bad != 0.0 || !w.is_finite() || !w_sum.is_finite()) as u64;
+                if m.is_finite() {
+                    report.max_m = report.max_m.max(m);
+                }
+                if w.is_finite() && w > 0.0 {
+                    report.max_w = report.max_w.max(w);
+                    report.min_w = report.min_w.min(w);
+                }
+            }
+        } else {
+            report.nonfinite_pixels += image.pixels.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count() as u64;
+        }
+        report.frames += 1;
+    }
+
+    // Static phase: the home view of the world as the soak left it, no edits, unbiased reuse (so the reference
+    // comparison measures drift and error, not the biased variant's known darkening).
+    renderer.set_view(&home);
+    *renderer.app_mut().world_mut().resource_mut::<RenderSettings>() = settings(&["reuse=unbiased"], DebugView::None)?;
+    renderer.render(8)?;
+    let mut means = Vec::with_capacity(config.static_frames as usize);
+    for _ in 0..config.static_frames.max(8) {
+        let image = renderer.render(1)?;
+        report.nonfinite_pixels += image.pixels.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count() as u64;
+        means.push(luminance_mean(&image));
+    }
+    let quarter = (means.len() / 4).max(1);
+    let average = |m: &[f64]| m.iter().sum::<f64>() / m.len().max(1) as f64;
+    report.static_mean_start = average(&means[..quarter]);
+    report.static_mean_end = average(&means[means.len() - quarter..]);
+    let all = average(&means);
+    report.frame_noise = (means.iter().map(|m| (m - all).powi(2)).sum::<f64>() / means.len() as f64).sqrt();
+    let final_world = renderer.app_mut().world().resource::<VoxelWorld>().clone();
+    let reference = render_reference(
+        &final_world,
+        &home,
+        &ReferenceOptions { width: config.width, height: config.height, spp: 256, ..Default::default() },
+    )?;
+    report.reference_mean = luminance_mean(&reference.image);
+    if report.min_w == f32::INFINITY {
+        report.min_w = 0.0;
+    }
+    Ok(report)
+}
