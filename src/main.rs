@@ -413,8 +413,11 @@ fn stress(quick: bool, frames: Option<u32>, scene: String, seed: u64) -> Result<
     config.seed = seed;
     let start = std::time::Instant::now();
     let report = on_gpu(|| run_stress(&config))?;
-    println!("{report}
-({:.1} s)", start.elapsed().as_secs_f64());
+    println!(
+        "{report}
+({:.1} s)",
+        start.elapsed().as_secs_f64()
+    );
     match report.failure() {
         Some(why) => Err(format!("stress failed: {why}")),
         None => Ok(()),

@@ -194,10 +194,9 @@ impl RenderSettings {
         let (key, value) = (key.trim(), value.trim());
         match key {
             "debug" => {
-                self.debug =
-                    DebugView::NAMES.iter().find(|(n, _)| *n == value).map(|(_, v)| *v).ok_or_else(|| {
-                        format!("setting debug: '{value}' is not one of none|albedo|normal|hit|depth|reservoir")
-                    })?;
+                self.debug = DebugView::NAMES.iter().find(|(n, _)| *n == value).map(|(_, v)| *v).ok_or_else(|| {
+                    format!("setting debug: '{value}' is not one of none|albedo|normal|hit|depth|reservoir")
+                })?;
             }
             "lighting" => {
                 self.lighting = Lighting::NAMES

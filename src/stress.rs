@@ -165,8 +165,7 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
     let world = crate::world::scene::load_scene(&config.scene).map_err(|e| e.to_string())?;
     let home = world.view(None).cloned().unwrap_or_else(|| world.overview());
     let lamps: Vec<u16> = (0..world.palette.id_count() as u16).filter(|&id| world.palette.is_emissive(id)).collect();
-    let blocks: Vec<u16> =
-        (1..world.palette.id_count() as u16).filter(|&id| !world.palette.is_emissive(id)).collect();
+    let blocks: Vec<u16> = (1..world.palette.id_count() as u16).filter(|&id| !world.palette.is_emissive(id)).collect();
     if lamps.is_empty() {
         return Err(format!("scene {}: the soak needs an emissive material", config.scene));
     }

@@ -83,7 +83,15 @@ impl BenchConfig {
     }
 
     pub fn quick() -> Self {
-        BenchConfig { width: 96, height: 64, warmup_frames: 4, timed_frames: 8, reference_spp: 256, camera: None, only: Vec::new() }
+        BenchConfig {
+            width: 96,
+            height: 64,
+            warmup_frames: 4,
+            timed_frames: 8,
+            reference_spp: 256,
+            camera: None,
+            only: Vec::new(),
+        }
     }
 }
 

