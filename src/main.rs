@@ -180,6 +180,20 @@ struct SettingArgs {
     /// A render setting KEY=VALUE (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE", help = format!("A render setting KEY=VALUE (repeatable): {SETTING_KEYS}"))]
     pairs: Vec<String>,
+    /// A RON file of settings, e.g. {"lighting": "restir", "candidates": 16}; `--set` pairs apply after it.
+    #[arg(long, value_name = "FILE.ron")]
+    config: Option<PathBuf>,
+}
+
+impl SettingArgs {
+    fn settings(&self) -> Result<RenderSettings, String> {
+        let mut settings = RenderSettings::default();
+        if let Some(path) = &self.config {
+            let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            settings = settings.with_ron(&text, &path.display().to_string())?;
+        }
+        settings.with_pairs(&self.pairs)
+    }
 }
 
 #[derive(Args)]
@@ -242,7 +256,7 @@ fn main() -> ExitCode {
 }
 
 fn play(args: PlayArgs) -> Result<(), String> {
-    let settings = RenderSettings::default().with_pairs(&args.settings.pairs)?;
+    let settings = args.settings.settings()?;
     let source = match args.world.source() {
         Some(source) if !args.new => source,
         Some(_) => return Err("--new generates a world; it cannot be combined with --world or --scene".into()),
@@ -317,7 +331,7 @@ fn check_output(path: &std::path::Path, allowed: &[&str]) -> Result<(), String> 
 }
 
 fn render(args: RenderArgs) -> Result<(), String> {
-    let settings = RenderSettings::default().with_pairs(&args.settings.pairs)?;
+    let settings = args.settings.settings()?;
     let (world, view) = args.shot.world_and_view("render")?;
     check_output(&args.out, &["png", "exr"])?;
     let options = HeadlessOptions {

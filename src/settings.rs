@@ -248,3 +248,51 @@ impl RenderSettings {
         Ok(self)
     }
 }
+
+impl RenderSettings {
+    /// Applies a RON settings file: a map of the `--set` keys to values, e.g.
+    /// `{"lighting": "restir", "candidates": 16, "temporal": true, "sample": "point"}`. Numbers, strings and
+    /// booleans are accepted; each pair goes through `set`, so the ranges and messages are the same.
+    pub fn with_ron(mut self, text: &str, origin: &str) -> Result<Self, String> {
+        let map: std::collections::BTreeMap<String, ron::Value> = ron::from_str(text).map_err(|e| {
+            format!(
+                "{origin}:{}:{}: {} (expected a map such as {{\"lighting\": \"restir\"}})",
+                e.span.start.line, e.span.start.col, e.code
+            )
+        })?;
+        for (key, value) in map {
+            let value = match value {
+                ron::Value::String(s) => s,
+                ron::Value::Bool(b) => (if b { "on" } else { "off" }).to_string(),
+                ron::Value::Number(n) => match n {
+                    ron::value::Number::F32(f) => f.get().to_string(),
+                    ron::value::Number::F64(f) => f.get().to_string(),
+                    other => format!("{}", other.into_f64()),
+                },
+                other => return Err(format!("{origin}: setting {key}: {other:?} is not a string, number or bool")),
+            };
+            self.set(&format!("{key}={value}")).map_err(|e| format!("{origin}: {e}"))?;
+        }
+        Ok(self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_ron_settings_file_sets_what_set_sets_and_rejects_the_same() {
+        let text = r#"{"lighting": "restir", "candidates": 16, "temporal": false, "radius": 12.5, "sample": "point"}"#;
+        let s = RenderSettings::default().with_ron(text, "t.ron").unwrap();
+        assert_eq!(s.lighting, Lighting::Restir);
+        assert_eq!((s.restir.candidates, s.restir.temporal, s.restir.radius), (16, false, 12.5));
+        assert!(s.restir.point_lights);
+        let bad = RenderSettings::default().with_ron(r#"{"candidates": 0}"#, "t.ron").unwrap_err();
+        assert!(bad.contains("t.ron: setting candidates: 0 is out of range (valid: 1..64)"), "{bad}");
+        let broken = RenderSettings::default().with_ron("{\"lighting\": ", "t.ron").unwrap_err();
+        assert!(broken.starts_with("t.ron:1:"), "{broken}");
+        let nested = RenderSettings::default().with_ron(r#"{"lighting": ["restir"]}"#, "t.ron").unwrap_err();
+        assert!(nested.contains("is not a string, number or bool"), "{nested}");
+    }
+}
