@@ -3,6 +3,7 @@
 #define_import_path glowbrick::frame
 
 #import bevy_render::view::View
+#import glowbrick::traversal::face_normal
 
 struct FrameParams {
     // Last frame's clip_from_world, for temporal reprojection.
@@ -103,9 +104,7 @@ fn highlight(colour: vec3<f32>, hit_voxel: vec3<i32>, face: u32, point: vec3<f32
 
 // The voxel a surface point lies on: step back from the face it was entered through.
 fn surface_voxel(s: Surface) -> vec3<i32> {
-    var n = vec3(0.0);
-    n[s.face / 2u] = select(1.0, -1.0, (s.face & 1u) == 1u);
-    return vec3<i32>(floor(s.point - n * 0.5));
+    return vec3<i32>(floor(s.point - face_normal(s.face) * 0.5));
 }
 
 // Progressive accumulation (the running mean of the frames since anything changed), then the HDR target.

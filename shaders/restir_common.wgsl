@@ -5,7 +5,7 @@
 #define_import_path glowbrick::restir
 
 #import glowbrick::world::materials
-#import glowbrick::traversal::trace
+#import glowbrick::traversal::{trace, face_normal}
 #import glowbrick::lights::{Light, lights, pick_light, light_contains, light_size, face_exposed, Rng, rng_next, pcg, RAY_OFFSET, PI}
 #import glowbrick::frame::{frame, view, Surface, RESTIR_POINT, RESTIR_UNBIASED}
 
@@ -20,7 +20,8 @@ struct Reservoir {
     w_sum: f32,
     m: f32,
     big_w: f32,
-    // Target at the pixel that owns the reservoir (kept for debugging and the stress run).
+    // Target of the sample at the pixel that owns the reservoir, this frame (reuse reads it instead of
+    // recomputing it).
     target_value: f32,
 }
 
@@ -58,12 +59,6 @@ fn luminance(c: vec3<f32>) -> f32 {
     return dot(c, vec3(0.2126, 0.7152, 0.0722));
 }
 
-fn face_axis_normal(face: u32) -> vec3<f32> {
-    var n = vec3(0.0);
-    n[face / 2u] = select(1.0, -1.0, (face & 1u) == 1u);
-    return n;
-}
-
 // The sampled point: on face `face` of the light's cube at (u, v) along the face's two other axes, or the centre.
 fn light_point(light: Light, face: u32, uv: vec2<f32>) -> vec3<f32> {
     let lo = vec3<f32>(light.min);
@@ -87,7 +82,7 @@ struct Shading {
 }
 
 fn shading(s: Surface) -> Shading {
-    return Shading(s.point, face_axis_normal(s.face), materials[s.material].albedo.rgb);
+    return Shading(s.point, face_normal(s.face), materials[s.material].albedo.rgb);
 }
 
 // Unshadowed reflected radiance from the sample, per unit of the sample's measure: area (albedo/pi Le cos cos/d^2)
@@ -106,7 +101,7 @@ fn unshadowed(x: Shading, light: Light, face: u32, uv: vec2<f32>) -> vec3<f32> {
         let size = f32(light_size(light));
         cos_area = (abs(wi.x) + abs(wi.y) + abs(wi.z)) * size * size;
     } else {
-        cos_area = -dot(face_axis_normal(face), wi);
+        cos_area = -dot(face_normal(face), wi);
     }
     if cos_surface <= 0.0 || cos_area <= 0.0 {
         return vec3(0.0);

@@ -74,7 +74,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 var p_current_at_prev = target_of(x, prev);
                 let p_prev_at_prev = target_of(prev_shading, prev);
                 var p_prev_at_current = target_of(prev_shading, current);
-                let p_current_at_current = target_of(x, current);
+                // This pixel's target at its own sample, computed above.
+                let p_current_at_current = current.target_value;
                 if unbiased() {
                     if p_current_at_prev > 0.0 && !reservoir_visible(x, prev) {
                         p_current_at_prev = 0.0;

@@ -28,6 +28,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 
     // Gather the neighbours first: pairwise MIS needs their count k.
     var taps: array<u32, MAX_TAPS>;
+    var tap_reservoirs: array<Reservoir, MAX_TAPS>;
     var used = 0u;
     var m_total = own.m;
     for (var i = 0u; i < min(frame.taps, MAX_TAPS); i++) {
@@ -45,7 +46,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             continue;
         }
         taps[used] = tap_index;
-        m_total += validated(reservoirs_temporal[tap_index]).m;
+        tap_reservoirs[used] = validated(reservoirs_temporal[tap_index]);
+        m_total += tap_reservoirs[used].m;
         used++;
     }
 
@@ -53,10 +55,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var merged = empty_reservoir();
     let k = f32(max(used, 1u));
     let m_share = own.m / k;
-    let p_own_at_own = target_of(x, own);
+    // The temporal pass stored this pixel's target at its own sample.
+    let p_own_at_own = own.target_value;
     var m_own = 1.0;
     for (var j = 0u; j < used; j++) {
-        let tap = validated(reservoirs_temporal[taps[j]]);
+        let tap = tap_reservoirs[j];
         let neighbour = shading(unpack_surface(gbuffer[taps[j]]));
         let share = select(0.0, (tap.m + m_share) / m_total, m_total > 0.0);
         // The neighbour's sample, weighed at both pixels. The unbiased variant resamples with this pixel's

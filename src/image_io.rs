@@ -20,6 +20,12 @@ impl LinearImage {
     pub fn non_finite_pixels(&self) -> usize {
         self.pixels.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count()
     }
+
+    /// Mean Rec. 709 luminance of the pixels.
+    pub fn mean_luminance(&self) -> f64 {
+        let sum: f64 = self.pixels.iter().map(|p| crate::lights::luminance([p[0], p[1], p[2]]) as f64).sum();
+        sum / self.pixels.len().max(1) as f64
+    }
 }
 
 /// ACES filmic fit (Narkowicz 2015): maps linear HDR radiance to [0, 1].

@@ -5,7 +5,6 @@
 //! edits) measures how the mean luminance of a view drifts over time against the CPU reference of that view.
 
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
-use crate::image_io::LinearImage;
 use crate::reference::sampling::Pcg;
 use crate::reference::{ReferenceOptions, render_reference};
 use crate::settings::{DebugView, RenderSettings};
@@ -137,12 +136,6 @@ const SETTING_CYCLE: [&[&str]; 7] = [
     &["spatial=off", "pick=uniform"],
 ];
 
-fn luminance_mean(image: &LinearImage) -> f64 {
-    let sum: f64 =
-        image.pixels.iter().map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64).sum();
-    sum / image.pixels.len().max(1) as f64
-}
-
 fn settings(pairs: &[&str], debug: DebugView) -> Result<RenderSettings, String> {
     let mut all = vec!["lighting=restir".to_string()];
     all.extend(pairs.iter().map(|p| p.to_string()));
@@ -246,7 +239,7 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
                 }
             }
         } else {
-            report.nonfinite_pixels += image.pixels.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count() as u64;
+            report.nonfinite_pixels += image.non_finite_pixels() as u64;
         }
         report.frames += 1;
     }
@@ -259,8 +252,8 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
     let mut means = Vec::with_capacity(config.static_frames as usize);
     for _ in 0..config.static_frames.max(8) {
         let image = renderer.render(1)?;
-        report.nonfinite_pixels += image.pixels.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count() as u64;
-        means.push(luminance_mean(&image));
+        report.nonfinite_pixels += image.non_finite_pixels() as u64;
+        means.push(image.mean_luminance());
     }
     let quarter = (means.len() / 4).max(1);
     let average = |m: &[f64]| m.iter().sum::<f64>() / m.len().max(1) as f64;
@@ -274,7 +267,7 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
         &home,
         &ReferenceOptions { width: config.width, height: config.height, spp: 256, ..Default::default() },
     )?;
-    report.reference_mean = luminance_mean(&reference.image);
+    report.reference_mean = reference.image.mean_luminance();
     if report.min_w == f32::INFINITY {
         report.min_w = 0.0;
     }

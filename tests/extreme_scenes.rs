@@ -33,12 +33,12 @@ fn check_with(name: &str, world: VoxelWorld, view: &CameraView, bound: f64, extr
     let options = HeadlessOptions { width: W, height: H, settings, ..Default::default() };
     let Some(mut renderer) = common::renderer(world.clone(), view, &options) else { return };
     let gpu = renderer.render(128).unwrap();
-    let bad = gpu.pixels.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count();
+    let bad = gpu.non_finite_pixels();
     assert_eq!(bad, 0, "{name}: non-finite pixels");
     let options = ReferenceOptions { width: W, height: H, spp: 512, bounces: 0, seed: 3, time_budget: None };
     let cpu = render_reference(&world, view, &options).unwrap().image;
-    assert!(cpu.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())), "{name}: non-finite CPU pixels");
-    let (g, c) = (common::mean_luminance(&gpu), common::mean_luminance(&cpu));
+    assert_eq!(cpu.non_finite_pixels(), 0, "{name}: non-finite CPU pixels");
+    let (g, c) = (gpu.mean_luminance(), cpu.mean_luminance());
     eprintln!("{name}: GPU mean {g:.6}, CPU mean {c:.6} ({:+.2}%)", 100.0 * (g - c) / c);
     assert!(c > 0.0, "{name}: the reference sees light");
     assert!(((g - c) / c).abs() < bound, "{name}: GPU mean {g} vs CPU {c}");

@@ -59,7 +59,7 @@ fn check_convergence(name: &str) {
     let view = world.view(Some("front")).unwrap().clone();
     let Some(keep) = common::comparable_pixels(&world, &view, W, H) else { return };
     let truth = reference(&world, &view, 4096);
-    let mean = common::mean_luminance(&common::masked(&truth, &keep));
+    let mean = common::masked(&truth, &keep).mean_luminance();
     eprintln!("{name}: mean {mean:.4}");
     let cases: [(&[&str], f64); 4] = [
         (&["reuse=unbiased", "spatial=off"], 0.025),
@@ -112,7 +112,7 @@ fn a_removed_light_is_never_shaded() {
     let west = view("west", [2.0, 12.0, 16.0], [1.0, 0.0, 0.0]);
     let Some(mut renderer) = restir(&world, &west, &["lighting=restir"]) else { return };
     let lit = renderer.render(8).unwrap();
-    assert!(common::mean_luminance(&lit) > 0.05, "the lamp lights the wall: {}", common::mean_luminance(&lit));
+    assert!(lit.mean_luminance() > 0.05, "the lamp lights the wall: {}", lit.mean_luminance());
     // Remove the visible lamp; the other one remains, so the ReSTIR passes keep running on last frame's
     // reservoirs, every one of which points at the removed light.
     renderer.app_mut().world_mut().write_message(EditRequest::player(Edit::Break { at: lamps[0] }));
@@ -132,7 +132,7 @@ fn centre_mean(image: &LinearImage) -> f64 {
         .flat_map(|y| (W / 4..3 * W / 4).map(move |x| (x, y)))
         .map(|(x, y)| image.pixel(x, y))
         .collect();
-    common::mean_luminance(&LinearImage { width: pixels.len() as u32, height: 1, pixels })
+    (LinearImage { width: pixels.len() as u32, height: 1, pixels }).mean_luminance()
 }
 
 #[test]
@@ -203,7 +203,7 @@ fn without_lights_no_restir_pass_runs() {
     let place = Edit::Place { at: IVec3::new(8, 4, 8), material: lamp };
     renderer.app_mut().world_mut().write_message(EditRequest::player(place));
     let lit = renderer.render(4).unwrap();
-    assert!(common::mean_luminance(&lit) > 0.0);
+    assert!(lit.mean_luminance() > 0.0);
     if primary.is_some() {
         for name in glowbrick::render::restir::RESTIR_PASS_NAMES {
             assert!(renderer.gpu_pass_ms(name).is_some(), "{name} did not run with a light");

@@ -187,7 +187,7 @@ fn measure(
 }
 
 /// GPU time of each voxel pass that ran (the primary pass, and the ReSTIR passes when they ran).
-fn pass_times(renderer: &HeadlessRenderer) -> PassTimes {
+pub(crate) fn pass_times(renderer: &HeadlessRenderer) -> PassTimes {
     std::iter::once(PRIMARY_PASS_NAME)
         .chain(RESTIR_PASS_NAMES)
         .filter_map(|name| renderer.gpu_pass_ms(name).map(|ms| (name, ms)))

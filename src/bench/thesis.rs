@@ -6,11 +6,9 @@
 //! The thesis rendered 1600 x 1024; `scale` shrinks both sides (and the 30 px spatial radius with them), so the
 //! CPU reference stays affordable on a small machine.
 
-use super::{BenchConfig, cached_reference};
+use super::{BenchConfig, PassTimes, cached_reference, pass_times};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::reference::metrics::{Metrics, compare};
-use crate::render::primary::PRIMARY_PASS_NAME;
-use crate::render::restir::RESTIR_PASS_NAMES;
 use crate::settings::RenderSettings;
 use crate::world::VoxelWorld;
 use crate::world::source::load_path;
@@ -79,13 +77,14 @@ pub fn thesis_scene(file: &str) -> Result<PathBuf, String> {
 /// One measured mode of one view.
 pub struct ThesisResult {
     pub metrics: Metrics,
-    pub passes: Vec<(&'static str, f64)>,
+    pub passes: PassTimes,
 }
 
 fn render_mode(
     world: &VoxelWorld,
     view: &crate::world::CameraView,
     config: &BenchConfig,
+    reference: &crate::image_io::LinearImage,
     sample: &str,
 ) -> Result<ThesisResult, String> {
     let radius = (30.0 * config.width as f32 / 1600.0).round().max(1.0);
@@ -98,12 +97,8 @@ fn render_mode(
     let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
     let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;
     let image = renderer.render(THESIS_FRAMES)?;
-    let passes = std::iter::once(PRIMARY_PASS_NAME)
-        .chain(RESTIR_PASS_NAMES)
-        .filter_map(|name| renderer.gpu_pass_ms(name).map(|ms| (name, ms)))
-        .collect();
-    let reference = cached_reference(world, view, config)?;
-    Ok(ThesisResult { metrics: compare(&image, &reference)?, passes })
+    let passes = pass_times(&renderer);
+    Ok(ThesisResult { metrics: compare(&image, reference)?, passes })
 }
 
 /// Runs the protocol at `scale` of 1600 x 1024 with `reference_spp`, writes `thesis.md` into `out`.
@@ -133,8 +128,9 @@ pub fn run_thesis_bench(scale: f32, reference_spp: u32, out: &Path) -> Result<St
         let mut world = loaded.as_ref().map(|(_, w)| w.clone()).ok_or("no world")?;
         world.brick_lights = t.brick_lights;
         let view = world.view(Some(t.view)).cloned().ok_or_else(|| format!("{}: no view {}", t.file, t.view))?;
-        let area = render_mode(&world, &view, &config, "area")?;
-        let point = render_mode(&world, &view, &config, "point")?;
+        let reference = cached_reference(&world, &view, &config)?;
+        let area = render_mode(&world, &view, &config, &reference, "area")?;
+        let point = render_mode(&world, &view, &config, &reference, "point")?;
         eprintln!("thesis: {}: area {}, point {}", t.label, area.metrics, point.metrics);
         rows.push((t, area, point));
     }

@@ -273,6 +273,26 @@ pub fn prepare_view_resources(
     }
 }
 
+/// Records one voxel compute pass over the view (8x8 workgroups) with the world, view and light bind groups,
+/// timed under `name` when render diagnostics are on.
+pub fn dispatch_voxel_pass(
+    encoder: &mut CommandEncoder,
+    diagnostics: Option<&bevy::render::diagnostic::DiagnosticsRecorder>,
+    name: &'static str,
+    pipeline: &ComputePipeline,
+    groups: [(&BindGroup, &[u32]); 3],
+    size: Extent3d,
+) {
+    let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor { label: Some(name), timestamp_writes: None });
+    let span = diagnostics.pass_span(&mut pass, name);
+    pass.set_pipeline(pipeline);
+    for (index, (group, offsets)) in groups.into_iter().enumerate() {
+        pass.set_bind_group(index as u32, group, offsets);
+    }
+    pass.dispatch_workgroups(size.width.div_ceil(8), size.height.div_ceil(8), 1);
+    span.end(&mut pass);
+}
+
 /// The per-view bind group (group 1) every voxel pass uses.
 pub fn view_bind_group(
     ctx: &RenderContext,
@@ -320,26 +340,21 @@ pub fn primary_pass(
     let Some(view_binding) = view_uniforms.uniforms.binding() else { return };
     let size = target.main_texture().size();
     let view_group = view_bind_group(&ctx, &pipeline_cache, &pipeline.view_layout, target, view_binding, resources);
-    // Keep last frame's G-buffer for temporal reprojection before this frame overwrites it.
-    ctx.command_encoder().copy_buffer_to_buffer(
-        &resources.gbuffer,
-        0,
-        &resources.prev_gbuffer,
-        0,
-        resources.gbuffer.size(),
-    );
+    // Keep last frame's G-buffer for ReSTIR's temporal reprojection before this frame overwrites it (only
+    // ReSTIR reads it, so other modes skip the copy).
+    if resources.run_restir {
+        ctx.command_encoder().copy_buffer_to_buffer(
+            &resources.gbuffer,
+            0,
+            &resources.prev_gbuffer,
+            0,
+            resources.gbuffer.size(),
+        );
+    }
     let diagnostics = ctx.diagnostic_recorder();
-    let diagnostics = diagnostics.as_deref();
-    let mut pass = ctx
-        .command_encoder()
-        .begin_compute_pass(&ComputePassDescriptor { label: Some("glowbrick_primary"), timestamp_writes: None });
     // GPU time under "render/glowbrick_primary/elapsed_gpu" when RenderDiagnosticsPlugin is on (the bench).
-    let span = diagnostics.pass_span(&mut pass, PRIMARY_PASS_NAME);
-    pass.set_pipeline(compute);
-    pass.set_bind_group(0, &gpu_world.bind_group, &[]);
-    pass.set_bind_group(1, &view_group, &[view_offset.offset]);
-    pass.set_bind_group(2, &gpu_lights.bind_group, &[]);
-    pass.dispatch_workgroups(size.width.div_ceil(8), size.height.div_ceil(8), 1);
-    span.end(&mut pass);
+    let groups =
+        [(&gpu_world.bind_group, &[][..]), (&view_group, &[view_offset.offset][..]), (&gpu_lights.bind_group, &[][..])];
+    dispatch_voxel_pass(ctx.command_encoder(), diagnostics.as_deref(), PRIMARY_PASS_NAME, compute, groups, size);
     frames.0.fetch_add(1, Ordering::Relaxed);
 }

@@ -5,11 +5,10 @@
 //! pass then shows emission alone, and the skipped passes record no GPU time.
 
 use super::gpu_world::{GpuWorld, WorldLayout};
-use super::primary::{PrimaryPipeline, PrimaryViewResources, primary_pass, view_bind_group};
+use super::primary::{PrimaryPipeline, PrimaryViewResources, dispatch_voxel_pass, primary_pass, view_bind_group};
 use super::{GlowbrickShaders, VoxelCamera, shader_defs};
 use crate::lights::upload::{GpuLights, LightsLayout};
 use bevy::prelude::*;
-use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::*;
 use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::view::{ViewTarget, ViewUniformOffset, ViewUniforms};
@@ -96,18 +95,15 @@ pub fn restir_passes(
     let size = target.main_texture().size();
     let view_group = view_bind_group(&ctx, &pipeline_cache, &primary.view_layout, target, view_binding, resources);
     let diagnostics = ctx.diagnostic_recorder();
-    let diagnostics = diagnostics.as_deref();
     let encoder = ctx.command_encoder();
     // Separate compute passes: each reads what the previous one wrote for other pixels.
     for (compute, name) in computes.into_iter().zip(RESTIR_PASS_NAMES) {
-        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor { label: Some(name), timestamp_writes: None });
-        let span = diagnostics.pass_span(&mut pass, name);
-        pass.set_pipeline(compute);
-        pass.set_bind_group(0, &gpu_world.bind_group, &[]);
-        pass.set_bind_group(1, &view_group, &[view_offset.offset]);
-        pass.set_bind_group(2, &gpu_lights.bind_group, &[]);
-        pass.dispatch_workgroups(size.width.div_ceil(8), size.height.div_ceil(8), 1);
-        span.end(&mut pass);
+        let groups = [
+            (&gpu_world.bind_group, &[][..]),
+            (&view_group, &[view_offset.offset][..]),
+            (&gpu_lights.bind_group, &[][..]),
+        ];
+        dispatch_voxel_pass(encoder, diagnostics.as_deref(), name, compute, groups, size);
     }
 }
 

@@ -102,10 +102,3 @@ pub fn masked(image: &LinearImage, keep: &[bool]) -> LinearImage {
     let pixels = image.pixels.iter().zip(keep).filter(|(_, k)| **k).map(|(p, _)| *p).collect::<Vec<_>>();
     LinearImage { width: pixels.len() as u32, height: 1, pixels }
 }
-
-/// Mean luminance of an image's pixels.
-pub fn mean_luminance(image: &LinearImage) -> f64 {
-    let sum: f64 =
-        image.pixels.iter().map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64).sum();
-    sum / image.pixels.len().max(1) as f64
-}
