@@ -56,9 +56,10 @@ const RESTIR_UNBIASED: u32 = 8u;
 @group(1) @binding(4) var<storage, read_write> gbuffer: array<vec4<f32>>;
 @group(1) @binding(5) var<storage, read_write> prev_gbuffer: array<vec4<f32>>;
 
-// The G-buffer's w: bit 0 hit, bits 1-3 face, bits 4+ material. Zero (a cleared buffer) reads as a miss.
-fn pack_surface(face: u32, material: u32) -> f32 {
-    return bitcast<f32>(1u | (face << 1u) | (material << 4u));
+// The G-buffer's w: bit 0 hit, bits 1-3 face, bits 4-19 material, bits 20-31 the moving object's id (0: the
+// static world). Zero (a cleared buffer) reads as a miss.
+fn pack_surface(face: u32, material: u32, object: u32) -> f32 {
+    return bitcast<f32>(1u | (face << 1u) | ((material & 0xFFFFu) << 4u) | (object << 20u));
 }
 
 struct Surface {
@@ -66,11 +67,12 @@ struct Surface {
     point: vec3<f32>,
     face: u32,
     material: u32,
+    object: u32,
 }
 
 fn unpack_surface(texel: vec4<f32>) -> Surface {
     let bits = bitcast<u32>(texel.w);
-    return Surface((bits & 1u) == 1u, texel.xyz, (bits >> 1u) & 7u, bits >> 4u);
+    return Surface((bits & 1u) == 1u, texel.xyz, (bits >> 1u) & 7u, (bits >> 4u) & 0xFFFFu, bits >> 20u);
 }
 
 fn pixel_index(pixel: vec2<u32>) -> u32 {
@@ -102,8 +104,21 @@ fn highlight(colour: vec3<f32>, hit_voxel: vec3<i32>, face: u32, point: vec3<f32
     return c;
 }
 
-// The voxel a surface point lies on: step back from the face it was entered through.
+// Sky radiance in direction `dir` (sun-and-sky lighting only).
+fn sky(dir: vec3<f32>) -> vec3<f32> {
+    let up = clamp(dir.y * 0.5 + 0.5, 0.0, 1.0);
+    return mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, up);
+}
+
+// A voxel coordinate no highlight or selection contains.
+const NOT_A_VOXEL: i32 = -1073741824;
+
+// The world voxel a surface point lies on: step back from the face it was entered through. NOT_A_VOXEL on a
+// moving object (its voxels are not world voxels).
 fn surface_voxel(s: Surface) -> vec3<i32> {
+    if s.object != 0u {
+        return vec3(NOT_A_VOXEL);
+    }
     return vec3<i32>(floor(s.point - face_normal(s.face) * 0.5));
 }
 

@@ -3,7 +3,7 @@
 // integral: pick a light (power or uniform), a uniform point on a cube face that sees the point, one shadow ray.
 #define_import_path glowbrick::lights
 
-#import glowbrick::traversal::trace
+#import glowbrick::traversal::trace_scene
 
 struct Light {
     min: vec3<i32>,
@@ -133,8 +133,8 @@ fn direct_sample(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, count: u32, powe
         return vec3(0.0);
     }
     let origin = p + n * RAY_OFFSET;
-    let hit = trace(origin, normalize(q - origin), d + 1.0);
-    if !hit.found || !light_contains(light, hit.voxel) {
+    let hit = trace_scene(origin, normalize(q - origin), d + 1.0);
+    if !hit.found || hit.object != 0u || !light_contains(light, hit.voxel) {
         return vec3(0.0);
     }
     let pdf = max(picked.pdf * pdf_area, 1e-30);

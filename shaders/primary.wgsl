@@ -2,8 +2,9 @@
 // plus emission, written into the camera's HDR target. Debug views show the pass's inputs.
 
 #import glowbrick::world::materials
-#import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, LIGHTING_NEE, LIGHTING_RESTIR}
-#import glowbrick::traversal::{trace, face_normal, INF}
+#import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, sky, NOT_A_VOXEL, LIGHTING_NEE, LIGHTING_RESTIR}
+#import glowbrick::gi::{gi_on, gi_touch_surface, gi_incoming}
+#import glowbrick::traversal::{trace_scene, face_normal, INF}
 #import glowbrick::lights::{Rng, pcg, direct_sample}
 
 const DEBUG_NONE: u32 = 0u;
@@ -22,11 +23,6 @@ fn primary_ray_dir(pixel: vec2<u32>, size: vec2<f32>) -> vec3<f32> {
     return normalize(p.xyz / p.w - view.world_position);
 }
 
-fn sky(dir: vec3<f32>) -> vec3<f32> {
-    let up = clamp(dir.y * 0.5 + 0.5, 0.0, 1.0);
-    return mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, up);
-}
-
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let size = vec2<u32>(view.viewport.zw);
@@ -35,9 +31,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let origin = view.world_position;
     let dir = primary_ray_dir(id.xy, vec2<f32>(size));
-    let hit = trace(origin, dir, INF);
+    let hit = trace_scene(origin, dir, INF);
     let point = origin + dir * hit.distance;
-    gbuffer[pixel_index(id.xy)] = select(vec4(0.0), vec4(point, pack_surface(hit.face, hit.material)), hit.found);
+    gbuffer[pixel_index(id.xy)] =
+        select(vec4(0.0), vec4(point, pack_surface(hit.face, hit.material, hit.object)), hit.found);
+    // The GI cache keeps the entries the camera sees (and their interpolation neighbours) alive and updated.
+    if gi_on() && hit.found {
+        gi_touch_surface(point, hit.face, hit.object);
+    }
     // Voxel ReSTIR shades in its own passes when there is a light to sample; without one it is emission only.
     let restir = frame.lighting == LIGHTING_RESTIR;
     if restir && frame.light_count > 0u && (frame.debug_view == DEBUG_NONE || frame.debug_view == DEBUG_RESERVOIR) {
@@ -51,6 +52,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     } else {
         let normal = face_normal(hit.face);
+        // Moving objects' voxels are in their own coordinates: never outlined or selected.
+        let world_voxel = select(hit.voxel, vec3(NOT_A_VOXEL), hit.object != 0u);
         let material = materials[hit.material];
         switch frame.debug_view {
             case DEBUG_ALBEDO: {
@@ -68,9 +71,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             default: {
                 if nee {
                     var rng = Rng(pcg(id.x + size.x * id.y) ^ pcg(frame.frame * 0x9E3779B9u + 1u));
-                    let radiance = material.radiance.rgb
+                    var radiance = material.radiance.rgb
                         + direct_sample(point, normal, material.albedo.rgb, frame.light_count, frame.power_pick == 1u, &rng);
-                    colour = vec4(highlight(radiance * frame.exposure, hit.voxel, hit.face, point, hit.distance), 1.0);
+                    if gi_on() {
+                        radiance += material.albedo.rgb * gi_incoming(point, hit.face, hit.object);
+                    }
+                    colour = vec4(highlight(radiance * frame.exposure, world_voxel, hit.face, point, hit.distance), 1.0);
                     break;
                 }
                 let sun_dir = frame.sun.xyz;
@@ -81,15 +87,20 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                     if frame.shadows != 0u {
                         // Start just off the face so the shadow ray does not hit its own voxel.
                         let p = origin + dir * hit.distance + normal * 1e-3;
-                        if trace(p, sun_dir, INF).found {
+                        if trace_scene(p, sun_dir, INF).found {
                             sun = 0.0;
                         }
                     }
                 }
-                // Sky light seen by the face: the sky colour in the normal's direction, a crude ambient term.
-                let lit = frame.sun_radiance.rgb * sun + sky(normal) * 0.3;
+                // Indirect light: the GI cache's (which sees the sky through its rays), else a crude ambient term,
+                // the sky colour in the normal's direction.
+                var ambient = sky(normal) * 0.3;
+                if gi_on() {
+                    ambient = gi_incoming(point, hit.face, hit.object);
+                }
+                let lit = frame.sun_radiance.rgb * sun + ambient;
                 let shaded = (material.albedo.rgb * lit + material.radiance.rgb) * frame.exposure;
-                colour = vec4(highlight(shaded, hit.voxel, hit.face, point, hit.distance), 1.0);
+                colour = vec4(highlight(shaded, world_voxel, hit.face, point, hit.distance), 1.0);
             }
         }
     }

@@ -5,7 +5,7 @@
 #define_import_path glowbrick::restir
 
 #import glowbrick::world::materials
-#import glowbrick::traversal::{trace, face_normal}
+#import glowbrick::traversal::{trace_scene, face_normal}
 #import glowbrick::lights::{Light, lights, pick_light, light_contains, light_size, face_exposed, Rng, rng_next, pcg, RAY_OFFSET, PI}
 #import glowbrick::frame::{frame, view, Surface, RESTIR_POINT, RESTIR_UNBIASED}
 
@@ -124,8 +124,8 @@ fn visible(x: Shading, light: Light, face: u32, uv: vec2<f32>) -> bool {
     if d <= 1e-6 {
         return false;
     }
-    let hit = trace(origin, to_light / d, d + 1.0);
-    return hit.found && light_contains(light, hit.voxel);
+    let hit = trace_scene(origin, to_light / d, d + 1.0);
+    return hit.found && hit.object == 0u && light_contains(light, hit.voxel);
 }
 
 fn reservoir_visible(x: Shading, r: Reservoir) -> bool {

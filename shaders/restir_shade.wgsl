@@ -7,6 +7,7 @@
 #import glowbrick::frame::{frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output}
 #import glowbrick::restir::{reservoirs_final, validated, finite, shading, unshadowed, reservoir_visible, NO_LIGHT}
 #import glowbrick::lights::lights
+#import glowbrick::gi::{gi_on, gi_incoming}
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -41,6 +42,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     reservoirs_final[index] = r;
+    if gi_on() {
+        radiance += materials[surface.material].albedo.rgb * gi_incoming(x.point, surface.face, surface.object);
+    }
     let depth = distance(view.world_position, x.point);
     write_output(id.xy, vec4(highlight(radiance * frame.exposure, surface_voxel(surface), surface.face, x.point, depth), 1.0));
 }

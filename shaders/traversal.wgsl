@@ -2,21 +2,24 @@
 // Mirrors src/world/traversal.rs step for step (same boundary formulas and tie rules) so GPU and CPU agree.
 #define_import_path glowbrick::traversal
 
-#import glowbrick::world::{world_info, brick_cell, pooled_voxel, POOLED_FLAG, BRICK_SIZE}
+#import glowbrick::world::{world_info, brick_cell, pooled_voxel, objects, object_count, object_voxel, Object, POOLED_FLAG, BRICK_SIZE}
 
 const INF: f32 = 3.0e38;
 
 struct Hit {
+    // The voxel hit: world coordinates, or the object's local ones when `object` is not 0.
     voxel: vec3<i32>,
     // Face entered: 0 +X, 1 -X, 2 +Y, 3 -Y, 4 +Z, 5 -Z.
     face: u32,
     distance: f32,
     material: u32,
     found: bool,
+    // 0 for the static world, else the moving object's id.
+    object: u32,
 }
 
 fn miss() -> Hit {
-    return Hit(vec3(0), 0u, INF, 0u, false);
+    return Hit(vec3(0), 0u, INF, 0u, false, 0u);
 }
 
 fn face_entered(axis: u32, dir_positive: bool) -> u32 {
@@ -91,7 +94,7 @@ fn trace_in_brick(origin: vec3<f32>, dir: vec3<f32>, inv: vec3<f32>, brick: vec3
     for (var i = 0; i < 3 * BRICK_SIZE; i++) {
         let material = pooled_voxel(slot, voxel - lo);
         if material != 0u {
-            return Hit(voxel, face_entered(axis, positive[axis]), t, material, true);
+            return Hit(voxel, face_entered(axis, positive[axis]), t, material, true, 0u);
         }
         let a = min_axis(t_max);
         t = t_max[a];
@@ -140,7 +143,7 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
                 let lo = brick * BRICK_SIZE;
                 let voxel = min(clamp(vec3<i32>(floor(origin + dir * t)), lo, lo + vec3(BRICK_SIZE - 1)),
                                 world_info.size.xyz - vec3(1));
-                return Hit(voxel, face_entered(axis, positive[axis]), t, cell, true);
+                return Hit(voxel, face_entered(axis, positive[axis]), t, cell, true, 0u);
             }
             let hit = trace_in_brick(origin, dir, inv, brick, cell & ~POOLED_FLAG, t, t_end, axis);
             if hit.found {
@@ -160,4 +163,76 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
         brick_t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(brick[a] + select(0, 1, positive[a])) * edge);
     }
     return miss();
+}
+
+// The first solid voxel of object o along the ray, before max_distance: the object's box, then a DDA through its
+// voxels (at most 16 per side, so at most 48 steps).
+fn trace_object(o: Object, origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
+    let size = vec3<f32>(o.size);
+    let entry = box_entry(origin, dir, o.min, o.min + size);
+    let t_end = min(entry.y, max_distance);
+    var t = max(entry.x, 0.0);
+    if !(t <= t_end) || all(dir == vec3(0.0)) {
+        return miss();
+    }
+    let p = origin - o.min;
+    let inv = inverse_dir(dir);
+    let step = vec3<i32>(sign(dir));
+    let positive = dir > vec3(0.0);
+    let hi = vec3<i32>(o.size) - vec3(1);
+    // Entered through a box face; a ray starting inside takes the axis it travels most along.
+    var axis = u32(entry.z);
+    if entry.x < 0.0 {
+        let a = abs(dir);
+        axis = select(select(2u, 1u, a.y >= a.z), 0u, a.x >= a.y && a.x >= a.z);
+    }
+    var voxel = clamp(vec3<i32>(floor(p + dir * t)), vec3(0), hi);
+    var t_max: vec3<f32>;
+    for (var a = 0u; a < 3u; a++) {
+        t_max[a] = cross_t(p[a], dir[a], inv[a], f32(voxel[a] + select(0, 1, positive[a])));
+    }
+    for (var i = 0; i < 48; i++) {
+        let material = object_voxel(o, voxel);
+        if material != 0u {
+            return Hit(voxel, face_entered(axis, positive[axis]), t, material, true, o.id);
+        }
+        let a = min_axis(t_max);
+        t = t_max[a];
+        if t > t_end {
+            break;
+        }
+        axis = a;
+        voxel[a] += step[a];
+        if voxel[a] < 0 || voxel[a] > hi[a] {
+            break;
+        }
+        t_max[a] = cross_t(p[a], dir[a], inv[a], f32(voxel[a] + select(0, 1, positive[a])));
+    }
+    return miss();
+}
+
+// The nearest moving object's voxel along the ray, before max_distance.
+fn trace_objects(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
+    var best = miss();
+    let count = object_count();
+    for (var i = 0u; i < count; i++) {
+        let hit = trace_object(objects[i], origin, dir, min(best.distance, max_distance));
+        if hit.found && hit.distance < best.distance {
+            best = hit;
+        }
+    }
+    return best;
+}
+
+// The first solid voxel of the static world or of a moving object: what camera, shadow and GI rays see.
+fn trace_scene(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
+    let world = trace(origin, dir, max_distance);
+    if object_count() == 0u {
+        return world;
+    }
+    let object = trace_objects(origin, dir, min(world.distance, max_distance));
+    if object.found {
+        return object;
+    }
+    return world;
 }

@@ -7,7 +7,7 @@ const BRICK_SIZE: i32 = #{BRICK_SIZE};
 const BRICK_WORDS: u32 = #{BRICK_WORDS}u;
 
 struct WorldInfo {
-    // World size in voxels (xyz) and bricks (xyz); w unused.
+    // World size in voxels (xyz) and the number of moving objects (w); bricks (xyz).
     size: vec4<i32>,
     bricks: vec4<i32>,
 }
@@ -24,6 +24,43 @@ struct Material {
 // Pooled bricks, two u16 voxels per word, little-endian: voxel i of a slot is in word i / 2, low half when even.
 @group(0) @binding(2) var<storage, read> brick_pool: array<u32>;
 @group(0) @binding(3) var<storage, read> materials: array<Material>;
+
+// A moving voxel object (src/dynamic): a small voxel grid translated to `min`, never rotated.
+struct Object {
+    min: vec3<f32>,
+    // Stable id, 1..4095 (keys its GI entries and marks its pixels in the G-buffer).
+    id: u32,
+    size: vec3<u32>,
+    // First voxel in object_voxels; x fastest, then y, then z.
+    offset: u32,
+}
+
+@group(0) @binding(4) var<storage, read> objects: array<Object>;
+@group(0) @binding(5) var<storage, read> object_voxels: array<u32>;
+
+fn object_count() -> u32 {
+    return u32(world_info.size.w);
+}
+
+// The voxel id at a local coordinate of object o (air outside it).
+fn object_voxel(o: Object, local: vec3<i32>) -> u32 {
+    if any(local < vec3(0)) || any(vec3<u32>(local) >= o.size) {
+        return 0u;
+    }
+    let l = vec3<u32>(local);
+    return object_voxels[o.offset + l.x + o.size.x * (l.y + o.size.y * l.z)];
+}
+
+// The index of the object with `id`, or object_count() when it is gone.
+fn object_index(id: u32) -> u32 {
+    let count = object_count();
+    for (var i = 0u; i < count; i++) {
+        if objects[i].id == id {
+            return i;
+        }
+    }
+    return count;
+}
 
 fn brick_cell(brick: vec3<i32>) -> u32 {
     let b = world_info.bricks.xyz;

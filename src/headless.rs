@@ -144,6 +144,39 @@ impl HeadlessRenderer {
             .and_then(|d| d.average())
     }
 
+    /// The GI cache's counters of the next rendered frame (`render::gi::GiCounter` indexes them). Renders that
+    /// frame (and any before the readback arrives).
+    pub fn gi_counters(&mut self) -> Result<[u32; crate::render::gi::GI_COUNTERS], String> {
+        let handle = self.app.world().resource::<crate::render::gi::GiCountersBuffer>().0.clone();
+        let sink = Captured::default();
+        let slot = sink.clone();
+        let entity = self
+            .app
+            .world_mut()
+            .spawn(Readback::buffer(handle))
+            .observe(move |event: On<ReadbackComplete>| {
+                if let Ok(mut s) = slot.0.lock() {
+                    s.get_or_insert_with(|| event.data.clone());
+                }
+            })
+            .id();
+        let start = Instant::now();
+        loop {
+            self.step();
+            if let Some(bytes) = sink.0.lock().map_err(|_| "readback lock poisoned")?.take() {
+                self.app.world_mut().despawn(entity);
+                let mut out = [0u32; crate::render::gi::GI_COUNTERS];
+                for (value, word) in out.iter_mut().zip(bytes.chunks_exact(4)) {
+                    *value = u32::from_le_bytes([word[0], word[1], word[2], word[3]]);
+                }
+                return Ok(out);
+            }
+            if start.elapsed() > self.timeout {
+                return Err(format!("timed out after {:?} waiting for the GI counters", self.timeout));
+            }
+        }
+    }
+
     /// Runs one frame and waits for the GPU (one frame in flight: on software Vulkan, queued frames would
     /// otherwise pile up).
     pub fn step(&mut self) {
@@ -185,7 +218,8 @@ impl HeadlessRenderer {
             }
             let render_world = self.app.sub_app(RenderApp).world();
             let error = crate::render::primary::pipeline_error(render_world)
-                .or_else(|| crate::render::restir::pipeline_error(render_world));
+                .or_else(|| crate::render::restir::pipeline_error(render_world))
+                .or_else(|| crate::render::gi::pipeline_error(render_world));
             if let Some(error) = error {
                 return Err(error);
             }

@@ -4,6 +4,7 @@
 //! `game` (the playable app), `headless` (rendering to files without a window).
 
 pub mod bench;
+pub mod dynamic;
 pub mod game;
 pub mod headless;
 pub mod image_io;
@@ -19,6 +20,11 @@ pub struct GlowbrickCorePlugin;
 
 impl bevy::app::Plugin for GlowbrickCorePlugin {
     fn build(&self, app: &mut bevy::app::App) {
-        app.add_plugins((world::events::WorldEditPlugin, lights::plugin::LightsPlugin, render::VoxelRenderPlugin));
+        app.add_plugins((
+            world::events::WorldEditPlugin,
+            lights::plugin::LightsPlugin,
+            render::VoxelRenderPlugin,
+            dynamic::DynamicObjectsPlugin,
+        ));
     }
 }

@@ -187,7 +187,12 @@ struct SettingArgs {
 
 impl SettingArgs {
     fn settings(&self) -> Result<RenderSettings, String> {
-        let mut settings = RenderSettings::default();
+        self.settings_over(RenderSettings::default())
+    }
+
+    /// The settings file and pairs applied over `base`.
+    fn settings_over(&self, base: RenderSettings) -> Result<RenderSettings, String> {
+        let mut settings = base;
         if let Some(path) = &self.config {
             let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
             settings = settings.with_ron(&text, &path.display().to_string())?;
@@ -256,7 +261,10 @@ fn main() -> ExitCode {
 }
 
 fn play(args: PlayArgs) -> Result<(), String> {
-    let settings = args.settings.settings()?;
+    // The game lights with the GI cache unless told otherwise (`--set gi=off`, or G in game).
+    let mut base = RenderSettings::default();
+    base.gi.enabled = true;
+    let settings = args.settings.settings_over(base)?;
     let source = match args.world.source() {
         Some(source) if !args.new => source,
         Some(_) => return Err("--new generates a world; it cannot be combined with --world or --scene".into()),

@@ -91,7 +91,53 @@ impl Default for RestirSettings {
     }
 }
 
+/// The per-voxel-face GI cache's knobs (seed 001 adapted, DESIGN.md "GI cache").
+#[derive(Clone, Debug, PartialEq)]
+pub struct GiSettings {
+    /// Indirect light from the cache; off, the cache holds no memory and no GI pass runs.
+    pub enabled: bool,
+    /// Fixed directions per face entry (K), traced against the static world once and cached.
+    pub rays: u32,
+    /// Of those, how many each visible entry re-shades per frame (round robin).
+    pub update_rays: u32,
+    /// Weight of a new frame in the temporal blend (a fresh entry averages its first 1/alpha frames evenly).
+    pub alpha: f32,
+    /// Average each entry with its same-orientation neighbours in a 3x3x3 block.
+    pub filter: bool,
+    /// Read last frame's indirect light at ray hits (multiple bounces); off gives one bounce.
+    pub bounces: bool,
+    /// Keep each entry's static hits until an edit can reach them; off retraces every ray every frame.
+    pub cache: bool,
+}
+
+impl Default for GiSettings {
+    fn default() -> Self {
+        GiSettings { enabled: false, rays: 64, update_rays: 8, alpha: 0.03, filter: true, bounces: true, cache: true }
+    }
+}
+
+impl GiSettings {
+    /// One line for the HUD.
+    pub fn summary(&self) -> String {
+        if !self.enabled {
+            return "GI off".into();
+        }
+        format!(
+            "GI K={} {}/frame a={} {}{}{}",
+            self.rays,
+            self.update_rays,
+            self.alpha,
+            if self.filter { "F" } else { "-" },
+            if self.bounces { "B" } else { "-" },
+            if self.cache { "C" } else { "-" }
+        )
+    }
+}
+
 /// Valid ranges, shared by `--set` (which rejects) and the in-game keys (which clamp).
+pub const GI_RAYS_RANGE: (u32, u32) = (4, 128);
+pub const GI_UPDATE_RAYS_RANGE: (u32, u32) = (1, 64);
+pub const GI_ALPHA_RANGE: (f32, f32) = (0.001, 1.0);
 pub const CANDIDATES_RANGE: (u32, u32) = (1, 64);
 pub const TAPS_RANGE: (u32, u32) = (0, 16);
 pub const RADIUS_RANGE: (f32, f32) = (0.0, 100.0);
@@ -113,6 +159,7 @@ pub struct RenderSettings {
     /// Linear scale applied before tonemapping.
     pub exposure: f32,
     pub restir: RestirSettings,
+    pub gi: GiSettings,
 }
 
 impl Default for RenderSettings {
@@ -126,6 +173,7 @@ impl Default for RenderSettings {
             shadows: true,
             exposure: 1.0,
             restir: RestirSettings::default(),
+            gi: GiSettings::default(),
         }
     }
 }
@@ -134,7 +182,8 @@ impl Default for RenderSettings {
 pub const SETTING_KEYS: &str = "lighting=sun|nee|restir, pick=power|uniform, accumulate=on|off, \
      debug=none|albedo|normal|hit|depth|reservoir, sun=on|off, shadows=on|off, exposure=<0.001..1000>, \
      candidates=<1..64>, taps=<0..16>, radius=<0..100>, temporal=on|off, spatial=on|off, \
-     sample=area|point, reuse=biased|unbiased";
+     sample=area|point, reuse=biased|unbiased, gi=on|off, gi_rays=<4..128>, gi_update=<1..64>, \
+     gi_alpha=<0.001..1>, gi_filter=on|off, gi_bounces=on|off, gi_cache=on|off";
 
 fn parse_switch(key: &str, value: &str) -> Result<bool, String> {
     match value {
@@ -235,6 +284,13 @@ impl RenderSettings {
                     _ => return Err(format!("setting reuse: '{value}' is not one of biased|unbiased")),
                 }
             }
+            "gi" => self.gi.enabled = parse_switch(key, value)?,
+            "gi_rays" => self.gi.rays = parse_count(key, value, GI_RAYS_RANGE)?,
+            "gi_update" => self.gi.update_rays = parse_count(key, value, GI_UPDATE_RAYS_RANGE)?,
+            "gi_alpha" => self.gi.alpha = parse_number(key, value, GI_ALPHA_RANGE)?,
+            "gi_filter" => self.gi.filter = parse_switch(key, value)?,
+            "gi_bounces" => self.gi.bounces = parse_switch(key, value)?,
+            "gi_cache" => self.gi.cache = parse_switch(key, value)?,
             _ => return Err(format!("unknown setting '{key}' (valid: {SETTING_KEYS})")),
         }
         Ok(())

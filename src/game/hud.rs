@@ -35,7 +35,7 @@ struct StatusText;
 struct HelpPanel;
 
 const HINT: &str = "WASD move | mouse look | LMB break | RMB place | MMB pick | wheel/1-9 block | B box brush | \
-                    F walk/fly | Ctrl+Z/Y undo/redo | L lighting | F4 settings | F5 save | F9 load | F1 help";
+                    F walk/fly | Ctrl+Z/Y undo/redo | L lighting | G GI | O lantern | F4 settings | F5 save | F9 load | F1 help";
 
 const HELP: &str = "glowbrick controls\n\n\
     click          capture the mouse (Esc releases it)\n\
@@ -51,6 +51,8 @@ const HELP: &str = "glowbrick controls\n\n\
     V              drop the --model .vox model in front of you\n\
     F3             debug views (lit, albedo, normal, depth)\n\
     L              lighting: sun and sky / NEE / Voxel ReSTIR\n\
+    G              indirect light (the GI cache) on / off\n\
+    O              spawn a drifting lantern in front of you\n\
     F4             render settings panel (arrows choose and change)\n\
     F5, F9         save, load\n\
     F1             this help";
@@ -208,7 +210,7 @@ fn update_texts(
     let (voxel_lights, brick_lights) = pool.counts();
     if let Ok(mut t) = texts.p0().single_mut() {
         t.0 = format!(
-            "{:.0} fps  {:.1} ms\nlights {} (voxel {voxel_lights}, brick {brick_lights})\nlighting {}{}\n{mode} | brush {brush}\ntarget {target}",
+            "{:.0} fps  {:.1} ms\nlights {} (voxel {voxel_lights}, brick {brick_lights})\nlighting {}{} | {}\n{mode} | brush {brush}\ntarget {target}",
             1.0 / smoothed_dt.max(1e-6),
             *smoothed_dt * 1000.0,
             pool.len(),
@@ -218,6 +220,7 @@ fn update_texts(
             } else {
                 String::new()
             },
+            settings.gi.summary(),
         );
     }
     if let Ok(mut t) = texts.p1().single_mut() {

@@ -6,6 +6,7 @@
 pub mod hud;
 pub mod interaction;
 pub mod models;
+pub mod objects;
 pub mod player;
 pub mod save_load;
 pub mod settings_panel;
@@ -59,6 +60,7 @@ pub fn run_game(
         interaction::InteractionInputPlugin,
         hud::HudPlugin,
         settings_panel::SettingsPanelPlugin,
+        objects::GameObjectsPlugin,
     ))
     .add_systems(Startup, move |mut commands: Commands| {
         commands.spawn((voxel_camera_bundle(&view), Tonemapping::AcesFitted, player::Player::looking(&view)));
@@ -67,9 +69,13 @@ pub fn run_game(
     .run()
 }
 
-/// F3 cycles the debug views (lit, albedo, normal, depth).
+/// F3 cycles the debug views (lit, albedo, normal, depth); G turns the GI cache on and off.
 fn toggle_debug_view(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<RenderSettings>) {
     use crate::settings::DebugView;
+    if keys.just_pressed(KeyCode::KeyG) {
+        settings.gi.enabled = !settings.gi.enabled;
+        info!("{}", settings.gi.summary());
+    }
     if keys.just_pressed(KeyCode::F3) {
         settings.debug = match settings.debug {
             DebugView::None => DebugView::Albedo,

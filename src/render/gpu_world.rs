@@ -21,6 +21,9 @@ pub fn world_bind_group_layout() -> BindGroupLayoutDescriptor {
                 storage_buffer_read_only_sized(false, None),
                 storage_buffer_read_only_sized(false, None),
                 storage_buffer_read_only_sized(false, None),
+                // Moving objects and their voxels (src/dynamic/upload.rs).
+                storage_buffer_read_only_sized(false, None),
+                storage_buffer_read_only_sized(false, None),
             ),
         ),
     )
@@ -37,6 +40,12 @@ pub struct GpuWorld {
     pub bind_group: BindGroup,
     /// Bytes written to GPU buffers last frame (0 when nothing changed).
     pub uploaded_bytes: u64,
+    /// Brick grid dimensions.
+    pub brick_dims: UVec3,
+    /// Bricks whose voxels changed this frame (the GI cache invalidates what their edits can reach).
+    pub edited_bricks: Vec<UVec3>,
+    /// The whole world was replaced this frame.
+    pub replaced: bool,
 }
 
 /// Layout of group 0, resolved once.
@@ -76,10 +85,14 @@ pub fn prepare_gpu_world(
     layout: Res<WorldLayout>,
     mut pending: ResMut<PendingUploads>,
     gpu: Option<ResMut<GpuWorld>>,
+    objects: Option<Res<crate::dynamic::upload::GpuObjects>>,
 ) {
+    let Some(objects) = objects else { return };
     let mut gpu = gpu;
     if let Some(gpu) = gpu.as_deref_mut() {
         gpu.uploaded_bytes = 0;
+        gpu.edited_bricks.clear();
+        gpu.replaced = false;
     }
     for upload in pending.0.drain(..) {
         let mut rebuild = false;
@@ -94,8 +107,8 @@ pub fn prepare_gpu_world(
             let brick_pool = storage_buffer(&device, "glowbrick_brick_pool", voxel_bytes(&full.pool));
             let material_capacity = materials.len() as u32;
             let materials = material_buffer(&device, &materials);
-            let bind_group =
-                world_bind_group(&device, &pipeline_cache, &layout.0, &info, &top_cells, &brick_pool, &materials);
+            let buffers = [&info, &top_cells, &brick_pool, &materials, &objects.objects, &objects.voxels];
+            let bind_group = world_bind_group(&device, &pipeline_cache, &layout.0, buffers);
             let bytes = upload.bytes();
             let new_gpu = GpuWorld {
                 info,
@@ -105,6 +118,9 @@ pub fn prepare_gpu_world(
                 material_capacity,
                 bind_group,
                 uploaded_bytes: bytes,
+                brick_dims: full.brick_dims,
+                edited_bricks: Vec::new(),
+                replaced: true,
             };
             match gpu.as_deref_mut() {
                 Some(existing) => *existing = new_gpu,
@@ -118,6 +134,8 @@ pub fn prepare_gpu_world(
         let Some(gpu) = gpu.as_deref_mut() else { continue };
         for &(index, raw) in &upload.top_cells {
             queue.write_buffer(&gpu.top_cells, index as u64 * 4, bytemuck::bytes_of(&raw));
+            let d = gpu.brick_dims;
+            gpu.edited_bricks.push(UVec3::new(index % d.x, index / d.x % d.y, index / (d.x * d.y)));
         }
         for (slot, voxels) in &upload.bricks {
             let offset = *slot as u64 * BRICK_VOXELS as u64 * 2;
@@ -133,37 +151,31 @@ pub fn prepare_gpu_world(
             }
         }
         if rebuild {
-            gpu.bind_group = world_bind_group(
-                &device,
-                &pipeline_cache,
-                &layout.0,
-                &gpu.info,
-                &gpu.top_cells,
-                &gpu.brick_pool,
-                &gpu.materials,
-            );
+            let buffers =
+                [&gpu.info, &gpu.top_cells, &gpu.brick_pool, &gpu.materials, &objects.objects, &objects.voxels];
+            gpu.bind_group = world_bind_group(&device, &pipeline_cache, &layout.0, buffers);
         }
         gpu.uploaded_bytes += upload.bytes();
     }
 }
 
+/// Group 0: world info, top cells, brick pool, materials, objects, object voxels.
 fn world_bind_group(
     device: &RenderDevice,
     pipeline_cache: &PipelineCache,
     layout: &BindGroupLayoutDescriptor,
-    info: &Buffer,
-    top_cells: &Buffer,
-    brick_pool: &Buffer,
-    materials: &Buffer,
+    buffers: [&Buffer; 6],
 ) -> BindGroup {
     device.create_bind_group(
         "glowbrick_world",
         &pipeline_cache.get_bind_group_layout(layout),
         &BindGroupEntries::sequential((
-            info.as_entire_binding(),
-            top_cells.as_entire_binding(),
-            brick_pool.as_entire_binding(),
-            materials.as_entire_binding(),
+            buffers[0].as_entire_binding(),
+            buffers[1].as_entire_binding(),
+            buffers[2].as_entire_binding(),
+            buffers[3].as_entire_binding(),
+            buffers[4].as_entire_binding(),
+            buffers[5].as_entire_binding(),
         )),
     )
 }

@@ -6,10 +6,12 @@
 //! 3. Render / PrepareResources: `gpu_world::prepare_gpu_world` writes it to GPU buffers,
 //!    `primary::prepare_view_resources` writes each view's parameters and restarts accumulation on change;
 //! 4. Core3d / MainPass, per camera with `VoxelCamera`: `primary::primary_pass` (G-buffer, and the image unless
-//!    ReSTIR shades it), then `restir::restir_passes` (candidates + temporal, spatial, shade); then Bevy's
-//!    tonemapping.
+//!    ReSTIR shades it; it also inserts the GI cache entries it sees), then `restir::restir_passes` (candidates +
+//!    temporal, spatial, shade), then `gi::gi_passes` (cache update and filter, read by next frame's shading);
+//!    then Bevy's tonemapping.
 
 pub mod camera;
+pub mod gi;
 pub mod gpu_world;
 pub mod primary;
 pub mod restir;
@@ -41,6 +43,10 @@ pub struct GlowbrickShaders {
     pub restir_initial: Handle<Shader>,
     pub restir_spatial: Handle<Shader>,
     pub restir_shade: Handle<Shader>,
+    pub gi: Handle<Shader>,
+    pub gi_refresh: Handle<Shader>,
+    pub gi_update: Handle<Shader>,
+    pub gi_filter: Handle<Shader>,
 }
 
 /// What the primary pass outlines: the player's target voxel and face, and a pending box selection
@@ -81,18 +87,26 @@ impl Plugin for VoxelRenderPlugin {
             restir_initial: add(include_str!("../../shaders/restir_initial.wgsl"), "glowbrick/restir_initial.wgsl"),
             restir_spatial: add(include_str!("../../shaders/restir_spatial.wgsl"), "glowbrick/restir_spatial.wgsl"),
             restir_shade: add(include_str!("../../shaders/restir_shade.wgsl"), "glowbrick/restir_shade.wgsl"),
+            gi: add(include_str!("../../shaders/gi.wgsl"), "glowbrick/gi.wgsl"),
+            gi_refresh: add(include_str!("../../shaders/gi_refresh.wgsl"), "glowbrick/gi_refresh.wgsl"),
+            gi_update: add(include_str!("../../shaders/gi_update.wgsl"), "glowbrick/gi_update.wgsl"),
+            gi_filter: add(include_str!("../../shaders/gi_filter.wgsl"), "glowbrick/gi_filter.wgsl"),
         };
+        let counters =
+            app.world_mut().resource_mut::<Assets<bevy::render::storage::ShaderBuffer>>().add(gi::counters_asset());
         let frames = app.world().get_resource::<FramesRendered>().cloned().unwrap_or_default();
         app.insert_resource(handles.clone())
             .insert_resource(frames.clone())
             .init_resource::<RenderSettings>()
             .init_resource::<Highlight>()
+            .insert_resource(gi::GiCountersBuffer(counters))
             .init_resource::<upload::UploadState>()
             .init_resource::<upload::WorldUpload>()
             .add_plugins((
                 ExtractComponentPlugin::<VoxelCamera>::default(),
                 ExtractResourcePlugin::<RenderSettings>::default(),
                 ExtractResourcePlugin::<Highlight>::default(),
+                ExtractResourcePlugin::<gi::GiCountersBuffer>::default(),
             ))
             .add_systems(PostUpdate, upload::stage_world_upload.run_if(resource_exists::<crate::world::VoxelWorld>));
 
@@ -112,6 +126,7 @@ impl Plugin for VoxelRenderPlugin {
                     .in_set(RenderSystems::PrepareResources),
             )
             .add_systems(Core3d, primary::primary_pass.after(main_transparent_pass_3d).in_set(Core3dSystems::MainPass));
+        gi::add_gi(render_app);
         restir::add_restir_passes(render_app);
     }
 }

@@ -147,6 +147,7 @@ pub fn init_primary_pipeline(
     shaders: Res<GlowbrickShaders>,
     world_layout: Res<WorldLayout>,
     lights_layout: Res<LightsLayout>,
+    gi_layout: Res<super::gi::GiLayout>,
 ) {
     let view_layout = BindGroupLayoutDescriptor::new(
         "glowbrick_primary_view_layout",
@@ -166,7 +167,7 @@ pub fn init_primary_pipeline(
     );
     let pipeline = pipeline_cache.queue_compute_pipeline(ComputePipelineDescriptor {
         label: Some("glowbrick_primary".into()),
-        layout: vec![world_layout.0.clone(), view_layout.clone(), lights_layout.0.clone()],
+        layout: vec![world_layout.0.clone(), view_layout.clone(), lights_layout.0.clone(), gi_layout.0.clone()],
         shader: shaders.primary.clone(),
         shader_defs: shader_defs(),
         entry_point: Some("main".into()),
@@ -196,14 +197,16 @@ pub fn prepare_view_resources(
     highlight: Option<Res<Highlight>>,
     gpu_world: Option<Res<GpuWorld>>,
     gpu_lights: Option<Res<GpuLights>>,
+    objects: Option<Res<crate::dynamic::upload::GpuObjects>>,
     frames: Res<FramesRendered>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
 ) {
     let settings = settings.map(|s| s.clone()).unwrap_or_default();
     let highlight = highlight.map(|h| *h).unwrap_or_default();
-    let scene_changed =
-        gpu_world.as_ref().is_some_and(|w| w.uploaded_bytes > 0) || gpu_lights.as_ref().is_some_and(|l| l.changed);
+    let scene_changed = gpu_world.as_ref().is_some_and(|w| w.uploaded_bytes > 0)
+        || gpu_lights.as_ref().is_some_and(|l| l.changed)
+        || objects.as_ref().is_some_and(|o| o.changed);
     let mut params = FrameParams::new(&settings, &highlight, frames.0.load(Ordering::Relaxed));
     params.light_count = gpu_lights.as_ref().map_or(0, |l| l.light_count);
     for (entity, view, resources) in &mut views {
@@ -273,14 +276,14 @@ pub fn prepare_view_resources(
     }
 }
 
-/// Records one voxel compute pass over the view (8x8 workgroups) with the world, view and light bind groups,
+/// Records one voxel compute pass over the view (8x8 workgroups) with the world, view, light and GI bind groups,
 /// timed under `name` when render diagnostics are on.
 pub fn dispatch_voxel_pass(
     encoder: &mut CommandEncoder,
     diagnostics: Option<&bevy::render::diagnostic::DiagnosticsRecorder>,
     name: &'static str,
     pipeline: &ComputePipeline,
-    groups: [(&BindGroup, &[u32]); 3],
+    groups: [(&BindGroup, &[u32]); 4],
     size: Extent3d,
 ) {
     let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor { label: Some(name), timestamp_writes: None });
@@ -328,11 +331,13 @@ pub fn primary_pass(
     gpu_world: Option<Res<GpuWorld>>,
     gpu_lights: Option<Res<GpuLights>>,
     restir: Option<Res<super::restir::RestirPipelines>>,
+    gi: Option<Res<super::gi::GiCache>>,
     frames: Res<FramesRendered>,
     mut ctx: RenderContext,
 ) {
     let (target, view_offset, resources) = view.into_inner();
     let (Some(pipeline), Some(gpu_world), Some(gpu_lights)) = (pipeline, gpu_world, gpu_lights) else { return };
+    let Some(gi_group) = gi.as_ref().and_then(|g| g.bind_group.as_ref()) else { return };
     if resources.run_restir && !super::restir::ready(restir.as_deref(), &pipeline_cache) {
         return;
     }
@@ -353,8 +358,12 @@ pub fn primary_pass(
     }
     let diagnostics = ctx.diagnostic_recorder();
     // GPU time under "render/glowbrick_primary/elapsed_gpu" when RenderDiagnosticsPlugin is on (the bench).
-    let groups =
-        [(&gpu_world.bind_group, &[][..]), (&view_group, &[view_offset.offset][..]), (&gpu_lights.bind_group, &[][..])];
+    let groups = [
+        (&gpu_world.bind_group, &[][..]),
+        (&view_group, &[view_offset.offset][..]),
+        (&gpu_lights.bind_group, &[][..]),
+        (gi_group, &[][..]),
+    ];
     dispatch_voxel_pass(ctx.command_encoder(), diagnostics.as_deref(), PRIMARY_PASS_NAME, compute, groups, size);
     frames.0.fetch_add(1, Ordering::Relaxed);
 }

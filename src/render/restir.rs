@@ -28,12 +28,18 @@ pub fn init_restir_pipelines(
     shaders: Res<GlowbrickShaders>,
     world_layout: Res<WorldLayout>,
     lights_layout: Res<LightsLayout>,
+    gi_layout: Res<super::gi::GiLayout>,
     primary: Res<PrimaryPipeline>,
 ) {
     let queue = |name: &'static str, shader: &Handle<Shader>| {
         pipeline_cache.queue_compute_pipeline(ComputePipelineDescriptor {
             label: Some(name.into()),
-            layout: vec![world_layout.0.clone(), primary.view_layout.clone(), lights_layout.0.clone()],
+            layout: vec![
+                world_layout.0.clone(),
+                primary.view_layout.clone(),
+                lights_layout.0.clone(),
+                gi_layout.0.clone(),
+            ],
             shader: shader.clone(),
             shader_defs: shader_defs(),
             entry_point: Some("main".into()),
@@ -75,6 +81,7 @@ pub fn restir_passes(
     view_uniforms: Res<ViewUniforms>,
     gpu_world: Option<Res<GpuWorld>>,
     gpu_lights: Option<Res<GpuLights>>,
+    gi: Option<Res<super::gi::GiCache>>,
     mut ctx: RenderContext,
 ) {
     let (target, view_offset, resources) = view.into_inner();
@@ -86,6 +93,7 @@ pub fn restir_passes(
     else {
         return;
     };
+    let Some(gi_group) = gi.as_ref().and_then(|g| g.bind_group.as_ref()) else { return };
     let Some(computes) =
         pipelines.passes.iter().map(|id| pipeline_cache.get_compute_pipeline(*id)).collect::<Option<Vec<_>>>()
     else {
@@ -102,6 +110,7 @@ pub fn restir_passes(
             (&gpu_world.bind_group, &[][..]),
             (&view_group, &[view_offset.offset][..]),
             (&gpu_lights.bind_group, &[][..]),
+            (gi_group, &[][..]),
         ];
         dispatch_voxel_pass(encoder, diagnostics.as_deref(), name, compute, groups, size);
     }

@@ -1,0 +1,315 @@
+// The per-voxel-face GI cache (DESIGN.md "GI cache", seed 001 adapted with seed 002's hash table): bindings
+// (group 3), the hash table of (voxel, face) entries, the fixed ray directions, the cached static hits, and the
+// lookups the shading passes use. Updated by gi_update.wgsl and gi_filter.wgsl.
+#define_import_path glowbrick::gi
+
+#import glowbrick::world::{voxel_at, objects, object_voxel, object_index, object_count}
+#import glowbrick::traversal::face_normal
+#import glowbrick::lights::pcg
+
+struct GiParams {
+    // 1 when the cache is on (the shading passes read it and the primary pass inserts into it).
+    enabled: u32,
+    // GI_* flags.
+    flags: u32,
+    // Directions per entry (K) and how many of them an entry re-shades per frame.
+    rays: u32,
+    update_rays: u32,
+    alpha: f32,
+    // Edit epoch now: entries traced at an older epoch re-test the edit log.
+    epoch: u32,
+    // Entries traced before this epoch retrace (edits that fell out of the log may touch them).
+    lost_epoch: u32,
+    edit_count: u32,
+    static_capacity: u32,
+    dynamic_capacity: u32,
+    frame: u32,
+    _pad: u32,
+}
+
+// One (voxel, face) entry. The key lives in gi_keys (0 = empty); this is its payload.
+struct GiEntry {
+    voxel: vec3<i32>,
+    face: u32,
+    // Frame it was last needed (seen by the camera, or hit by another entry's ray).
+    last_used: u32,
+    // Edit epoch its static hits were traced at; NEVER_TRACED before the first trace.
+    traced_epoch: u32,
+    // Frames blended so far (sets the blend weight of young entries); 0 = no value yet.
+    samples: u32,
+    // 0 for the static world; object index + 1 for a dynamic object's face (its own table).
+    object: u32,
+    // Bounds of its rays' static segments, for edit invalidation.
+    lo: vec3<f32>,
+    // Frame the camera last saw it: only such entries insert the entries their rays hit (one level), so the
+    // cache follows the view instead of spreading through the world.
+    last_seen: u32,
+    hi: vec3<f32>,
+    _pad: u32,
+}
+
+const GI_FILTER: u32 = 1u;
+const GI_BOUNCES: u32 = 2u;
+const GI_CACHE: u32 = 4u;
+
+// Frames an entry may go unused before it stops being updated, and before its slot is freed.
+const UPDATE_AGE: u32 = 16u;
+const MAX_AGE: u32 = 240u;
+
+const NEVER_TRACED: u32 = 0xFFFFFFFFu;
+const MAX_PROBES: u32 = 16u;
+// A cached hit: bits 0-2 the face hit (MISS_FACE: left the world), bits 3-31 the distance in 1/256 voxels.
+const MISS_FACE: u32 = 7u;
+const DISTANCE_SCALE: f32 = 256.0;
+
+// Counters the tests and the bench read back (src/render/gi.rs, GiCounter).
+const COUNT_UPDATED: u32 = 0u;
+const COUNT_RETRACED: u32 = 1u;
+const COUNT_LIVE: u32 = 2u;
+const COUNT_EVICTED: u32 = 3u;
+const COUNT_FULL: u32 = 4u;
+const COUNT_INSERTED: u32 = 5u;
+const COUNT_RAYS_TRACED: u32 = 6u;
+const COUNT_BORROWED: u32 = 7u;
+
+@group(3) @binding(0) var<uniform> gi: GiParams;
+@group(3) @binding(1) var<storage, read_write> gi_keys: array<atomic<u32>>;
+@group(3) @binding(2) var<storage, read_write> gi_entries: array<GiEntry>;
+// Blended incoming radiance (irradiance / pi, rgb) per entry, and its filtered copy that shading reads.
+@group(3) @binding(3) var<storage, read_write> gi_irradiance: array<vec4<f32>>;
+@group(3) @binding(4) var<storage, read_write> gi_filtered: array<vec4<f32>>;
+// K cached static hits per entry.
+@group(3) @binding(5) var<storage, read_write> gi_rays: array<u32>;
+// Edit log: pairs (min voxel xyz, epoch), (max voxel xyz exclusive, 0) of edited bricks.
+@group(3) @binding(6) var<storage, read> gi_edits: array<vec4<i32>>;
+@group(3) @binding(7) var<storage, read_write> gi_counters: array<atomic<u32>>;
+
+fn key_hash(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
+    return pcg(pcg(pcg(pcg(u32(voxel.x)) ^ u32(voxel.y)) ^ u32(voxel.z)) ^ (face | (object << 3u)));
+}
+
+// A second, independent hash stored as the key (never 0, which marks an empty slot).
+fn key_checksum(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
+    let h = pcg(u32(voxel.x) * 0x9E3779B9u ^ pcg(u32(voxel.y) * 0x85EBCA6Bu ^ pcg(u32(voxel.z) ^ (face << 24u) ^ (object << 27u))));
+    return max(h, 1u);
+}
+
+// The table an entry belongs to: static entries in [0, static), dynamic ones after them.
+fn table_base(object: u32) -> u32 {
+    return select(0u, gi.static_capacity, object != 0u);
+}
+
+fn table_size(object: u32) -> u32 {
+    return select(gi.static_capacity, gi.dynamic_capacity, object != 0u);
+}
+
+const NOT_FOUND: u32 = 0xFFFFFFFFu;
+
+fn probe_slot(voxel: vec3<i32>, face: u32, object: u32, i: u32) -> u32 {
+    // Capacities are powers of two.
+    return table_base(object) + ((key_hash(voxel, face, object) + i) & (table_size(object) - 1u));
+}
+
+// The slot of an entry, or NOT_FOUND.
+fn gi_find(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
+    let checksum = key_checksum(voxel, face, object);
+    for (var i = 0u; i < MAX_PROBES; i++) {
+        let slot = probe_slot(voxel, face, object, i);
+        let key = atomicLoad(&gi_keys[slot]);
+        if key == checksum {
+            return slot;
+        }
+        if key == 0u {
+            break;
+        }
+    }
+    return NOT_FOUND;
+}
+
+// Finds or inserts an entry and marks it used this frame (and seen, when the camera sees it). NOT_FOUND when
+// its probe window is full.
+fn gi_touch(voxel: vec3<i32>, face: u32, object: u32, seen: bool) -> u32 {
+    let checksum = key_checksum(voxel, face, object);
+    for (var i = 0u; i < MAX_PROBES; i++) {
+        let slot = probe_slot(voxel, face, object, i);
+        var key = atomicLoad(&gi_keys[slot]);
+        if key == 0u {
+            // Weak exchange may fail spuriously; retry the same slot a few times before moving on.
+            for (var attempt = 0u; attempt < 4u && key == 0u; attempt++) {
+                let result = atomicCompareExchangeWeak(&gi_keys[slot], 0u, checksum);
+                if result.exchanged {
+                    gi_entries[slot].voxel = voxel;
+                    gi_entries[slot].face = face;
+                    gi_entries[slot].object = object;
+                    gi_entries[slot].traced_epoch = NEVER_TRACED;
+                    gi_entries[slot].samples = 0u;
+                    gi_entries[slot].last_used = gi.frame;
+                    gi_entries[slot].last_seen = select(0u, gi.frame, seen);
+                    atomicAdd(&gi_counters[COUNT_INSERTED], 1u);
+                    return slot;
+                }
+                key = result.old_value;
+            }
+        }
+        if key == checksum {
+            // Every toucher writes the same values: a benign race, and skipped when already set.
+            if gi_entries[slot].last_used != gi.frame {
+                gi_entries[slot].last_used = gi.frame;
+            }
+            if seen && gi_entries[slot].last_seen != gi.frame {
+                gi_entries[slot].last_seen = gi.frame;
+            }
+            return slot;
+        }
+    }
+    atomicAdd(&gi_counters[COUNT_FULL], 1u);
+    return NOT_FOUND;
+}
+
+// Whether (voxel, face) is a surface of the static world: solid with air in front.
+fn is_surface(voxel: vec3<i32>, face: u32) -> bool {
+    return voxel_at(voxel) != 0u && voxel_at(voxel + vec3<i32>(face_normal(face))) == 0u;
+}
+
+// The face's two in-plane axes.
+fn tangent_axes(face: u32) -> vec2<u32> {
+    let axis = face / 2u;
+    return vec2((axis + 1u) % 3u, (axis + 2u) % 3u);
+}
+
+fn unit(axis: u32, s: i32) -> vec3<i32> {
+    var v = vec3(0);
+    v[axis] = s;
+    return v;
+}
+
+// The three in-plane neighbours a point on a face interpolates with: towards the point's quadrant.
+struct Bilinear {
+    step_u: vec3<i32>,
+    step_v: vec3<i32>,
+    weight: vec2<f32>,
+}
+
+fn bilinear(point: vec3<f32>, voxel: vec3<i32>, face: u32) -> Bilinear {
+    let t = tangent_axes(face);
+    let local = point - vec3<f32>(voxel) - vec3(0.5);
+    let fu = clamp(local[t.x], -0.5, 0.5);
+    let fv = clamp(local[t.y], -0.5, 0.5);
+    return Bilinear(unit(t.x, select(1, -1, fu < 0.0)), unit(t.y, select(1, -1, fv < 0.0)), vec2(abs(fu), abs(fv)));
+}
+
+// Whether (local voxel, face) is a surface of moving object `index`: solid, with the object's air in front.
+fn is_object_surface(index: u32, voxel: vec3<i32>, face: u32) -> bool {
+    let o = objects[index];
+    return object_voxel(o, voxel) != 0u && object_voxel(o, voxel + vec3<i32>(face_normal(face))) == 0u;
+}
+
+// Where a surface point lies in the frame its entries are keyed in: world coordinates for the static world, the
+// object's local ones for a moving object. w is 0 when the object is gone.
+fn entry_frame_point(point: vec3<f32>, object: u32) -> vec4<f32> {
+    if object == 0u {
+        return vec4(point, 1.0);
+    }
+    let index = object_index(object);
+    if index == object_count() {
+        return vec4(0.0);
+    }
+    return vec4(point - objects[index].min, 1.0);
+}
+
+// Inserts (or refreshes) the entries a pixel seeing `point` on `face` (of the static world, or of object
+// `object`) reads: its own face and the three in-plane neighbours it interpolates with.
+fn gi_touch_surface(point: vec3<f32>, face: u32, object: u32) {
+    let p = entry_frame_point(point, object);
+    if p.w == 0.0 {
+        return;
+    }
+    let voxel = vec3<i32>(floor(p.xyz - face_normal(face) * 0.5));
+    gi_touch(voxel, face, object, true);
+    let b = bilinear(p.xyz, voxel, face);
+    let index = object_index(object);
+    for (var i = 1u; i < 4u; i++) {
+        let neighbour = voxel + select(vec3(0), b.step_u, (i & 1u) != 0u) + select(vec3(0), b.step_v, (i & 2u) != 0u);
+        let surface = select(is_object_surface(index, neighbour, face), is_surface(neighbour, face), object == 0u);
+        if surface {
+            gi_touch(neighbour, face, object, true);
+        }
+    }
+}
+
+// An entry's shading value, or `fallback` when it does not exist or has no value yet (padding).
+fn filtered_or(voxel: vec3<i32>, face: u32, object: u32, fallback: vec3<f32>) -> vec3<f32> {
+    let slot = gi_find(voxel, face, object);
+    if slot == NOT_FOUND || gi_entries[slot].samples == 0u {
+        return fallback;
+    }
+    return gi_filtered[slot].rgb;
+}
+
+// Whether a frame stamp is within the last `frames` frames. Written as an addition: Mesa 22's lavapipe crashes
+// (segfault in its queue thread) on `gi.frame - stamp` compared in these passes.
+fn used_within(stamp: u32, frames: u32) -> bool {
+    return stamp + frames >= gi.frame;
+}
+
+fn gi_on() -> bool {
+    return gi.enabled == 1u;
+}
+
+// Incoming indirect radiance (irradiance / pi) at `point` on `face` (of the static world, or of object
+// `object`): bilinear over the face's entry and its three in-plane neighbours of the same orientation in the same
+// table; a missing neighbour repeats the face's own value. Static surfaces never read a moving object's entries.
+fn gi_incoming(point: vec3<f32>, face: u32, object: u32) -> vec3<f32> {
+    let p = entry_frame_point(point, object);
+    if p.w == 0.0 {
+        return vec3(0.0);
+    }
+    let voxel = vec3<i32>(floor(p.xyz - face_normal(face) * 0.5));
+    let own = filtered_or(voxel, face, object, vec3(0.0));
+    let b = bilinear(p.xyz, voxel, face);
+    let u = filtered_or(voxel + b.step_u, face, object, own);
+    let v = filtered_or(voxel + b.step_v, face, object, own);
+    let uv = filtered_or(voxel + b.step_u + b.step_v, face, object, own);
+    return mix(mix(own, u, b.weight.x), mix(v, uv, b.weight.x), b.weight.y);
+}
+
+// Direction i of K for an entry: a Hammersley point, Cranley-Patterson rotated per entry so neighbours do not
+// share directions, mapped to the cosine-weighted hemisphere around the face normal.
+fn ray_direction(face: u32, i: u32, k: u32, seed: u32) -> vec3<f32> {
+    let rotation = vec2(f32(pcg(seed) >> 8u), f32(pcg(seed ^ 0x68E31DA4u) >> 8u)) * (1.0 / 16777216.0);
+    let u = fract((f32(i) + 0.5) / f32(k) + rotation.x);
+    let v = fract(f32(reverseBits(i)) * 2.3283064e-10 + rotation.y);
+    let r = sqrt(u);
+    let phi = 6.2831853 * v;
+    let t = tangent_axes(face);
+    var d = face_normal(face) * sqrt(max(1.0 - u, 0.0));
+    d[t.x] = r * cos(phi);
+    d[t.y] = r * sin(phi);
+    return normalize(d);
+}
+
+// Where an entry's rays start: the face's centre, just off the surface (`base` is the object's corner, or 0).
+fn ray_origin(voxel: vec3<i32>, face: u32, base: vec3<f32>) -> vec3<f32> {
+    return base + vec3<f32>(voxel) + vec3(0.5) + face_normal(face) * (0.5 + 1e-3);
+}
+
+// Per-entry seed for its directions: fixed for the entry's life so the cached hits stay valid.
+fn slot_seed(slot: u32) -> u32 {
+    return atomicLoad(&gi_keys[slot]);
+}
+
+fn encode_hit(found: bool, face: u32, distance: f32) -> u32 {
+    if !found {
+        return MISS_FACE;
+    }
+    let d = u32(clamp(distance * DISTANCE_SCALE, 0.0, f32(0x1FFFFFFFu)));
+    return (d << 3u) | face;
+}
+
+fn hit_face(code: u32) -> u32 {
+    return code & 7u;
+}
+
+fn hit_distance(code: u32) -> f32 {
+    return f32(code >> 3u) / DISTANCE_SCALE;
+}

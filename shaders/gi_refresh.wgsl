@@ -1,0 +1,106 @@
+// GI cache refresh, one thread per static slot, before the update: brings a due entry's K cached static hits up
+// to date. A new entry traces all K; after an edit, only the rays whose segments cross an edited brick are traced
+// again, and entries whose rays cannot reach any edit keep every hit (counted: COUNT_RETRACED, COUNT_RAYS_TRACED).
+
+#import glowbrick::world::world_info
+#import glowbrick::traversal::{trace, box_entry, INF}
+#import glowbrick::gi::{gi, gi_keys, gi_entries, gi_rays, gi_edits, gi_counters, GiEntry, used_within, ray_direction,
+    ray_origin, slot_seed, encode_hit, hit_face, hit_distance, NEVER_TRACED, MISS_FACE, UPDATE_AGE, GI_CACHE, COUNT_RETRACED,
+    COUNT_RAYS_TRACED}
+
+// Whether an edit since the entry's trace may have reached its rays at all: an edited brick overlaps the box
+// around its ray segments. Cheap; the rays themselves are tested only when it says yes.
+fn maybe_stale(e: GiEntry) -> bool {
+    for (var i = 0u; i < gi.edit_count; i++) {
+        if edit_reaches(e, i) {
+            return true;
+        }
+    }
+    return false;
+}
+
+fn edit_reaches(e: GiEntry, i: u32) -> bool {
+    let lo = gi_edits[2u * i];
+    if u32(lo.w) <= e.traced_epoch {
+        return false;
+    }
+    let hi = vec3<f32>(gi_edits[2u * i + 1u].xyz);
+    return all(e.lo <= hi) && all(e.hi >= vec3<f32>(lo.xyz));
+}
+
+// Whether the segment from `origin` along `dir` for `length` passes through edit i's bricks. The margin covers
+// the cached distance's rounding (1/256 voxel, always short of the face).
+fn segment_crosses_edit(origin: vec3<f32>, dir: vec3<f32>, length: f32, i: u32) -> bool {
+    let margin = vec3(0.05);
+    let lo = vec3<f32>(gi_edits[2u * i].xyz) - margin;
+    let hi = vec3<f32>(gi_edits[2u * i + 1u].xyz) + margin;
+    let t = box_entry(origin, dir, lo, hi);
+    return t.x <= t.y && t.y >= 0.0 && t.x <= length;
+}
+
+// Where ray i's static segment ends: its cached hit, or where it leaves the world.
+fn segment_length(origin: vec3<f32>, dir: vec3<f32>, code: u32) -> f32 {
+    if hit_face(code) != MISS_FACE {
+        return hit_distance(code);
+    }
+    return max(box_entry(origin, dir, vec3(0.0), vec3<f32>(world_info.size.xyz)).y, 0.0);
+}
+
+// Brings an entry's K cached static hits up to date: all of them when it was never traced (or edits it cannot
+// check were forgotten), else only the rays whose segments cross a brick edited since. Returns the rays traced.
+fn refresh(slot: u32, e: GiEntry, origin: vec3<f32>) -> u32 {
+    let everything = e.traced_epoch == NEVER_TRACED || e.traced_epoch < gi.lost_epoch;
+    if !everything && (e.traced_epoch == gi.epoch || !maybe_stale(e)) {
+        if e.traced_epoch != gi.epoch {
+            gi_entries[slot].traced_epoch = gi.epoch;
+        }
+        return 0u;
+    }
+    var lo = origin;
+    var hi = origin;
+    var traced = 0u;
+    for (var i = 0u; i < gi.rays; i++) {
+        let dir = ray_direction(e.face, i, gi.rays, slot_seed(slot));
+        var code = gi_rays[slot * gi.rays + i];
+        var stale = everything;
+        if !stale {
+            let length = segment_length(origin, dir, code);
+            for (var k = 0u; k < gi.edit_count && !stale; k++) {
+                stale = edit_reaches(e, k) && segment_crosses_edit(origin, dir, length, k);
+            }
+        }
+        if stale {
+            let hit = trace(origin, dir, INF);
+            code = encode_hit(hit.found, hit.face, hit.distance);
+            gi_rays[slot * gi.rays + i] = code;
+            traced++;
+        }
+        let end = origin + dir * segment_length(origin, dir, code);
+        lo = min(lo, end);
+        hi = max(hi, end);
+    }
+    gi_entries[slot].lo = lo - vec3(1.0);
+    gi_entries[slot].hi = hi + vec3(1.0);
+    gi_entries[slot].traced_epoch = gi.epoch;
+    if traced > 0u {
+        atomicAdd(&gi_counters[COUNT_RETRACED], 1u);
+        atomicAdd(&gi_counters[COUNT_RAYS_TRACED], traced);
+    }
+    return traced;
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn refresh_static(@builtin(global_invocation_id) id: vec3<u32>) {
+    let slot = id.x;
+    if slot >= gi.static_capacity || (gi.flags & GI_CACHE) == 0u || atomicLoad(&gi_keys[slot]) == 0u {
+        return;
+    }
+    let e = gi_entries[slot];
+    if !used_within(e.last_used, UPDATE_AGE) {
+        return;
+    }
+    if refresh(slot, e, ray_origin(e.voxel, e.face, vec3(0.0))) > 0u {
+        // What it blended so far saw the old world: start over.
+        gi_entries[slot].samples = 0u;
+    }
+}

@@ -1,0 +1,176 @@
+// GI cache update, one thread per table slot: age out unused entries, then re-shade `update_rays` of an entry's K
+// directions from its cached static hits (brought up to date by gi_refresh.wgsl) or, for a moving object's
+// entry, from rays traced now; light at a hit is its direct light plus its face's cached indirect light from
+// last frame (and emission where the shading passes do not already count it); blend.
+
+#import glowbrick::world::{materials, voxel_at, objects, object_index, object_count}
+#import glowbrick::traversal::{trace, trace_objects, trace_scene, face_normal, INF}
+#import glowbrick::frame::{frame, sky, LIGHTING_SUN}
+#import glowbrick::lights::{Rng, pcg, direct_sample}
+#import glowbrick::gi::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_edits, gi_counters, GiEntry,
+    gi_touch, gi_find, used_within, slot_seed, ray_direction, ray_origin, encode_hit, hit_face, hit_distance, NEVER_TRACED, NOT_FOUND,
+    MISS_FACE, UPDATE_AGE, MAX_AGE, GI_BOUNCES, GI_CACHE, COUNT_UPDATED, COUNT_RETRACED, COUNT_LIVE, COUNT_EVICTED, COUNT_RAYS_TRACED, COUNT_BORROWED}
+
+// Light arriving along a ray that hit (voxel, face) at `point`: the hit face's direct light, with bounces on its
+// cached indirect light (last frame's filtered value: stable while this pass writes), and in sun-and-sky mode
+// its emission. With emitter lighting the emission is left out: the shading passes' light sampling already
+// brings every emitter's direct light to the pixel, and counting it again here would double it.
+fn hit_radiance(point: vec3<f32>, face: u32, seen: bool, fallback: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+    let n = face_normal(face);
+    let voxel = vec3<i32>(floor(point - n * 0.5));
+    let id = voxel_at(voxel);
+    if id == 0u {
+        // Removed this frame, before the edit reached the cache.
+        return vec3(0.0);
+    }
+    let m = materials[id];
+    var radiance = vec3(0.0);
+    if frame.lighting == LIGHTING_SUN {
+        radiance = m.radiance.rgb;
+        let cos_sun = dot(n, frame.sun.xyz);
+        if frame.sun.w > 0.0 && cos_sun > 0.0 && (frame.shadows == 0u || !trace_scene(point + n * 1e-3, frame.sun.xyz, INF).found) {
+            radiance += m.albedo.rgb * frame.sun_radiance.rgb * cos_sun;
+        }
+    } else {
+        radiance += direct_sample(point, n, m.albedo.rgb, frame.light_count, frame.power_pick == 1u, rng);
+    }
+    if (gi.flags & GI_BOUNCES) != 0u {
+        // Entries the camera sees bring the entries their rays hit into the cache; those only look up.
+        var slot = NOT_FOUND;
+        if seen {
+            slot = gi_touch(voxel, face, 0u, false);
+        } else {
+            slot = gi_find(voxel, face, 0u);
+        }
+        // A hit face without a value yet (or no room for it in a full table) borrows the shooting entry's own
+        // indirect light: nearby surfaces of a room see similar indirect light, and leaving it out would
+        // darken every later bounce.
+        var incoming = fallback;
+        if slot != NOT_FOUND && gi_entries[slot].samples > 0u {
+            incoming = gi_filtered[slot].rgb;
+        } else {
+            atomicAdd(&gi_counters[COUNT_BORROWED], 1u);
+        }
+        radiance += m.albedo.rgb * incoming;
+    }
+    return radiance;
+}
+
+// Light arriving along a ray that hit a moving object's voxel: its emission (objects' emitters are not in the
+// light pool, so this is the only way their light reaches other surfaces), its direct light, and with bounces
+// on, the shooting entry's own indirect light as an estimate of the object's (static entries never read a moving
+// object's entries: the split).
+fn object_hit_radiance(point: vec3<f32>, face: u32, material: u32, fallback: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+    let n = face_normal(face);
+    let m = materials[material];
+    var radiance = m.radiance.rgb;
+    if frame.lighting == LIGHTING_SUN {
+        let cos_sun = dot(n, frame.sun.xyz);
+        if frame.sun.w > 0.0 && cos_sun > 0.0 && (frame.shadows == 0u || !trace_scene(point + n * 1e-3, frame.sun.xyz, INF).found) {
+            radiance += m.albedo.rgb * frame.sun_radiance.rgb * cos_sun;
+        }
+    } else {
+        radiance += direct_sample(point, n, m.albedo.rgb, frame.light_count, frame.power_pick == 1u, rng);
+    }
+    if (gi.flags & GI_BOUNCES) != 0u {
+        radiance += m.albedo.rgb * fallback;
+    }
+    return radiance;
+}
+
+fn miss_radiance(dir: vec3<f32>) -> vec3<f32> {
+    return select(vec3(0.0), sky(dir), frame.lighting == LIGHTING_SUN);
+}
+
+fn finite3(v: vec3<f32>) -> bool {
+    return all(v == v) && all(abs(v) < vec3(3.0e38));
+}
+
+// Ages and re-shades the entry in `slot`. Static entries read their cached static hits and test only
+// the moving objects per frame; a moving object's entries trace everything every frame (nothing of theirs stays
+// put).
+fn update_entry(slot: u32) {
+    if atomicLoad(&gi_keys[slot]) == 0u {
+        return;
+    }
+    let e = gi_entries[slot];
+    let dynamic = e.object != 0u;
+    let index = object_index(e.object);
+    let gone = dynamic && index == object_count();
+    if !used_within(e.last_used, MAX_AGE) || gone {
+        atomicStore(&gi_keys[slot], 0u);
+        gi_entries[slot].samples = 0u;
+        atomicAdd(&gi_counters[COUNT_EVICTED], 1u);
+        return;
+    }
+    atomicAdd(&gi_counters[COUNT_LIVE], 1u);
+    if !used_within(e.last_used, UPDATE_AGE) {
+        return;
+    }
+    atomicAdd(&gi_counters[COUNT_UPDATED], 1u);
+    var base = vec3(0.0);
+    if dynamic {
+        base = objects[index].min;
+    }
+    let origin = ray_origin(e.voxel, e.face, base);
+    // The refresh pass (gi_refresh.wgsl) has brought the cached hits up to date this frame.
+    let cached = (gi.flags & GI_CACHE) != 0u && !dynamic;
+    let samples = e.samples;
+    let seen = used_within(e.last_seen, 1u) && !dynamic;
+    let own = select(vec3(0.0), gi_filtered[slot].rgb, samples > 0u);
+    var rng = Rng(pcg(slot_seed(slot) ^ pcg(gi.frame)));
+    let first = pcg(slot_seed(slot) ^ 0x5bd1e995u) + gi.frame * gi.update_rays;
+    var sum = vec3(0.0);
+    for (var j = 0u; j < gi.update_rays; j++) {
+        let i = (first + j) % gi.rays;
+        let dir = ray_direction(e.face, i, gi.rays, slot_seed(slot));
+        var found: bool;
+        var face: u32;
+        var distance: f32;
+        if cached {
+            let code = gi_rays[slot * gi.rays + i];
+            face = hit_face(code);
+            found = face != MISS_FACE;
+            distance = hit_distance(code);
+        } else {
+            let hit = trace(origin, dir, INF);
+            found = hit.found;
+            face = hit.face;
+            distance = hit.distance;
+        }
+        // A moving object in front of the static hit replaces it for this frame.
+        // A moving object in front of the static hit replaces it for this frame.
+        let object = trace_objects(origin, dir, select(INF, distance, found));
+        if object.found {
+            sum += object_hit_radiance(origin + dir * object.distance, object.face, object.material, own, &rng);
+        } else if found {
+            sum += hit_radiance(origin + dir * distance, face, seen, own, &rng);
+        } else {
+            sum += miss_radiance(dir);
+        }
+    }
+    var estimate = sum / f32(gi.update_rays);
+    if !finite3(estimate) {
+        estimate = vec3(0.0);
+    }
+    // Young entries average evenly; after 1/alpha frames it becomes an exponential blend.
+    let weight = max(gi.alpha, 1.0 / f32(samples + 1u));
+    let blended = select(mix(gi_irradiance[slot].rgb, estimate, weight), estimate, samples == 0u);
+    gi_irradiance[slot] = vec4(blended, 1.0);
+    gi_entries[slot].samples = min(samples + 1u, 1u << 20u);
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn update_static(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x < gi.static_capacity {
+        update_entry(id.x);
+    }
+}
+
+// The moving objects' table, dispatched only while objects exist.
+@compute @workgroup_size(64, 1, 1)
+fn update_dynamic(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x < gi.dynamic_capacity {
+        update_entry(gi.static_capacity + id.x);
+    }
+}

@@ -1,0 +1,168 @@
+//! Moving voxel objects: entities with a small voxel model (`model`) and a translation that a motion drives.
+//! Every GPU pass traces them (ray against the object's box, then a DDA through its voxels; `shaders/traversal.wgsl`
+//! `trace_scene`), so they show up in the image, cast shadows and reach the GI cache, which gives their faces
+//! their own table (the static/dynamic split). Their emissive voxels are not in the light pool: they light the
+//! world through the GI cache only.
+//!
+//! Objects translate but never rotate: their faces stay axis-aligned, so the G-buffer's face encoding, ReSTIR's
+//! face tests and the per-face GI entries hold for them unchanged. They are not saved with the world and do not
+//! collide with the player.
+
+pub mod model;
+pub mod upload;
+
+pub use model::VoxelModel;
+
+use bevy::prelude::*;
+use std::sync::Arc;
+
+/// How an object moves, as a function of time since it was spawned.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Motion {
+    Still,
+    /// A horizontal circle of `radius` around the spawn point, once per `period` seconds.
+    Drift {
+        radius: f32,
+        period: f32,
+    },
+    /// A pendulum's bob below the spawn point (the pivot): arc of `length` and `amplitude` radians in the x-y plane.
+    Swing {
+        length: f32,
+        amplitude: f32,
+        period: f32,
+    },
+    /// Back and forth along `offset` from the spawn point (a triangle wave).
+    Slide {
+        offset: Vec3,
+        period: f32,
+    },
+}
+
+impl Motion {
+    /// Offset from the spawn point at time `t`.
+    pub fn offset(&self, t: f32) -> Vec3 {
+        let phase = |period: f32| std::f32::consts::TAU * t / period.max(1e-3);
+        match *self {
+            Motion::Still => Vec3::ZERO,
+            Motion::Drift { radius, period } => {
+                let a = phase(period);
+                Vec3::new(a.cos() - 1.0, 0.0, a.sin()) * radius
+            }
+            Motion::Swing { length, amplitude, period } => {
+                let angle = amplitude * phase(period).sin();
+                Vec3::new(angle.sin(), -angle.cos(), 0.0) * length
+            }
+            Motion::Slide { offset, period } => {
+                let u = (t / period.max(1e-3)).rem_euclid(1.0);
+                offset * (1.0 - (2.0 * u - 1.0).abs())
+            }
+        }
+    }
+}
+
+/// A moving voxel object. Its `Transform`'s translation is the world position of the model's minimum corner.
+#[derive(Component, Clone, Debug)]
+pub struct DynamicObject {
+    /// Stable id (1..=4095) that keys its GI entries; never reused while the object lives.
+    pub id: u32,
+    pub model: Arc<VoxelModel>,
+    pub motion: Motion,
+    /// Where the motion is centred (the pendulum's pivot for a swing).
+    pub anchor: Vec3,
+    /// Seconds since spawn, advanced by the object clock.
+    pub age: f32,
+}
+
+/// Ids for new objects, and the object clock's step: fixed per frame, so headless runs are reproducible.
+#[derive(Resource, Debug)]
+pub struct ObjectClock {
+    next_id: u32,
+    /// Seconds per frame the motions advance (0 freezes them).
+    pub step: f32,
+}
+
+impl Default for ObjectClock {
+    fn default() -> Self {
+        ObjectClock { next_id: 1, step: 1.0 / 60.0 }
+    }
+}
+
+/// Largest number of objects the GPU holds; spawning more is refused with a message.
+pub const MAX_OBJECTS: usize = 64;
+/// Object ids fit in 12 bits of the G-buffer.
+const MAX_ID: u32 = 4095;
+
+impl ObjectClock {
+    fn take_id(&mut self) -> u32 {
+        let id = self.next_id;
+        self.next_id = self.next_id % MAX_ID + 1;
+        id
+    }
+}
+
+/// Spawns an object at `anchor`. Errors when the GPU's object table is full.
+pub fn spawn_object(
+    commands: &mut Commands,
+    clock: &mut ObjectClock,
+    existing: usize,
+    model: Arc<VoxelModel>,
+    motion: Motion,
+    anchor: Vec3,
+) -> Result<Entity, String> {
+    if existing >= MAX_OBJECTS {
+        return Err(format!("cannot spawn '{}': {MAX_OBJECTS} objects is the most the renderer holds", model.name));
+    }
+    let object = DynamicObject { id: clock.take_id(), model, motion, anchor, age: 0.0 };
+    let at = anchor + object.motion.offset(0.0);
+    Ok(commands.spawn((object, Transform::from_translation(at))).id())
+}
+
+/// `spawn_object` for code holding the whole world (tests, headless tools).
+pub fn spawn_object_in(
+    world: &mut World,
+    model: Arc<VoxelModel>,
+    motion: Motion,
+    anchor: Vec3,
+) -> Result<Entity, String> {
+    let existing = world.query::<&DynamicObject>().iter(world).count();
+    if existing >= MAX_OBJECTS {
+        return Err(format!("cannot spawn '{}': {MAX_OBJECTS} objects is the most the renderer holds", model.name));
+    }
+    let id = world.get_resource_or_init::<ObjectClock>().take_id();
+    let at = anchor + motion.offset(0.0);
+    let object = DynamicObject { id, model, motion, anchor, age: 0.0 };
+    Ok(world.spawn((object, Transform::from_translation(at))).id())
+}
+
+/// Advances every object's motion by one clock step.
+pub fn animate_objects(clock: Res<ObjectClock>, mut objects: Query<(&mut DynamicObject, &mut Transform)>) {
+    for (mut object, mut transform) in &mut objects {
+        object.age += clock.step;
+        transform.translation = object.anchor + object.motion.offset(object.age);
+    }
+}
+
+/// The models shipped in `assets/models`, embedded so the binary runs from any directory.
+pub const BUILTIN_MODELS: [(&str, &str); 2] = [
+    ("lantern", include_str!("../../assets/models/lantern.ron")),
+    ("block", include_str!("../../assets/models/block.ron")),
+];
+
+/// A built-in model resolved against `palette`.
+pub fn builtin_model(name: &str, palette: &crate::world::Palette) -> Result<VoxelModel, String> {
+    let (_, text) = BUILTIN_MODELS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .ok_or_else(|| format!("no built-in model '{name}' (have: lantern, block)"))?;
+    VoxelModel::from_ron(text, &format!("assets/models/{name}.ron"), palette)
+}
+
+/// Object clock, motion and the GPU upload of objects.
+pub struct DynamicObjectsPlugin;
+
+impl Plugin for DynamicObjectsPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_resource::<ObjectClock>().add_systems(Update, animate_objects);
+        upload::add_object_upload(app);
+    }
+}

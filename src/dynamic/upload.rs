@@ -1,0 +1,133 @@
+//! Objects to the GPU: each frame the main world lists the objects (position, size, id, where their voxels
+//! start), the render world writes them into two fixed-size buffers that group 0 binds next to the brick grid
+//! (`shaders/world.wgsl`: `objects`, `object_voxels`), and the object count into `world_info.size.w`.
+
+use super::{DynamicObject, MAX_OBJECTS, model::MAX_MODEL_EDGE};
+use bevy::prelude::*;
+use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
+use bevy::render::render_resource::{Buffer, BufferDescriptor, BufferUsages};
+use bevy::render::renderer::{RenderDevice, RenderQueue};
+use bevy::render::{Render, RenderApp, RenderStartup, RenderSystems};
+use std::sync::Arc;
+
+/// One object as the shaders read it (`Object` in `shaders/world.wgsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GpuObject {
+    /// World position of the model's minimum corner.
+    pub min: [f32; 3],
+    pub id: u32,
+    pub size: [u32; 3],
+    /// First voxel in `object_voxels`.
+    pub offset: u32,
+}
+
+/// Voxel slots the GPU holds: every object at the largest model size.
+const VOXEL_CAPACITY: usize = MAX_OBJECTS * (MAX_MODEL_EDGE * MAX_MODEL_EDGE * MAX_MODEL_EDGE) as usize;
+
+/// This frame's objects for the render world; `voxels` is rebuilt only when the set of objects changes.
+#[derive(Resource, ExtractResource, Clone, Default)]
+pub struct ObjectsUpload {
+    pub objects: Vec<GpuObject>,
+    pub voxels: Arc<Vec<u32>>,
+    /// Ids the voxels were packed for, in order.
+    packed_ids: Vec<u32>,
+}
+
+/// Lists the objects (sorted by id, so the packing is stable) after this frame's motion (PostUpdate).
+pub fn stage_objects(mut upload: ResMut<ObjectsUpload>, objects: Query<(&DynamicObject, &Transform)>) {
+    let mut list: Vec<(&DynamicObject, &Transform)> = objects.iter().take(MAX_OBJECTS).collect();
+    list.sort_by_key(|(o, _)| o.id);
+    let ids: Vec<u32> = list.iter().map(|(o, _)| o.id).collect();
+    let repack = ids != upload.packed_ids;
+    let mut voxels = Vec::new();
+    let mut offset = 0u32;
+    upload.objects = list
+        .iter()
+        .map(|(object, transform)| {
+            let m = &object.model;
+            if repack {
+                voxels.extend(m.voxels.iter().map(|&v| v as u32));
+            }
+            let gpu =
+                GpuObject { min: transform.translation.to_array(), id: object.id, size: m.size.to_array(), offset };
+            offset += m.voxels.len() as u32;
+            gpu
+        })
+        .collect();
+    if repack {
+        upload.voxels = Arc::new(voxels);
+        upload.packed_ids = ids;
+    }
+}
+
+/// The render world's object buffers (fixed size, created once) and what they hold.
+#[derive(Resource)]
+pub struct GpuObjects {
+    pub objects: Buffer,
+    pub voxels: Buffer,
+    pub count: u32,
+    /// Whether any object moved, appeared or went this frame (restarts accumulation).
+    pub changed: bool,
+    last_objects: Vec<GpuObject>,
+    last_voxels: Option<Arc<Vec<u32>>>,
+}
+
+fn init_gpu_objects(mut commands: Commands, device: Res<RenderDevice>) {
+    let buffer = |label: &'static str, size: usize| {
+        device.create_buffer(&BufferDescriptor {
+            label: Some(label),
+            size: size as u64,
+            usage: BufferUsages::STORAGE | BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    };
+    commands.insert_resource(GpuObjects {
+        objects: buffer("glowbrick_objects", MAX_OBJECTS * size_of::<GpuObject>()),
+        voxels: buffer("glowbrick_object_voxels", VOXEL_CAPACITY * 4),
+        count: 0,
+        changed: false,
+        last_objects: Vec::new(),
+        last_voxels: None,
+    });
+}
+
+/// Writes this frame's objects (Render, PrepareResources, after the world upload so the count lands in the
+/// current `world_info`).
+pub fn prepare_gpu_objects(
+    upload: Option<Res<ObjectsUpload>>,
+    mut gpu: ResMut<GpuObjects>,
+    gpu_world: Option<Res<crate::render::gpu_world::GpuWorld>>,
+    queue: Res<RenderQueue>,
+) {
+    let Some(upload) = upload else { return };
+    gpu.changed = upload.objects != gpu.last_objects;
+    if gpu.changed && !upload.objects.is_empty() {
+        queue.write_buffer(&gpu.objects, 0, bytemuck::cast_slice(&upload.objects));
+    }
+    if gpu.last_voxels.as_ref().is_none_or(|v| !Arc::ptr_eq(v, &upload.voxels)) && !upload.voxels.is_empty() {
+        let n = upload.voxels.len().min(VOXEL_CAPACITY);
+        queue.write_buffer(&gpu.voxels, 0, bytemuck::cast_slice(&upload.voxels[..n]));
+        gpu.last_voxels = Some(upload.voxels.clone());
+    }
+    gpu.count = upload.objects.len() as u32;
+    gpu.last_objects = upload.objects.clone();
+    if let Some(world) = gpu_world {
+        // world_info.size.w: the object count every trace loops over.
+        queue.write_buffer(&world.info, 12, bytemuck::bytes_of(&gpu.count));
+    }
+}
+
+pub fn add_object_upload(app: &mut App) {
+    app.init_resource::<ObjectsUpload>()
+        .add_plugins(ExtractResourcePlugin::<ObjectsUpload>::default())
+        .add_systems(PostUpdate, stage_objects);
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
+    render_app.add_systems(RenderStartup, init_gpu_objects).add_systems(
+        Render,
+        prepare_gpu_objects
+            .after(crate::render::gpu_world::prepare_gpu_world)
+            .before(crate::render::primary::prepare_view_resources)
+            .in_set(RenderSystems::PrepareResources),
+    );
+}

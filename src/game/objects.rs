@@ -1,0 +1,103 @@
+//! Moving objects in the game: a drifting lantern and a swinging block near the start view, and O to spawn
+//! another drifting lantern in front of the player.
+
+use super::hud::StatusLine;
+use crate::dynamic::{DynamicObject, Motion, ObjectClock, VoxelModel, builtin_model, spawn_object};
+use crate::world::{Palette, VoxelWorld};
+use bevy::prelude::*;
+use std::sync::Arc;
+
+/// A built-in model for this world: materials its legend names that the world's palette lacks are added from
+/// the default palette first (they then save with the world like any material).
+pub fn model_for_world(name: &str, world: &mut VoxelWorld) -> Result<VoxelModel, String> {
+    if let Err(first) = builtin_model(name, &world.palette) {
+        let defaults = Palette::default_blocks();
+        let (_, text) = crate::dynamic::BUILTIN_MODELS.iter().find(|(n, _)| *n == name).ok_or(first)?;
+        for material in defaults.materials.iter().filter(|m| text.contains(&format!("\"{}\"", m.name))) {
+            if world.palette.id_of(&material.name).is_none()
+                && world.palette.id_count() < crate::world::palette::MAX_MATERIALS
+            {
+                world.palette.push(material.clone());
+            }
+        }
+    }
+    builtin_model(name, &world.palette)
+}
+
+/// Spawns the default objects around `centre` (a point in front of the start view): a lantern drifting in a
+/// circle and a block swinging like a pendulum.
+pub fn spawn_default_objects(
+    commands: &mut Commands,
+    clock: &mut ObjectClock,
+    world: &mut VoxelWorld,
+    centre: Vec3,
+) -> Result<(), String> {
+    let lantern = Arc::new(model_for_world("lantern", world)?);
+    let block = Arc::new(model_for_world("block", world)?);
+    let size = world.grid.size().as_vec3();
+    let inside = |p: Vec3| p.clamp(Vec3::splat(4.0), (size - 8.0).max(Vec3::splat(4.0)));
+    spawn_object(
+        commands,
+        clock,
+        0,
+        lantern,
+        Motion::Drift { radius: 5.0, period: 12.0 },
+        inside(centre + Vec3::Y * 3.0),
+    )?;
+    let swing = Motion::Swing { length: 7.0, amplitude: 0.7, period: 5.0 };
+    spawn_object(commands, clock, 1, block, swing, inside(centre + Vec3::new(6.0, 10.0, 0.0)))?;
+    Ok(())
+}
+
+fn spawn_at_start(
+    mut commands: Commands,
+    mut clock: ResMut<ObjectClock>,
+    mut world: ResMut<VoxelWorld>,
+    mut status: ResMut<StatusLine>,
+) {
+    let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
+    let centre = Vec3::from(view.origin) + Vec3::from(view.direction).normalize_or_zero() * 14.0;
+    if let Err(e) = spawn_default_objects(&mut commands, &mut clock, &mut world, centre) {
+        status.show(e);
+    }
+}
+
+/// O spawns a drifting lantern 8 voxels in front of the player.
+fn spawn_key(
+    keys: Res<ButtonInput<KeyCode>>,
+    mut commands: Commands,
+    mut clock: ResMut<ObjectClock>,
+    mut world: ResMut<VoxelWorld>,
+    camera: Query<&Transform, With<super::player::Player>>,
+    objects: Query<(), With<DynamicObject>>,
+    mut status: ResMut<StatusLine>,
+) {
+    if !keys.just_pressed(KeyCode::KeyO) {
+        return;
+    }
+    let Ok(t) = camera.single() else { return };
+    let result = model_for_world("lantern", &mut world).and_then(|model| {
+        let at = t.translation + *t.forward() * 8.0 - Vec3::splat(1.5);
+        spawn_object(
+            &mut commands,
+            &mut clock,
+            objects.iter().count(),
+            Arc::new(model),
+            Motion::Drift { radius: 3.0, period: 8.0 },
+            at,
+        )
+    });
+    match result {
+        Ok(_) => status.show(format!("spawned a lantern ({} objects)", objects.iter().count() + 1)),
+        Err(e) => status.show(e),
+    }
+}
+
+/// Default objects at start, and the spawn key (needs a window).
+pub struct GameObjectsPlugin;
+
+impl Plugin for GameObjectsPlugin {
+    fn build(&self, app: &mut App) {
+        app.add_systems(Startup, spawn_at_start).add_systems(Update, spawn_key);
+    }
+}

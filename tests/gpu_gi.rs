@@ -1,0 +1,241 @@
+//! The GI cache on the GPU against the CPU path tracer, its edit invalidation and its skip rules.
+//!
+//! Convergence (96x64, direct light by NEE in the window room and unbiased ReSTIR in the cornell box, plus the
+//! cache with alpha 0.1; 100 warm-up frames, then 128 accumulated; against a 1024-spp reference over the pixels
+//! whose primary hit matches the CPU's and does not touch an emitter). Each bounce takes about 1/alpha frames
+//! to settle (a hit's indirect light is last frame's), hence the warm-up and the faster alpha than the default.
+//! - one bounce (`gi_bounces=off`) against the 1-bounce reference: |bias| < 3% of the mean, relMSE < 0.02;
+//! - bounce feedback against the 8-bounce reference: |bias| < 6%, relMSE < 0.03. The cache's own bias (its
+//!   filter and interpolation blur, the one-level insertion rule that leaves some far hits without a value) is
+//!   part of what these bound; the measured numbers are printed.
+
+mod common;
+
+use bevy::math::{IVec3, UVec3, Vec3};
+use glowbrick::headless::{HeadlessOptions, HeadlessRenderer};
+use glowbrick::image_io::LinearImage;
+use glowbrick::reference::metrics::compare;
+use glowbrick::reference::{ReferenceOptions, render_reference};
+use glowbrick::render::gi::{DYNAMIC_GI_PASS_NAMES, GI_PASS_NAMES, GiCounter};
+use glowbrick::settings::RenderSettings;
+use glowbrick::world::events::EditRequest;
+use glowbrick::world::palette::{Material, Palette};
+use glowbrick::world::scene::load_scene;
+use glowbrick::world::{CameraView, Edit, VoxelWorld};
+
+const W: u32 = 96;
+const H: u32 = 64;
+
+fn settings(pairs: &[&str]) -> RenderSettings {
+    let pairs: Vec<String> = pairs.iter().map(|p| p.to_string()).collect();
+    RenderSettings::default().with_pairs(&pairs).unwrap()
+}
+
+fn renderer(world: &VoxelWorld, view: &CameraView, pairs: &[&str]) -> Option<HeadlessRenderer> {
+    let options = HeadlessOptions { width: W, height: H, settings: settings(pairs), ..Default::default() };
+    common::renderer(world.clone(), view, &options)
+}
+
+fn set_accumulate(renderer: &mut HeadlessRenderer, on: bool) {
+    renderer.app_mut().world_mut().resource_mut::<RenderSettings>().accumulate = on;
+}
+
+/// `warm` frames for the cache to fill, then the mean of `frames` frames (accumulation restarts on the switch).
+fn converged(renderer: &mut HeadlessRenderer, warm: u32, frames: u32) -> LinearImage {
+    set_accumulate(renderer, false);
+    renderer.render(warm).unwrap();
+    set_accumulate(renderer, true);
+    renderer.render(frames).unwrap()
+}
+
+fn reference(world: &VoxelWorld, view: &CameraView, bounces: u32, spp: u32) -> LinearImage {
+    let options = ReferenceOptions { width: W, height: H, spp, bounces, seed: 17, time_budget: None };
+    render_reference(world, view, &options).unwrap().image
+}
+
+fn check_against_reference(scene: &str, view_name: &str, direct: &[&str]) {
+    let world = load_scene(scene).unwrap();
+    let view = world.view(Some(view_name)).unwrap().clone();
+    let Some(keep) = common::comparable_pixels(&world, &view, W, H) else { return };
+    let cases = [("gi_bounces=off", 1, 0.03, 0.02), ("gi_bounces=on", 8, 0.06, 0.03)];
+    for (pair, bounces, bias_bound, relmse_bound) in cases {
+        let truth = common::masked(&reference(&world, &view, bounces, 1024), &keep);
+        let direct_only = common::masked(&reference(&world, &view, 0, 256), &keep);
+        let mut pairs = vec!["gi=on", "gi_alpha=0.1", pair];
+        pairs.extend_from_slice(direct);
+        let Some(mut r) = renderer(&world, &view, &pairs) else { return };
+        let image = common::masked(&converged(&mut r, 100, 128), &keep);
+        eprintln!("{scene} {pair}: GI counters {:?}", r.gi_counters().unwrap());
+        let m = compare(&image, &truth).unwrap();
+        let mean = truth.mean_luminance();
+        let indirect = mean - direct_only.mean_luminance();
+        eprintln!(
+            "{scene} {pair} vs {bounces}-bounce reference: {m} (bias {:+.1}% of the mean {mean:.4}, indirect is {:.0}%)",
+            100.0 * m.bias / mean,
+            100.0 * indirect / mean
+        );
+        // The scene must have indirect light worth measuring, or the bounds say nothing.
+        assert!(indirect > 0.15 * mean, "{scene}: indirect light is {indirect} of {mean}");
+        assert!(m.bias.abs() < bias_bound * mean, "{scene} {pair}: bias {} of mean {mean}", m.bias);
+        assert!(m.relmse < relmse_bound, "{scene} {pair}: relMSE {}", m.relmse);
+    }
+}
+
+#[test]
+fn the_gi_cache_converges_to_the_path_traced_reference_in_the_window_room() {
+    check_against_reference("window-room", "inside", &["lighting=nee"]);
+}
+
+#[test]
+fn the_gi_cache_converges_to_the_path_traced_reference_in_the_cornell_box() {
+    // ReSTIR for the direct light here: NEE's noise among 256 brick lights (relMSE 0.07 at 128 frames) would
+    // hide the cache's error.
+    check_against_reference("cornell", "front", &["lighting=restir", "reuse=unbiased", "radius=8"]);
+}
+
+/// A 64 x 16 x 16 floor with a lamp block at x = 12 and a wall across x = 20 (full height and depth) that hides
+/// the lamp from the floor beyond it; the camera looks down on the whole floor.
+fn walled_floor() -> (VoxelWorld, CameraView) {
+    let mut palette = Palette::new(vec![]);
+    let white = palette.push(Material::solid("white", [0.8, 0.8, 0.8]));
+    let lamp = palette.push(Material::emissive("lamp", [0.9; 3], [1.0; 3], 20.0));
+    let mut world = VoxelWorld::new(UVec3::new(64, 16, 16), palette);
+    world.grid.fill_box(IVec3::ZERO, IVec3::new(64, 1, 16), white).unwrap();
+    world.grid.fill_box(IVec3::new(20, 1, 0), IVec3::new(21, 16, 16), white).unwrap();
+    world.grid.fill_box(IVec3::new(11, 6, 7), IVec3::new(13, 8, 9), lamp).unwrap();
+    let view =
+        CameraView { name: "above".into(), origin: [34.0, 40.0, 8.0], direction: [0.0, -1.0, 0.0001], fov_deg: 80.0 };
+    (world, view)
+}
+
+#[test]
+fn an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_follows() {
+    let (world, view) = walled_floor();
+    let pairs = ["lighting=nee", "gi=on"];
+    let Some(mut r) = renderer(&world, &view, &pairs) else { return };
+    r.render(8).unwrap();
+    let quiet = r.gi_counters().unwrap();
+    assert_eq!(quiet[GiCounter::Retraced as usize], 0, "nothing retraces without an edit: {quiet:?}");
+    // A block in the far corner (brick 7, 0, 0): only entries with a ray through that brick retrace it.
+    let corner = Edit::FillBox { min: IVec3::new(60, 1, 1), max: IVec3::new(62, 3, 3), material: 1 };
+    r.app_mut().world_mut().write_message(EditRequest::player(corner));
+    let after = r.gi_counters().unwrap();
+    let (retraced, live) = (after[GiCounter::Retraced as usize], after[GiCounter::Live as usize]);
+    let rays = after[GiCounter::RaysTraced as usize];
+    eprintln!("corner edit: {retraced} of {live} entries retraced {rays} of their {} rays", live * 64);
+    assert!(retraced > 20, "entries near the corner retrace: {retraced}");
+    // On an open floor, grazing rays from far away cross the corner brick too: count entries that kept every
+    // cached hit, and the share of rays traced again.
+    assert!(live - retraced > live / 3, "entries far from the corner keep their cached hits: {retraced} of {live}");
+    assert!(rays < live * 64 / 8, "only rays through the edited brick are traced again: {rays}");
+    // Open a doorway in the wall: bricks x 16..24, y 0..8, z 0..16, in the middle of everything.
+    let hole = Edit::FillBox { min: IVec3::new(20, 1, 5), max: IVec3::new(20, 5, 10), material: 0 };
+    r.app_mut().world_mut().write_message(EditRequest::player(hole));
+    let after = r.gi_counters().unwrap();
+    let (retraced, live) = (after[GiCounter::Retraced as usize], after[GiCounter::Live as usize]);
+    let rays = after[GiCounter::RaysTraced as usize];
+    eprintln!("doorway: {retraced} of {live} entries retraced {rays} of their {} rays", live * 64);
+    assert!(retraced > 50, "entries that see the doorway's bricks retrace: {retraced}");
+    assert!(rays < live * 64 / 2, "not every ray is traced again: {rays}");
+
+    // The indirect light through the doorway: the edited renderer, 64 accumulated frames after the edit, against
+    // a fresh renderer of the edited world, each minus the direct light alone (GI off).
+    set_accumulate(&mut r, true);
+    let followed = r.render(64).unwrap();
+    let mut opened = world.clone();
+    opened.grid.fill_box(IVec3::new(60, 1, 1), IVec3::new(63, 4, 4), 1).unwrap();
+    opened.grid.fill_box(IVec3::new(20, 1, 5), IVec3::new(21, 6, 11), 0).unwrap();
+    let Some(mut fresh) = renderer(&opened, &view, &pairs) else { return };
+    let truth = converged(&mut fresh, 16, 64);
+    let Some(mut direct) = renderer(&opened, &view, &["lighting=nee", "accumulate=on"]) else { return };
+    let direct = direct.render(64).unwrap();
+    let beyond = |image: &LinearImage| {
+        // The floor beyond the wall (x from about 24 to 64 in the world).
+        let pixels: Vec<[f32; 4]> =
+            (0..H).flat_map(|y| (W * 2 / 5..W * 4 / 5).map(move |x| (x, y))).map(|(x, y)| image.pixel(x, y)).collect();
+        LinearImage { width: pixels.len() as u32, height: 1, pixels }.mean_luminance()
+    };
+    let (a, b, d) = (beyond(&followed) - beyond(&direct), beyond(&truth) - beyond(&direct), beyond(&direct));
+    eprintln!("floor beyond the wall: direct {d:.5}; indirect after the edit {a:.5}, in a fresh renderer {b:.5}");
+    assert!(b > 0.1 * d, "the doorway brings indirect light worth measuring: {b} vs direct {d}");
+    assert!((a - b).abs() < 0.1 * b, "the cache follows the edit within 64 frames: {a} vs {b}");
+}
+
+#[test]
+fn with_gi_off_no_gi_pass_runs() {
+    let (world, view) = walled_floor();
+    let Some(mut off) = renderer(&world, &view, &["lighting=nee"]) else { return };
+    off.render(4).unwrap();
+    for name in GI_PASS_NAMES {
+        assert_eq!(off.gpu_pass_ms(name), None, "{name} ran with GI off");
+    }
+    let Some(mut on) = renderer(&world, &view, &["lighting=nee", "gi=on"]) else { return };
+    on.render(16).unwrap();
+    for name in [glowbrick::render::primary::PRIMARY_PASS_NAME].into_iter().chain(GI_PASS_NAMES) {
+        eprintln!("{name}: {:?} ms", on.gpu_pass_ms(name));
+    }
+    for name in GI_PASS_NAMES {
+        assert!(on.gpu_pass_ms(name).is_some() || !common::require_gpu(), "{name} records its GPU time with GI on");
+    }
+    assert_eq!(glowbrick::render::gi::cache_bytes(&settings(&["gi=off"]).gi), 104, "GI off holds a placeholder only");
+}
+
+/// A 32 x 16 x 16 room cut in two by a one-voxel wall at x = 16 (full height and depth); a lamp lights the +x
+/// side, which the camera looks at.
+fn walled_room() -> (VoxelWorld, CameraView, u16) {
+    let mut palette = Palette::new(vec![]);
+    let white = palette.push(Material::solid("white", [0.8, 0.8, 0.8]));
+    let lamp = palette.push(Material::emissive("lamp", [0.9; 3], [1.0; 3], 10.0));
+    let glare = palette.push(Material::emissive("glare", [0.9; 3], [1.0, 0.6, 0.3], 60.0));
+    let mut world = VoxelWorld::new(UVec3::new(32, 16, 16), palette);
+    world.grid.fill_box(IVec3::ZERO, IVec3::new(32, 1, 16), white).unwrap();
+    world.grid.fill_box(IVec3::new(16, 1, 0), IVec3::new(17, 16, 16), white).unwrap();
+    world.grid.fill_box(IVec3::new(27, 10, 7), IVec3::new(28, 11, 9), lamp).unwrap();
+    let view =
+        CameraView { name: "east".into(), origin: [31.0, 9.0, 8.0], direction: [-1.0, -0.35, 0.0], fov_deg: 70.0 };
+    let _ = white;
+    (world, view, glare)
+}
+
+/// The mean of `frames` single frames (moving objects restart accumulation every frame).
+fn mean_of_frames(r: &mut HeadlessRenderer, frames: u32) -> f64 {
+    (0..frames).map(|_| r.render(1).unwrap().mean_luminance()).sum::<f64>() / frames as f64
+}
+
+#[test]
+fn a_glowing_object_behind_a_wall_does_not_leak_through_it() {
+    use glowbrick::dynamic::{Motion, VoxelModel, spawn_object_in};
+    use std::sync::Arc;
+    let (world, view, glare) = walled_room();
+    let model = Arc::new(VoxelModel { name: "glare".into(), size: UVec3::new(2, 2, 2), voxels: vec![glare; 8] });
+    let pairs = ["lighting=nee", "gi=on", "gi_alpha=0.1"];
+    let slide = |anchor: Vec3| (Motion::Slide { offset: Vec3::new(0.0, 0.0, 10.0), period: 2.0 }, anchor);
+
+    let Some(mut empty) = renderer(&world, &view, &pairs) else { return };
+    empty.render(60).unwrap();
+    let without = mean_of_frames(&mut empty, 48);
+    for name in DYNAMIC_GI_PASS_NAMES {
+        assert_eq!(empty.gpu_pass_ms(name), None, "{name} ran in a world without moving objects");
+    }
+
+    // The object slides along the far side of the wall, one voxel from it.
+    let Some(mut behind) = renderer(&world, &view, &pairs) else { return };
+    let (motion, anchor) = slide(Vec3::new(13.0, 2.0, 2.0));
+    spawn_object_in(behind.app_mut().world_mut(), model.clone(), motion, anchor).unwrap();
+    behind.render(60).unwrap();
+    let with_behind = mean_of_frames(&mut behind, 48);
+    for name in DYNAMIC_GI_PASS_NAMES {
+        assert!(behind.gpu_pass_ms(name).is_some() || !common::require_gpu(), "{name} runs with a moving object");
+    }
+
+    // The same object on the camera's side of the wall, high up and out of view: its light reaches the room only
+    // through the cache, and must brighten it, or the comparison above says nothing.
+    let Some(mut in_front) = renderer(&world, &view, &pairs) else { return };
+    let (motion, anchor) = slide(Vec3::new(23.0, 13.0, 2.0));
+    spawn_object_in(in_front.app_mut().world_mut(), model, motion, anchor).unwrap();
+    in_front.render(60).unwrap();
+    let with_in_front = mean_of_frames(&mut in_front, 48);
+    eprintln!("mean luminance: no object {without:.5}, behind the wall {with_behind:.5}, in front {with_in_front:.5}");
+    assert!(with_in_front > 1.1 * without, "the glowing object lights the room it is in: {with_in_front} vs {without}");
+    assert!((with_behind - without).abs() < 0.02 * without, "no light through the wall: {with_behind} vs {without}");
+}
