@@ -116,13 +116,17 @@ impl HeadlessRenderer {
         &mut self.app
     }
 
-    /// Moves the camera to `view` (takes effect on the next frame; temporal history is kept).
+    /// Moves the camera to `view`, field of view included (takes effect on the next frame; temporal history is
+    /// kept).
     pub fn set_view(&mut self, view: &CameraView) {
         let transform = crate::render::camera::view_transform(view);
         let world = self.app.world_mut();
-        let mut cameras = world.query_filtered::<&mut Transform, With<crate::render::VoxelCamera>>();
-        for mut t in cameras.iter_mut(world) {
+        let mut cameras = world.query_filtered::<(&mut Transform, &mut Projection), With<crate::render::VoxelCamera>>();
+        for (mut t, mut projection) in cameras.iter_mut(world) {
             *t = transform;
+            if let Projection::Perspective(p) = projection.as_mut() {
+                p.fov = view.fov_deg.to_radians();
+            }
         }
     }
 
