@@ -52,10 +52,14 @@ enum Command {
         /// box with brick lights on and off; writes thesis.md beside the thesis' Table 3.
         #[arg(long)]
         thesis: bool,
+        /// The GI cache bench instead: K, the static cache, the filter and bounces against an 8-bounce reference,
+        /// the cost of edits, memory; writes gi.md.
+        #[arg(long)]
+        gi: bool,
         /// With --thesis: image size as a fraction of the thesis' 1600x1024.
         #[arg(long, default_value_t = 0.2)]
         scale: f32,
-        /// With --thesis: samples per pixel of the CPU reference.
+        /// With --thesis or --gi: samples per pixel of the CPU reference.
         #[arg(long, default_value_t = 1024)]
         spp: u32,
         /// Comma-separated bench settings to run (default: all), e.g. restir,nee-power.
@@ -246,6 +250,15 @@ fn main() -> ExitCode {
         Command::Compare { image, reference, diff } => compare(image, reference, diff),
         Command::Bench { thesis: true, scale, spp, out, .. } => {
             on_gpu(|| glowbrick::bench::thesis::run_thesis_bench(scale, spp, &out)).map(|text| println!("{text}"))
+        }
+        Command::Bench { gi: true, spp, out, .. } => {
+            let config = glowbrick::bench::BenchConfig {
+                width: 128,
+                height: 72,
+                reference_spp: spp,
+                ..glowbrick::bench::BenchConfig::full()
+            };
+            on_gpu(|| glowbrick::bench::gi::run_gi_bench(&config, &out)).map(|text| println!("{text}"))
         }
         Command::Bench { scenes, quick, out, camera, settings, .. } => bench(scenes, quick, camera, settings, out),
         Command::Stress { quick, frames, scene, seed } => stress(quick, frames, scene, seed),

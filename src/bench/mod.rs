@@ -8,6 +8,7 @@
 //! The spatial radius scales with the image (the thesis' 30 px at 1600 wide). Last per scene, `nee-equal-time`
 //! accumulates NEE frames for the time one default ReSTIR frame takes: the equal-time comparison.
 
+pub mod gi;
 pub mod plot;
 pub mod thesis;
 
@@ -126,8 +127,19 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 
 /// The direct-light reference of a scene view, computed once and cached by world, view, size and spp.
 pub fn cached_reference(world: &VoxelWorld, view: &CameraView, config: &BenchConfig) -> Result<LinearImage, String> {
+    cached_path_reference(world, view, config, 0)
+}
+
+/// The reference with `bounces` diffuse bounces (0: direct light), cached like `cached_reference`.
+pub fn cached_path_reference(
+    world: &VoxelWorld,
+    view: &CameraView,
+    config: &BenchConfig,
+    bounces: u32,
+) -> Result<LinearImage, String> {
+    let light = if bounces == 0 { "direct".to_string() } else { format!("{bounces}bounces") };
     let key = format!(
-        "{}|{:?}|{}x{}|{}spp|direct",
+        "{}|{:?}|{}x{}|{}spp|{light}",
         world_to_string(world),
         view,
         config.width,
@@ -144,6 +156,7 @@ pub fn cached_reference(world: &VoxelWorld, view: &CameraView, config: &BenchCon
         width: config.width,
         height: config.height,
         spp: config.reference_spp,
+        bounces,
         ..Default::default()
     };
     let reference = render_reference(world, view, &options)?;
