@@ -71,6 +71,9 @@ const COUNT_FULL: u32 = 4u;
 const COUNT_INSERTED: u32 = 5u;
 const COUNT_RAYS_TRACED: u32 = 6u;
 const COUNT_BORROWED: u32 = 7u;
+// Counted since the renderer started (never cleared): non-finite values found and reset.
+const COUNT_RESERVOIR_RESETS: u32 = 8u;
+const COUNT_GI_RESETS: u32 = 9u;
 
 @group(3) @binding(0) var<uniform> gi: GiParams;
 @group(3) @binding(1) var<storage, read_write> gi_keys: array<atomic<u32>>;

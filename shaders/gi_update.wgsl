@@ -9,7 +9,7 @@
 #import glowbrick::lights::{Rng, pcg, direct_sample}
 #import glowbrick::gi::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_edits, gi_counters, GiEntry,
     gi_touch, gi_find, used_within, slot_seed, ray_direction, ray_origin, encode_hit, hit_face, hit_distance, NEVER_TRACED, NOT_FOUND,
-    MISS_FACE, UPDATE_AGE, MAX_AGE, GI_BOUNCES, GI_CACHE, COUNT_UPDATED, COUNT_RETRACED, COUNT_LIVE, COUNT_EVICTED, COUNT_RAYS_TRACED, COUNT_BORROWED}
+    MISS_FACE, UPDATE_AGE, MAX_AGE, GI_BOUNCES, GI_CACHE, COUNT_UPDATED, COUNT_RETRACED, COUNT_LIVE, COUNT_EVICTED, COUNT_RAYS_TRACED, COUNT_BORROWED, COUNT_GI_RESETS}
 
 // Light arriving along a ray that hit (voxel, face) at `point`: the hit face's direct light, with bounces on its
 // cached indirect light (last frame's filtered value: stable while this pass writes), and in sun-and-sky mode
@@ -151,6 +151,7 @@ fn update_entry(slot: u32) {
     }
     var estimate = sum / f32(gi.update_rays);
     if !finite3(estimate) {
+        atomicAdd(&gi_counters[COUNT_GI_RESETS], 1u);
         estimate = vec3(0.0);
     }
     // Young entries average evenly; after 1/alpha frames it becomes an exponential blend.

@@ -7,6 +7,7 @@
 #import glowbrick::world::materials
 #import glowbrick::traversal::{trace_scene, face_normal}
 #import glowbrick::lights::{Light, lights, pick_light, light_contains, light_size, face_exposed, Rng, rng_next, pcg, RAY_OFFSET, PI}
+#import glowbrick::gi::{gi_counters, COUNT_RESERVOIR_RESETS}
 #import glowbrick::frame::{frame, view, Surface, RESTIR_POINT, RESTIR_UNBIASED}
 
 // 32 bytes. `face` is the light cube's face (0 +X, 1 -X, ... as the traversal numbers faces) or POINT_FACE,
@@ -43,9 +44,13 @@ fn finite(x: f32) -> bool {
 
 // A reservoir read from memory is used only if its fields are sane and its light is still the one it sampled:
 // a freed or reused slot has another generation, so a removed light is never shaded.
+// A non-finite field is also counted (COUNT_RESERVOIR_RESETS, read back by the stress run).
 fn validated(r: Reservoir) -> Reservoir {
-    if r.slot == NO_LIGHT || r.slot >= arrayLength(&lights) || !finite(r.w_sum) || !finite(r.m) || !finite(r.big_w)
-        || r.m < 0.0 || r.big_w < 0.0 || r.face > POINT_FACE {
+    if !finite(r.w_sum) || !finite(r.m) || !finite(r.big_w) || !finite(r.target_value) {
+        atomicAdd(&gi_counters[COUNT_RESERVOIR_RESETS], 1u);
+        return empty_reservoir();
+    }
+    if r.slot == NO_LIGHT || r.slot >= arrayLength(&lights) || r.m < 0.0 || r.big_w < 0.0 || r.face > POINT_FACE {
         return empty_reservoir();
     }
     let light = lights[r.slot];

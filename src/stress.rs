@@ -7,6 +7,7 @@
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::reference::sampling::Pcg;
 use crate::reference::{ReferenceOptions, render_reference};
+use crate::render::gi::GiCounter;
 use crate::settings::{DebugView, RenderSettings};
 use crate::world::events::EditRequest;
 use crate::world::{CameraView, Edit, VoxelWorld};
@@ -48,6 +49,9 @@ pub struct StressReport {
     pub nonfinite_pixels: u64,
     pub reservoir_reads: u32,
     pub nonfinite_reservoirs: u64,
+    /// Counted on the GPU over the whole soak: reservoirs and GI estimates found non-finite and reset.
+    pub reservoir_resets: u32,
+    pub gi_resets: u32,
     pub max_m: f32,
     pub max_w: f32,
     pub min_w: f32,
@@ -76,10 +80,11 @@ impl StressReport {
     /// Why the run failed, if it did: any non-finite value, or a static view that drifts by more than 5% of the
     /// reference or sits more than 10% from it.
     pub fn failure(&self) -> Option<String> {
-        if self.nonfinite_pixels > 0 || self.nonfinite_reservoirs > 0 {
+        if self.nonfinite_pixels > 0 || self.nonfinite_reservoirs > 0 || self.reservoir_resets > 0 || self.gi_resets > 0
+        {
             return Some(format!(
-                "{} non-finite pixels, {} non-finite reservoirs",
-                self.nonfinite_pixels, self.nonfinite_reservoirs
+                "{} non-finite pixels, {} non-finite reservoirs read, {} reservoirs and {} GI estimates reset on the GPU",
+                self.nonfinite_pixels, self.nonfinite_reservoirs, self.reservoir_resets, self.gi_resets
             ));
         }
         if self.drift() > 0.05 {
@@ -108,6 +113,11 @@ impl fmt::Display for StressReport {
         writeln!(f, "non-finite pixels: {}", self.nonfinite_pixels)?;
         writeln!(
             f,
+            "non-finite values reset on the GPU (all frames, all passes): reservoirs {}, GI estimates {}",
+            self.reservoir_resets, self.gi_resets
+        )?;
+        writeln!(
+            f,
             "reservoirs: {} reads, non-finite {}, max M {:.0}, W in [{:.3e}, {:.3e}]",
             self.reservoir_reads, self.nonfinite_reservoirs, self.max_m, self.min_w, self.max_w
         )?;
@@ -126,8 +136,11 @@ impl fmt::Display for StressReport {
 }
 
 /// The settings the soak cycles through: defaults and the extremes of every range.
-const SETTING_CYCLE: [&[&str]; 7] = [
+const SETTING_CYCLE: [&[&str]; 9] = [
     &[],
+    // The GI cache at its extremes (a new K also rebuilds its tables).
+    &["gi=on", "gi_rays=4", "gi_update=1", "gi_alpha=1"],
+    &["gi=on", "gi_rays=128", "gi_update=64", "gi_alpha=0.001", "gi_filter=off"],
     &["candidates=1"],
     &["candidates=64", "taps=16", "radius=100"],
     &["radius=0"],
@@ -155,7 +168,9 @@ fn random_camera(world: &VoxelWorld, rng: &mut Pcg) -> CameraView {
 
 /// Runs the soak on `config.scene` and returns what it saw.
 pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
-    let world = crate::world::scene::load_scene(&config.scene).map_err(|e| e.to_string())?;
+    let mut world = crate::world::scene::load_scene(&config.scene).map_err(|e| e.to_string())?;
+    // A drifting lantern the whole time: every pass traces it, the GI cache gives it its own table.
+    let lantern = std::sync::Arc::new(crate::game::objects::model_for_world("lantern", &mut world)?);
     let home = world.view(None).cloned().unwrap_or_else(|| world.overview());
     let lamps: Vec<u16> = (0..world.palette.id_count() as u16).filter(|&id| world.palette.is_emissive(id)).collect();
     let blocks: Vec<u16> = (1..world.palette.id_count() as u16).filter(|&id| !world.palette.is_emissive(id)).collect();
@@ -170,6 +185,9 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
         ..Default::default()
     };
     let mut renderer = HeadlessRenderer::new(world.clone(), &home, &options)?;
+    let centre = world.grid.size().as_vec3() * 0.5;
+    let drift = crate::dynamic::Motion::Drift { radius: centre.x * 0.5, period: 4.0 };
+    crate::dynamic::spawn_object_in(renderer.app_mut().world_mut(), lantern, drift, centre)?;
     let mut rng = Pcg::new(config.seed, 0x5747);
     let mut report = StressReport { min_w: f32::INFINITY, ..Default::default() };
     let mut placed: Vec<IVec3> = Vec::new();
@@ -243,6 +261,10 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
         }
         report.frames += 1;
     }
+
+    let counters = renderer.gi_counters()?;
+    report.reservoir_resets = counters[GiCounter::ReservoirResets as usize];
+    report.gi_resets = counters[GiCounter::GiResets as usize];
 
     // Static phase: the home view of the world as the soak left it, no edits, unbiased reuse (so the reference
     // comparison measures drift and error, not the biased variant's known darkening).

@@ -61,8 +61,14 @@ pub enum GiCounter {
     RaysTraced = 6,
     /// Ray hits whose face had no cached value and borrowed the shooting entry's indirect light.
     Borrowed = 7,
+    /// Since the renderer started: ReSTIR reservoirs read with a non-finite field (reset to empty).
+    ReservoirResets = 8,
+    /// Since the renderer started: GI estimates that came out non-finite (replaced by zero).
+    GiResets = 9,
 }
-pub const GI_COUNTERS: usize = 8;
+/// Counter words; the first `PER_FRAME_COUNTERS` restart every frame, the rest count since the start.
+pub const GI_COUNTERS: usize = 16;
+const PER_FRAME_COUNTERS: usize = 8;
 
 /// `GiParams` in `shaders/gi.wgsl`.
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
@@ -299,7 +305,7 @@ pub fn prepare_gi(
         cache.bind_group = None;
         return;
     };
-    queue.write_buffer(&counters.buffer, 0, &[0u8; GI_COUNTERS * 4]);
+    queue.write_buffer(&counters.buffer, 0, &[0u8; PER_FRAME_COUNTERS * 4]);
     let t = &cache.tables;
     cache.bind_group = Some(device.create_bind_group(
         "glowbrick_gi",
