@@ -77,6 +77,7 @@ fn material_buffer(device: &RenderDevice, materials: &[GpuMaterial]) -> Buffer {
 }
 
 /// Applies the queued uploads to the GPU buffers (creating them on the first full upload).
+#[allow(clippy::too_many_arguments)]
 pub fn prepare_gpu_world(
     mut commands: Commands,
     device: Res<RenderDevice>,
