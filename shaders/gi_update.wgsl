@@ -11,6 +11,19 @@
     gi_touch, gi_find, used_within, slot_seed, ray_direction, ray_origin, encode_hit, hit_face, hit_distance, NEVER_TRACED, NOT_FOUND,
     MISS_FACE, UPDATE_AGE, MAX_AGE, GI_BOUNCES, GI_CACHE, COUNT_UPDATED, COUNT_RETRACED, COUNT_LIVE, COUNT_EVICTED, COUNT_RAYS_TRACED, COUNT_BORROWED, COUNT_GI_RESETS}
 
+// Direct light reflected by a surface at `point` (normal n): the sun with a shadow ray in sun-and-sky mode, else
+// one next-event-estimation sample of the light pool.
+fn direct_at(point: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+    if frame.lighting != LIGHTING_SUN {
+        return direct_sample(point, n, albedo, frame.light_count, frame.power_pick == 1u, rng);
+    }
+    let cos_sun = dot(n, frame.sun.xyz);
+    if frame.sun.w > 0.0 && cos_sun > 0.0 && (frame.shadows == 0u || !trace_scene(point + n * 1e-3, frame.sun.xyz, INF).found) {
+        return albedo * frame.sun_radiance.rgb * cos_sun;
+    }
+    return vec3(0.0);
+}
+
 // Light arriving along a ray that hit (voxel, face) at `point`: the hit face's direct light, with bounces on its
 // cached indirect light (last frame's filtered value: stable while this pass writes), and in sun-and-sky mode
 // its emission. With emitter lighting the emission is left out: the shading passes' light sampling already
@@ -24,15 +37,9 @@ fn hit_radiance(point: vec3<f32>, face: u32, seen: bool, fallback: vec3<f32>, rn
         return vec3(0.0);
     }
     let m = materials[id];
-    var radiance = vec3(0.0);
+    var radiance = direct_at(point, n, m.albedo.rgb, rng);
     if frame.lighting == LIGHTING_SUN {
-        radiance = m.radiance.rgb;
-        let cos_sun = dot(n, frame.sun.xyz);
-        if frame.sun.w > 0.0 && cos_sun > 0.0 && (frame.shadows == 0u || !trace_scene(point + n * 1e-3, frame.sun.xyz, INF).found) {
-            radiance += m.albedo.rgb * frame.sun_radiance.rgb * cos_sun;
-        }
-    } else {
-        radiance += direct_sample(point, n, m.albedo.rgb, frame.light_count, frame.power_pick == 1u, rng);
+        radiance += m.radiance.rgb;
     }
     if (gi.flags & GI_BOUNCES) != 0u {
         // Entries the camera sees bring the entries their rays hit into the cache; those only look up.
@@ -63,15 +70,7 @@ fn hit_radiance(point: vec3<f32>, face: u32, seen: bool, fallback: vec3<f32>, rn
 fn object_hit_radiance(point: vec3<f32>, face: u32, material: u32, fallback: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
     let n = face_normal(face);
     let m = materials[material];
-    var radiance = m.radiance.rgb;
-    if frame.lighting == LIGHTING_SUN {
-        let cos_sun = dot(n, frame.sun.xyz);
-        if frame.sun.w > 0.0 && cos_sun > 0.0 && (frame.shadows == 0u || !trace_scene(point + n * 1e-3, frame.sun.xyz, INF).found) {
-            radiance += m.albedo.rgb * frame.sun_radiance.rgb * cos_sun;
-        }
-    } else {
-        radiance += direct_sample(point, n, m.albedo.rgb, frame.light_count, frame.power_pick == 1u, rng);
-    }
+    var radiance = m.radiance.rgb + direct_at(point, n, m.albedo.rgb, rng);
     if (gi.flags & GI_BOUNCES) != 0u {
         radiance += m.albedo.rgb * fallback;
     }

@@ -30,7 +30,8 @@ impl LinearImage {
 
 /// ACES filmic fit (Narkowicz 2015): maps linear HDR radiance to [0, 1].
 pub fn tonemap_aces(x: f32) -> f32 {
-    let x = x.max(0.0);
+    // Past 1e4 the curve is 1 anyway; capping keeps x^2 from overflowing to inf / inf = NaN (black pixels).
+    let x = x.clamp(0.0, 1.0e4);
     ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
 }
 
@@ -78,4 +79,18 @@ pub fn read_image(path: &Path) -> Result<LinearImage, String> {
     let (width, height) = rgba.dimensions();
     let pixels = rgba.pixels().map(|p| p.0).collect();
     Ok(LinearImage { width, height, pixels })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tonemap_aces;
+
+    #[test]
+    fn tonemapping_never_turns_a_bright_pixel_black() {
+        for x in [1.0e4f32, 1.0e20, f32::MAX, f32::INFINITY] {
+            assert_eq!(tonemap_aces(x), 1.0, "{x}");
+        }
+        assert_eq!(tonemap_aces(-1.0), 0.0);
+        assert!((tonemap_aces(0.18) - 0.2666).abs() < 1e-3, "{}", tonemap_aces(0.18));
+    }
 }

@@ -127,3 +127,14 @@ fn hit_face_points_back_along_the_ray() {
     // A ray that ends before the box misses.
     assert!(trace(&grid, &Ray::new(Vec3::new(0.5, 15.5, 15.5), Vec3::X), 9.0).is_none());
 }
+
+#[test]
+fn a_subnormal_direction_component_on_a_boundary_plane_gives_a_finite_hit() {
+    let mut grid = BrickGrid::new(UVec3::splat(16));
+    grid.fill_box(IVec3::new(0, 0, 0), IVec3::new(16, 1, 16), 1).unwrap();
+    // Origin exactly on voxel planes in x and z; the z component is subnormal (its reciprocal is infinite).
+    let ray = Ray::new(Vec3::new(4.0, 8.0, 4.0), Vec3::new(0.3, -1.0, 1.0e-39));
+    let hit = trace(&grid, &ray, f32::INFINITY).expect("the ray reaches the floor");
+    assert!(hit.distance.is_finite(), "{hit:?}");
+    assert_eq!(hit.voxel.y, 0);
+}

@@ -127,6 +127,10 @@ pub fn render_reference(
     if options.spp == 0 || options.bounces > 64 {
         return Err(format!("spp {} must be at least 1 and bounces {} at most 64", options.spp, options.bounces));
     }
+    // A zero field of view or a zero direction would give a silently black image.
+    if let Some(problem) = view.problem() {
+        return Err(problem);
+    }
     let start = Instant::now();
     let mut pool = LightPool::from_world(world);
     let alias = pool.alias().clone();

@@ -370,13 +370,7 @@ pub fn init_gi_pipelines(
 /// A GI pipeline's compile error, if one failed.
 pub fn pipeline_error(render_world: &World) -> Option<String> {
     let pipelines = render_world.get_resource::<GiPipelines>()?;
-    let cache = render_world.resource::<PipelineCache>();
-    pipelines.passes.iter().zip(PIPELINE_NAMES).find_map(|(id, name)| match cache.get_compute_pipeline_state(*id) {
-        CachedPipelineState::Err(e) if !matches!(e, bevy::shader::ShaderCacheError::ShaderNotLoaded(_)) => {
-            Some(format!("the {name} shader failed to compile: {e}"))
-        }
-        _ => None,
-    })
+    super::compile_error(render_world, &pipelines.passes, &PIPELINE_NAMES)
 }
 
 /// Updates and filters the cache after the camera's passes inserted this frame's entries (which shade with

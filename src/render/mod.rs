@@ -70,6 +70,23 @@ pub fn shader_defs() -> Vec<ShaderDefVal> {
     ]
 }
 
+/// The first of `ids` (named by `names`) that failed to compile, as one message (a shader not loaded yet is not
+/// a failure).
+pub fn compile_error(
+    render_world: &bevy::ecs::world::World,
+    ids: &[bevy::render::render_resource::CachedComputePipelineId],
+    names: &[&str],
+) -> Option<String> {
+    use bevy::render::render_resource::{CachedPipelineState, PipelineCache};
+    let cache = render_world.resource::<PipelineCache>();
+    ids.iter().zip(names).find_map(|(id, name)| match cache.get_compute_pipeline_state(*id) {
+        CachedPipelineState::Err(e) if !matches!(e, bevy::shader::ShaderCacheError::ShaderNotLoaded(_)) => {
+            Some(format!("the {name} shader failed to compile: {e}"))
+        }
+        _ => None,
+    })
+}
+
 /// Adds the voxel renderer. Needs `VoxelWorld` and `RenderSettings` resources in the main world.
 pub struct VoxelRenderPlugin;
 

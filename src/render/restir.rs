@@ -62,13 +62,7 @@ pub fn ready(pipelines: Option<&RestirPipelines>, cache: &PipelineCache) -> bool
 /// A ReSTIR pipeline's compile error, if one failed.
 pub fn pipeline_error(render_world: &World) -> Option<String> {
     let pipelines = render_world.get_resource::<RestirPipelines>()?;
-    let cache = render_world.resource::<PipelineCache>();
-    pipelines.passes.iter().zip(RESTIR_PASS_NAMES).find_map(|(id, name)| match cache.get_compute_pipeline_state(*id) {
-        CachedPipelineState::Err(e) if !matches!(e, bevy::shader::ShaderCacheError::ShaderNotLoaded(_)) => {
-            Some(format!("the {name} shader failed to compile: {e}"))
-        }
-        _ => None,
-    })
+    super::compile_error(render_world, &pipelines.passes, &RESTIR_PASS_NAMES)
 }
 
 /// Dispatches the three ReSTIR passes for the current camera, after `primary_pass` wrote the G-buffer.

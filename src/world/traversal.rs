@@ -41,8 +41,12 @@ pub struct Ray {
 
 impl Ray {
     /// A ray from `origin` towards `dir` (normalised here; a zero direction gives a ray that hits nothing).
+    /// A ray along `dir` normalised. Components below 1e-20 become 0: their reciprocal would be infinite, and
+    /// infinity times zero (an origin on a boundary plane) NaN; the GPU flushes such values to zero as well.
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
-        Ray { origin, dir: dir.normalize_or_zero() }
+        let dir = dir.normalize_or_zero();
+        let dir = Vec3::select(dir.abs().cmplt(Vec3::splat(1e-20)), Vec3::ZERO, dir);
+        Ray { origin, dir }
     }
 
     pub fn at(&self, t: f32) -> Vec3 {
