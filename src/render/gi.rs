@@ -1,10 +1,11 @@
 //! The per-voxel-face GI cache (DESIGN.md "GI cache"; seed 001 adapted to voxels with seed 002's hash table).
 //!
 //! Entries are (surface voxel, face) pairs in a fixed-capacity GPU hash table (`shaders/gi.wgsl`). The primary
-//! pass inserts the entries of the faces it sees; `gi_update.wgsl` keeps K static ray hits per entry, traced once
-//! and retraced only when an edit's brick overlaps the entry's rays (the edit log below), and re-shades a few of
-//! them per frame; `gi_filter.wgsl` averages same-orientation neighbours; the shading passes interpolate. With
-//! GI off the buffers shrink to a few bytes and no GI pass is dispatched.
+//! pass inserts the entries of the faces it sees; `gi_refresh.wgsl` keeps K static ray hits per entry, traced once
+//! and traced again only for rays that cross a brick edited since (the edit log below); `gi_update.wgsl`
+//! re-shades a few of them per frame (and traces moving objects' entries outright); `gi_filter.wgsl` averages
+//! same-orientation neighbours; the shading passes interpolate (one frame of latency). With GI off the buffers
+//! shrink to a placeholder and no GI pass is dispatched; without moving objects their passes are not either.
 
 use super::gpu_world::{GpuWorld, WorldLayout};
 use super::primary::PrimaryPipeline;
