@@ -94,7 +94,11 @@ fn update_entry(slot: u32) {
     }
     let e = gi_entries[slot];
     let dynamic = e.object != 0u;
-    let index = object_index(e.object);
+    // Only a moving object's entry looks its object up (a scan of the object list).
+    var index = 0u;
+    if dynamic {
+        index = object_index(e.object);
+    }
     let gone = dynamic && index == object_count();
     if !used_within(e.last_used, MAX_AGE) || gone {
         atomicStore(&gi_keys[slot], 0u);
@@ -117,12 +121,13 @@ fn update_entry(slot: u32) {
     let samples = e.samples;
     let seen = used_within(e.last_seen, 1u) && !dynamic;
     let own = select(vec3(0.0), gi_filtered[slot].rgb, samples > 0u);
-    var rng = Rng(pcg(slot_seed(slot) ^ pcg(gi.frame)));
-    let first = pcg(slot_seed(slot) ^ 0x5bd1e995u) + gi.frame * gi.update_rays;
+    let seed = slot_seed(slot);
+    var rng = Rng(pcg(seed ^ pcg(gi.frame)));
+    let first = pcg(seed ^ 0x5bd1e995u) + gi.frame * gi.update_rays;
     var sum = vec3(0.0);
     for (var j = 0u; j < gi.update_rays; j++) {
         let i = (first + j) % gi.rays;
-        let dir = ray_direction(e.face, i, gi.rays, slot_seed(slot));
+        let dir = ray_direction(e.face, i, gi.rays, seed);
         var found: bool;
         var face: u32;
         var distance: f32;

@@ -12,7 +12,7 @@
 mod common;
 
 use bevy::math::{IVec3, UVec3, Vec3};
-use glowbrick::headless::{HeadlessOptions, HeadlessRenderer};
+use glowbrick::headless::HeadlessRenderer;
 use glowbrick::image_io::LinearImage;
 use glowbrick::reference::metrics::compare;
 use glowbrick::reference::{ReferenceOptions, render_reference};
@@ -26,14 +26,8 @@ use glowbrick::world::{CameraView, Edit, VoxelWorld};
 const W: u32 = 96;
 const H: u32 = 64;
 
-fn settings(pairs: &[&str]) -> RenderSettings {
-    let pairs: Vec<String> = pairs.iter().map(|p| p.to_string()).collect();
-    RenderSettings::default().with_pairs(&pairs).unwrap()
-}
-
 fn renderer(world: &VoxelWorld, view: &CameraView, pairs: &[&str]) -> Option<HeadlessRenderer> {
-    let options = HeadlessOptions { width: W, height: H, settings: settings(pairs), ..Default::default() };
-    common::renderer(world.clone(), view, &options)
+    common::renderer_with(world, view, W, H, pairs)
 }
 
 fn set_accumulate(renderer: &mut HeadlessRenderer, on: bool) {
@@ -182,7 +176,11 @@ fn with_gi_off_no_gi_pass_runs() {
     for name in GI_PASS_NAMES {
         assert!(on.gpu_pass_ms(name).is_some() || !common::require_gpu(), "{name} records its GPU time with GI on");
     }
-    assert_eq!(glowbrick::render::gi::cache_bytes(&settings(&["gi=off"]).gi), 104, "GI off holds a placeholder only");
+    assert_eq!(
+        glowbrick::render::gi::cache_bytes(&common::settings(&["gi=off"]).gi),
+        104,
+        "GI off holds a placeholder only"
+    );
 }
 
 /// A 32 x 16 x 16 room cut in two by a one-voxel wall at x = 16 (full height and depth); a lamp lights the +x

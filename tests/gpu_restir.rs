@@ -12,11 +12,10 @@
 mod common;
 
 use bevy::math::{IVec3, UVec3};
-use glowbrick::headless::{HeadlessOptions, HeadlessRenderer};
+use glowbrick::headless::HeadlessRenderer;
 use glowbrick::image_io::LinearImage;
 use glowbrick::reference::metrics::{Metrics, compare};
 use glowbrick::reference::{ReferenceOptions, render_reference};
-use glowbrick::settings::RenderSettings;
 use glowbrick::world::events::EditRequest;
 use glowbrick::world::palette::{Material, Palette};
 use glowbrick::world::scene::load_scene;
@@ -25,14 +24,8 @@ use glowbrick::world::{CameraView, Edit, VoxelWorld};
 const W: u32 = 96;
 const H: u32 = 64;
 
-fn settings(pairs: &[&str]) -> RenderSettings {
-    let pairs: Vec<String> = pairs.iter().map(|p| p.to_string()).collect();
-    RenderSettings::default().with_pairs(&pairs).unwrap()
-}
-
 fn restir(world: &VoxelWorld, view: &CameraView, pairs: &[&str]) -> Option<HeadlessRenderer> {
-    let options = HeadlessOptions { width: W, height: H, settings: settings(pairs), ..Default::default() };
-    common::renderer(world.clone(), view, &options)
+    common::renderer_with(world, view, W, H, pairs)
 }
 
 fn reference(world: &VoxelWorld, view: &CameraView, spp: u32) -> LinearImage {

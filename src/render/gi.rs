@@ -277,7 +277,10 @@ pub fn prepare_gi(
     if shape != cache.shape || gpu_world.as_ref().is_some_and(|w| w.replaced) {
         cache.reset(&device, shape);
     }
+    // The edit log reaches the GPU only in frames that add to it (a reset empties it: edit_count 0 reads none).
+    let mut log_changed = false;
     if let Some(world) = &gpu_world {
+        log_changed = !world.edited_bricks.is_empty();
         cache.log_edits(&world.edited_bricks);
     }
     cache.enabled = gi.enabled;
@@ -298,8 +301,8 @@ pub fn prepare_gi(
         _pad: 0,
     };
     queue.write_buffer(&cache.params, 0, bytemuck::bytes_of(&params));
-    let log: Vec<i32> = cache.log.iter().flatten().copied().collect();
-    if !log.is_empty() {
+    if log_changed {
+        let log: Vec<i32> = cache.log.iter().flatten().copied().collect();
         queue.write_buffer(&cache.edits, 0, bytemuck::cast_slice(&log));
     }
     let Some(counters) = counters.and_then(|c| buffers.get(&c.0)) else {

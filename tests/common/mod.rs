@@ -24,6 +24,24 @@ pub fn renderer(world: VoxelWorld, view: &CameraView, options: &HeadlessOptions)
     }
 }
 
+/// Render settings from `--set` pairs (panics on a bad pair: a test's own typo).
+pub fn settings(pairs: &[&str]) -> glowbrick::settings::RenderSettings {
+    let pairs: Vec<String> = pairs.iter().map(|p| p.to_string()).collect();
+    glowbrick::settings::RenderSettings::default().with_pairs(&pairs).unwrap()
+}
+
+/// A `w` x `h` headless renderer with `pairs`, or `None` as `renderer` says.
+pub fn renderer_with(
+    world: &VoxelWorld,
+    view: &CameraView,
+    w: u32,
+    h: u32,
+    pairs: &[&str],
+) -> Option<HeadlessRenderer> {
+    let options = HeadlessOptions { width: w, height: h, settings: settings(pairs), ..Default::default() };
+    renderer(world.clone(), view, &options)
+}
+
 /// Pixel counts of a GPU `debug=hit` image against the CPU traversal of the same camera rays.
 #[derive(Debug)]
 pub struct HitComparison {
