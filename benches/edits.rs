@@ -5,7 +5,7 @@
 use bevy::math::{IVec3, UVec3};
 use criterion::{BenchmarkId, Criterion, black_box, criterion_group, criterion_main};
 use glowbrick::lights::LightPool;
-use glowbrick::render::upload::{UploadState, stage_upload};
+use glowbrick::render::scene::world::{UploadState, stage_upload};
 use glowbrick::world::{Edit, Palette, VoxelWorld};
 
 /// A world with a stone floor (8 voxels thick) and a lamp every 16 voxels on it.

@@ -2,19 +2,15 @@
 // plus emission, written into the camera's HDR target. Debug views show the pass's inputs.
 
 #import glowbrick::world::materials
-#import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, sky, NOT_A_VOXEL, LIGHTING_NEE, LIGHTING_RESTIR}
-#import glowbrick::gi::{gi_on, gi_touch_surface, gi_incoming}
+#import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, NOT_A_VOXEL}
+#import glowbrick::gi::cache::{gi_on, gi_touch_surface, gi_incoming}
 #import glowbrick::traversal::{trace_scene, face_normal, INF}
-#import glowbrick::lights::{Rng, pcg, direct_sample}
+#import glowbrick::lights::{scene, sky, direct_sample}
+#import glowbrick::random::{Rng, pcg}
+#import glowbrick::constants::{LIGHTING_NEE, LIGHTING_RESTIR, DEBUG_NONE, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
+    DEBUG_RESERVOIR, RAY_OFFSET}
 
-const DEBUG_NONE: u32 = 0u;
-const DEBUG_ALBEDO: u32 = 1u;
-const DEBUG_NORMAL: u32 = 2u;
-const DEBUG_HIT: u32 = 3u;
-const DEBUG_DEPTH: u32 = 4u;
-const DEBUG_RESERVOIR: u32 = 5u;
-
-// The camera ray through the centre of `pixel`; render::camera::camera_ray computes the same on the CPU.
+// The camera ray through the centre of `pixel`; world::camera::camera_ray computes the same on the CPU.
 fn primary_ray_dir(pixel: vec2<u32>, size: vec2<f32>) -> vec3<f32> {
     let uv = (vec2<f32>(pixel) + 0.5) / size;
     let ndc = vec2(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
@@ -40,11 +36,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         gi_touch_surface(point, hit.face, hit.object);
     }
     // Voxel ReSTIR shades in its own passes when there is a light to sample; without one it is emission only.
-    let restir = frame.lighting == LIGHTING_RESTIR;
-    if restir && frame.light_count > 0u && (frame.debug_view == DEBUG_NONE || frame.debug_view == DEBUG_RESERVOIR) {
+    let restir = scene.mode == LIGHTING_RESTIR;
+    if restir && scene.light_count > 0u && (frame.debug_view == DEBUG_NONE || frame.debug_view == DEBUG_RESERVOIR) {
         return;
     }
-    let nee = frame.lighting == LIGHTING_NEE || restir;
+    let nee = scene.mode == LIGHTING_NEE || restir;
     var colour = vec4(0.0);
     if !hit.found {
         if frame.debug_view == DEBUG_NONE && !nee {
@@ -72,21 +68,21 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 if nee {
                     var rng = Rng(pcg(id.x + size.x * id.y) ^ pcg(frame.frame * 0x9E3779B9u + 1u));
                     var radiance = material.radiance.rgb
-                        + direct_sample(point, normal, material.albedo.rgb, frame.light_count, frame.power_pick == 1u, &rng);
+                        + direct_sample(point, normal, material.albedo.rgb, scene.light_count, scene.power_pick == 1u, &rng);
                     if gi_on() {
                         radiance += material.albedo.rgb * gi_incoming(point, hit.face, hit.object);
                     }
                     colour = vec4(highlight(radiance * frame.exposure, world_voxel, hit.face, point, hit.distance), 1.0);
                     break;
                 }
-                let sun_dir = frame.sun.xyz;
+                let sun_dir = scene.sun.xyz;
                 var sun = 0.0;
                 let cos_sun = dot(normal, sun_dir);
-                if frame.sun.w > 0.0 && cos_sun > 0.0 {
+                if scene.sun.w > 0.0 && cos_sun > 0.0 {
                     sun = cos_sun;
-                    if frame.shadows != 0u {
+                    if scene.shadows != 0u {
                         // Start just off the face so the shadow ray does not hit its own voxel.
-                        let p = origin + dir * hit.distance + normal * 1e-3;
+                        let p = origin + dir * hit.distance + normal * RAY_OFFSET;
                         if trace_scene(p, sun_dir, INF).found {
                             sun = 0.0;
                         }
@@ -98,7 +94,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 if gi_on() {
                     ambient = gi_incoming(point, hit.face, hit.object);
                 }
-                let lit = frame.sun_radiance.rgb * sun + ambient;
+                let lit = scene.sun_radiance.rgb * sun + ambient;
                 let shaded = (material.albedo.rgb * lit + material.radiance.rgb) * frame.exposure;
                 colour = vec4(highlight(shaded, world_voxel, hit.face, point, hit.distance), 1.0);
             }

@@ -4,6 +4,8 @@
 use crate::image_io::LinearImage;
 use crate::render::FramesRendered;
 use crate::render::camera::voxel_camera_bundle;
+use crate::render::gpu_types::COUNTERS;
+use crate::render::scene::counters::GpuCountersBuffer;
 use crate::settings::RenderSettings;
 use crate::world::{CameraView, VoxelWorld};
 use bevy::app::PluginsState;
@@ -119,7 +121,7 @@ impl HeadlessRenderer {
     /// Moves the camera to `view`, field of view included (takes effect on the next frame; temporal history is
     /// kept).
     pub fn set_view(&mut self, view: &CameraView) {
-        let transform = crate::render::camera::view_transform(view);
+        let transform = crate::world::view_transform(view);
         let world = self.app.world_mut();
         let mut cameras = world.query_filtered::<(&mut Transform, &mut Projection), With<crate::render::VoxelCamera>>();
         for (mut t, mut projection) in cameras.iter_mut(world) {
@@ -148,10 +150,10 @@ impl HeadlessRenderer {
             .and_then(|d| d.average())
     }
 
-    /// The GI cache's counters of the next rendered frame (`render::gi::GiCounter` indexes them). Renders that
+    /// The GPU counters of the next rendered frame (`render::gpu_types::GpuCounter` indexes them). Renders that
     /// frame (and any before the readback arrives).
-    pub fn gi_counters(&mut self) -> Result<[u32; crate::render::gi::GI_COUNTERS], String> {
-        let handle = self.app.world().resource::<crate::render::gi::GiCountersBuffer>().0.clone();
+    pub fn counters(&mut self) -> Result<[u32; COUNTERS], String> {
+        let handle = self.app.world().resource::<GpuCountersBuffer>().0.clone();
         let sink = Captured::default();
         let slot = sink.clone();
         let entity = self
@@ -169,7 +171,7 @@ impl HeadlessRenderer {
             self.step();
             if let Some(bytes) = sink.0.lock().map_err(|_| "readback lock poisoned")?.take() {
                 self.app.world_mut().despawn(entity);
-                let mut out = [0u32; crate::render::gi::GI_COUNTERS];
+                let mut out = [0u32; COUNTERS];
                 for (value, word) in out.iter_mut().zip(bytes.chunks_exact(4)) {
                     *value = u32::from_le_bytes([word[0], word[1], word[2], word[3]]);
                 }
@@ -221,10 +223,7 @@ impl HeadlessRenderer {
                 readback = Some(entity);
             }
             let render_world = self.app.sub_app(RenderApp).world();
-            let error = crate::render::primary::pipeline_error(render_world)
-                .or_else(|| crate::render::restir::pipeline_error(render_world))
-                .or_else(|| crate::render::gi::pipeline_error(render_world));
-            if let Some(error) = error {
+            if let Some(error) = crate::render::frame::pipeline_error(render_world) {
                 return Err(error);
             }
             if start.elapsed() > self.timeout {

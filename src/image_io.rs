@@ -1,5 +1,6 @@
 //! Linear float images: writing EXR (linear values kept) and PNG (tonemapped and sRGB-encoded).
 
+use crate::colour::{linear_to_srgb, luminance, tonemap_aces};
 use image::{ImageBuffer, Rgb, Rgba32FImage};
 use std::path::Path;
 
@@ -23,21 +24,9 @@ impl LinearImage {
 
     /// Mean Rec. 709 luminance of the pixels.
     pub fn mean_luminance(&self) -> f64 {
-        let sum: f64 = self.pixels.iter().map(|p| crate::lights::luminance([p[0], p[1], p[2]]) as f64).sum();
+        let sum: f64 = self.pixels.iter().map(|p| luminance([p[0], p[1], p[2]]) as f64).sum();
         sum / self.pixels.len().max(1) as f64
     }
-}
-
-/// ACES filmic fit (Narkowicz 2015): maps linear HDR radiance to [0, 1].
-pub fn tonemap_aces(x: f32) -> f32 {
-    // Past 1e4 the curve is 1 anyway; capping keeps x^2 from overflowing to inf / inf = NaN (black pixels).
-    let x = x.clamp(0.0, 1.0e4);
-    ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
-}
-
-/// Linear [0, 1] to the sRGB transfer curve.
-pub fn linear_to_srgb(x: f32) -> f32 {
-    if x <= 0.003_130_8 { x * 12.92 } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
 }
 
 /// Writes `.exr` (linear float) or `.png` (tonemapped 8-bit sRGB), by the file's extension.
@@ -79,18 +68,4 @@ pub fn read_image(path: &Path) -> Result<LinearImage, String> {
     let (width, height) = rgba.dimensions();
     let pixels = rgba.pixels().map(|p| p.0).collect();
     Ok(LinearImage { width, height, pixels })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::tonemap_aces;
-
-    #[test]
-    fn tonemapping_never_turns_a_bright_pixel_black() {
-        for x in [1.0e4f32, 1.0e20, f32::MAX, f32::INFINITY] {
-            assert_eq!(tonemap_aces(x), 1.0, "{x}");
-        }
-        assert_eq!(tonemap_aces(-1.0), 0.0);
-        assert!((tonemap_aces(0.18) - 0.2666).abs() < 1e-3, "{}", tonemap_aces(0.18));
-    }
 }

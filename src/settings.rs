@@ -134,12 +134,15 @@ impl GiSettings {
     }
 }
 
+/// Most spatial taps a ReSTIR pixel merges (the `taps` range's end; the shaders loop to it).
+pub const MAX_TAPS: u32 = 16;
+
 /// Valid ranges, shared by `--set` (which rejects) and the in-game keys (which clamp).
 pub const GI_RAYS_RANGE: (u32, u32) = (4, 128);
 pub const GI_UPDATE_RAYS_RANGE: (u32, u32) = (1, 64);
 pub const GI_ALPHA_RANGE: (f32, f32) = (0.001, 1.0);
 pub const CANDIDATES_RANGE: (u32, u32) = (1, 64);
-pub const TAPS_RANGE: (u32, u32) = (0, 16);
+pub const TAPS_RANGE: (u32, u32) = (0, MAX_TAPS);
 pub const RADIUS_RANGE: (f32, f32) = (0.0, 100.0);
 pub const EXPOSURE_RANGE: (f32, f32) = (0.001, 1000.0);
 

@@ -7,7 +7,7 @@
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::reference::sampling::Pcg;
 use crate::reference::{ReferenceOptions, render_reference};
-use crate::render::gi::GiCounter;
+use crate::render::gpu_types::GpuCounter;
 use crate::settings::{DebugView, RenderSettings};
 use crate::world::events::EditRequest;
 use crate::world::{CameraView, Edit, VoxelWorld};
@@ -170,7 +170,7 @@ fn random_camera(world: &VoxelWorld, rng: &mut Pcg) -> CameraView {
 pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
     let mut world = crate::world::scene::load_scene(&config.scene).map_err(|e| e.to_string())?;
     // A drifting lantern the whole time: every pass traces it, the GI cache gives it its own table.
-    let lantern = std::sync::Arc::new(crate::game::objects::model_for_world("lantern", &mut world)?);
+    let lantern = std::sync::Arc::new(crate::dynamic::model_for_world("lantern", &mut world)?);
     let home = world.view(None).cloned().unwrap_or_else(|| world.overview());
     let lamps: Vec<u16> = (0..world.palette.id_count() as u16).filter(|&id| world.palette.is_emissive(id)).collect();
     let blocks: Vec<u16> = (1..world.palette.id_count() as u16).filter(|&id| !world.palette.is_emissive(id)).collect();
@@ -262,9 +262,9 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
         report.frames += 1;
     }
 
-    let counters = renderer.gi_counters()?;
-    report.reservoir_resets = counters[GiCounter::ReservoirResets as usize];
-    report.gi_resets = counters[GiCounter::GiResets as usize];
+    let counters = renderer.counters()?;
+    report.reservoir_resets = counters[GpuCounter::ReservoirResets as usize];
+    report.gi_resets = counters[GpuCounter::GiResets as usize];
 
     // Static phase: the home view of the world as the soak left it, no edits, unbiased reuse (so the reference
     // comparison measures drift and error, not the biased variant's known darkening).

@@ -30,7 +30,7 @@ fn game(eye: Vec3, dir: Vec3, save: PathBuf) -> App {
         .insert_resource(SavePath(save));
     let view = CameraView { name: "test".into(), origin: eye.into(), direction: dir.into(), fov_deg: 60.0 };
     app.world_mut().spawn((
-        glowbrick::render::camera::view_transform(&view),
+        glowbrick::world::view_transform(&view),
         Player::looking(&view),
         Projection::Perspective(PerspectiveProjection::default()),
     ));
@@ -50,7 +50,7 @@ fn act(app: &mut App, action: PlayerAction) {
 fn aim(app: &mut App, eye: Vec3, dir: Vec3) {
     let view = CameraView { name: "aim".into(), origin: eye.into(), direction: dir.into(), fov_deg: 60.0 };
     let mut q = app.world_mut().query::<&mut Transform>();
-    *q.single_mut(app.world_mut()).unwrap() = glowbrick::render::camera::view_transform(&view);
+    *q.single_mut(app.world_mut()).unwrap() = glowbrick::world::view_transform(&view);
     app.update();
 }
 

@@ -16,7 +16,8 @@ use glowbrick::headless::HeadlessRenderer;
 use glowbrick::image_io::LinearImage;
 use glowbrick::reference::metrics::compare;
 use glowbrick::reference::{ReferenceOptions, render_reference};
-use glowbrick::render::gi::{DYNAMIC_GI_PASS_NAMES, GI_PASS_NAMES, GiCounter};
+use glowbrick::render::gi::{DYNAMIC_GI_PASS_NAMES, GI_PASS_NAMES};
+use glowbrick::render::gpu_types::GpuCounter;
 use glowbrick::settings::RenderSettings;
 use glowbrick::world::events::EditRequest;
 use glowbrick::world::palette::{Material, Palette};
@@ -59,7 +60,7 @@ fn check_against_reference(scene: &str, view_name: &str, direct: &[&str]) {
         pairs.extend_from_slice(direct);
         let Some(mut r) = renderer(&world, &view, &pairs) else { return };
         let image = common::masked(&converged(&mut r, 100, 128), &keep);
-        eprintln!("{scene} {pair}: GI counters {:?}", r.gi_counters().unwrap());
+        eprintln!("{scene} {pair}: GI counters {:?}", r.counters().unwrap());
         let m = compare(&image, &truth).unwrap();
         let mean = truth.mean_luminance();
         let indirect = mean - direct_only.mean_luminance();
@@ -108,14 +109,14 @@ fn an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_follows(
     let pairs = ["lighting=nee", "gi=on"];
     let Some(mut r) = renderer(&world, &view, &pairs) else { return };
     r.render(8).unwrap();
-    let quiet = r.gi_counters().unwrap();
-    assert_eq!(quiet[GiCounter::Retraced as usize], 0, "nothing retraces without an edit: {quiet:?}");
+    let quiet = r.counters().unwrap();
+    assert_eq!(quiet[GpuCounter::GiRetraced as usize], 0, "nothing retraces without an edit: {quiet:?}");
     // A block in the far corner (brick 7, 0, 0): only entries with a ray through that brick retrace it.
     let corner = Edit::FillBox { min: IVec3::new(60, 1, 1), max: IVec3::new(62, 3, 3), material: 1 };
     r.app_mut().world_mut().write_message(EditRequest::player(corner));
-    let after = r.gi_counters().unwrap();
-    let (retraced, live) = (after[GiCounter::Retraced as usize], after[GiCounter::Live as usize]);
-    let rays = after[GiCounter::RaysTraced as usize];
+    let after = r.counters().unwrap();
+    let (retraced, live) = (after[GpuCounter::GiRetraced as usize], after[GpuCounter::GiLive as usize]);
+    let rays = after[GpuCounter::GiRaysTraced as usize];
     eprintln!("corner edit: {retraced} of {live} entries retraced {rays} of their {} rays", live * 64);
     assert!(retraced > 20, "entries near the corner retrace: {retraced}");
     // On an open floor, grazing rays from far away cross the corner brick too: count entries that kept every
@@ -125,9 +126,9 @@ fn an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_follows(
     // Open a doorway in the wall: bricks x 16..24, y 0..8, z 0..16, in the middle of everything.
     let hole = Edit::FillBox { min: IVec3::new(20, 1, 5), max: IVec3::new(20, 5, 10), material: 0 };
     r.app_mut().world_mut().write_message(EditRequest::player(hole));
-    let after = r.gi_counters().unwrap();
-    let (retraced, live) = (after[GiCounter::Retraced as usize], after[GiCounter::Live as usize]);
-    let rays = after[GiCounter::RaysTraced as usize];
+    let after = r.counters().unwrap();
+    let (retraced, live) = (after[GpuCounter::GiRetraced as usize], after[GpuCounter::GiLive as usize]);
+    let rays = after[GpuCounter::GiRaysTraced as usize];
     eprintln!("doorway: {retraced} of {live} entries retraced {rays} of their {} rays", live * 64);
     assert!(retraced > 50, "entries that see the doorway's bricks retrace: {retraced}");
     assert!(rays < live * 64 / 2, "not every ray is traced again: {rays}");

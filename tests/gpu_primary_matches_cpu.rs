@@ -11,10 +11,10 @@ use bevy::math::{UVec2, UVec3};
 use common::compare_hits;
 use glowbrick::headless::HeadlessOptions;
 use glowbrick::image_io::LinearImage;
-use glowbrick::render::camera::{camera_ray, view_transform, world_from_clip};
 use glowbrick::settings::RenderSettings;
 use glowbrick::world::scene::{generated_world, load_scene};
 use glowbrick::world::{CameraView, VoxelWorld, trace};
+use glowbrick::world::{camera_ray, view_transform, world_from_clip};
 
 /// Renders, or returns None when no adapter exists and the GPU is not required.
 fn render(world: VoxelWorld, view: &CameraView, settings: RenderSettings, w: u32, h: u32) -> Option<LinearImage> {

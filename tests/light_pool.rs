@@ -209,14 +209,14 @@ fn cornell_has_256_brick_lights() {
 fn light_upload_sends_changed_slots_only() {
     use bevy::prelude::*;
     use glowbrick::lights::plugin::LightsPlugin;
-    use glowbrick::lights::upload::LightUpload;
+    use glowbrick::render::scene::lights::{LightUpload, LightUploadPlugin};
     use glowbrick::world::events::{EditRequest, WorldEditPlugin};
 
     let mut world = VoxelWorld::new(UVec3::splat(16), palette());
     world.apply(Edit::Place { at: IVec3::new(1, 1, 1), material: WARM }).unwrap();
     world.apply(Edit::Place { at: IVec3::new(5, 1, 1), material: BLUE }).unwrap();
     let mut app = App::new();
-    app.add_plugins((WorldEditPlugin, LightsPlugin)).insert_resource(world);
+    app.add_plugins((WorldEditPlugin, LightsPlugin, LightUploadPlugin)).insert_resource(world);
     app.update();
     let upload = app.world().resource::<LightUpload>().clone();
     assert_eq!(upload.light_count, 2);

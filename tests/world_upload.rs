@@ -1,7 +1,7 @@
 //! The renderer's upload staging: the first frame uploads the whole world, later frames only the dirty bricks.
 
 use bevy::prelude::*;
-use glowbrick::render::upload::{UploadState, WorldUpload, stage_world_upload};
+use glowbrick::render::scene::world::{UploadState, WorldUpload, stage_world_upload};
 use glowbrick::world::scene::load_scene;
 use glowbrick::world::{Edit, VoxelWorld};
 

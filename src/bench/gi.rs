@@ -7,7 +7,8 @@
 use super::{BenchConfig, cached_path_reference};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::reference::metrics::{Metrics, compare};
-use crate::render::gi::{ENTRY_BYTES, GI_PASS_NAMES, GiCounter, RAY_BYTES, cache_bytes};
+use crate::render::gi::{ENTRY_BYTES, GI_PASS_NAMES, RAY_BYTES, cache_bytes};
+use crate::render::gpu_types::GpuCounter;
 use crate::render::primary::PRIMARY_PASS_NAME;
 use crate::settings::RenderSettings;
 use crate::world::events::EditRequest;
@@ -83,7 +84,7 @@ fn measure_row(
     let frame_ms = start.elapsed().as_secs_f64() * 1000.0 / TIMED_FRAMES as f64;
     let gi_ms = GI_PASS_NAMES.map(|n| r.gpu_pass_ms(n));
     let primary_ms = r.gpu_pass_ms(PRIMARY_PASS_NAME);
-    let live = r.gi_counters()?[GiCounter::Live as usize];
+    let live = r.counters()?[GpuCounter::GiLive as usize];
     set_accumulate(&mut r, true);
     let image = r.render(AVERAGED_FRAMES)?;
     let settings = RenderSettings::default().with_pairs(&pairs.iter().map(|p| p.to_string()).collect::<Vec<_>>())?;
@@ -124,12 +125,12 @@ fn measure_edits(world: &VoxelWorld, view: &CameraView, config: &BenchConfig) ->
     let mut costs = Vec::new();
     for (label, edit) in edits {
         r.app_mut().world_mut().write_message(EditRequest::player(edit));
-        let c = r.gi_counters()?;
+        let c = r.counters()?;
         costs.push(EditCost {
             label,
-            live: c[GiCounter::Live as usize],
-            retraced: c[GiCounter::Retraced as usize],
-            rays: c[GiCounter::RaysTraced as usize],
+            live: c[GpuCounter::GiLive as usize],
+            retraced: c[GpuCounter::GiRetraced as usize],
+            rays: c[GpuCounter::GiRaysTraced as usize],
         });
         r.render(4)?;
     }

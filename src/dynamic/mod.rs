@@ -1,5 +1,5 @@
 //! Moving voxel objects: entities with a small voxel model (`model`) and a translation that a motion drives.
-//! Every GPU pass traces them (ray against the object's box, then a DDA through its voxels; `shaders/traversal.wgsl`
+//! Every GPU pass traces them (ray against the object's box, then a DDA through its voxels; `shaders/lib/traversal.wgsl`
 //! `trace_scene`), so they show up in the image, cast shadows and reach the GI cache, which gives their faces
 //! their own table (the static/dynamic split). Their emissive voxels are not in the light pool: they light the
 //! world through the GI cache only.
@@ -9,7 +9,6 @@
 //! collide with the player.
 
 pub mod model;
-pub mod upload;
 
 pub use model::VoxelModel;
 
@@ -90,12 +89,12 @@ impl Default for ObjectClock {
 /// Largest number of objects the GPU holds; spawning more is refused with a message.
 pub const MAX_OBJECTS: usize = 64;
 /// Object ids fit in 12 bits of the G-buffer.
-const MAX_ID: u32 = 4095;
+pub const MAX_OBJECT_ID: u32 = 4095;
 
 impl ObjectClock {
     fn take_id(&mut self) -> u32 {
         let id = self.next_id;
-        self.next_id = self.next_id % MAX_ID + 1;
+        self.next_id = self.next_id % MAX_OBJECT_ID + 1;
         id
     }
 }
@@ -157,12 +156,28 @@ pub fn builtin_model(name: &str, palette: &crate::world::Palette) -> Result<Voxe
     VoxelModel::from_ron(text, &format!("assets/models/{name}.ron"), palette)
 }
 
-/// Object clock, motion and the GPU upload of objects.
+/// A built-in model for this world: materials its legend names that the world's palette lacks are added from
+/// the default palette first (they then save with the world like any material).
+pub fn model_for_world(name: &str, world: &mut crate::world::VoxelWorld) -> Result<VoxelModel, String> {
+    if let Err(first) = builtin_model(name, &world.palette) {
+        let defaults = crate::world::Palette::default_blocks();
+        let (_, text) = BUILTIN_MODELS.iter().find(|(n, _)| *n == name).ok_or(first)?;
+        for material in defaults.materials.iter().filter(|m| text.contains(&format!("\"{}\"", m.name))) {
+            if world.palette.id_of(&material.name).is_none()
+                && world.palette.id_count() < crate::world::palette::MAX_MATERIALS
+            {
+                world.palette.push(material.clone());
+            }
+        }
+    }
+    builtin_model(name, &world.palette)
+}
+
+/// Object clock and motion (the GPU upload of objects is `render::scene::objects`).
 pub struct DynamicObjectsPlugin;
 
 impl Plugin for DynamicObjectsPlugin {
     fn build(&self, app: &mut App) {
         app.init_resource::<ObjectClock>().add_systems(Update, animate_objects);
-        upload::add_object_upload(app);
     }
 }

@@ -5,8 +5,9 @@
 use super::hud::StatusLine;
 use super::interaction::{Target, place_position};
 use super::player::Player;
+use crate::colour::srgb_to_linear;
 use crate::world::events::{ApplyEdits, EditRequest};
-use crate::world::import::vox::{VoxFile, srgb_to_linear};
+use crate::world::import::vox::VoxFile;
 use crate::world::{Edit, Material, VoxelWorld};
 use bevy::prelude::*;
 use std::sync::Arc;

@@ -2,27 +2,10 @@
 //! another drifting lantern in front of the player.
 
 use super::hud::StatusLine;
-use crate::dynamic::{DynamicObject, Motion, ObjectClock, VoxelModel, builtin_model, spawn_object};
-use crate::world::{Palette, VoxelWorld};
+use crate::dynamic::{DynamicObject, Motion, ObjectClock, model_for_world, spawn_object};
+use crate::world::VoxelWorld;
 use bevy::prelude::*;
 use std::sync::Arc;
-
-/// A built-in model for this world: materials its legend names that the world's palette lacks are added from
-/// the default palette first (they then save with the world like any material).
-pub fn model_for_world(name: &str, world: &mut VoxelWorld) -> Result<VoxelModel, String> {
-    if let Err(first) = builtin_model(name, &world.palette) {
-        let defaults = Palette::default_blocks();
-        let (_, text) = crate::dynamic::BUILTIN_MODELS.iter().find(|(n, _)| *n == name).ok_or(first)?;
-        for material in defaults.materials.iter().filter(|m| text.contains(&format!("\"{}\"", m.name))) {
-            if world.palette.id_of(&material.name).is_none()
-                && world.palette.id_count() < crate::world::palette::MAX_MATERIALS
-            {
-                world.palette.push(material.clone());
-            }
-        }
-    }
-    builtin_model(name, &world.palette)
-}
 
 /// Spawns the default objects around `centre` (a point in front of the start view): a lantern drifting in a
 /// circle and a block swinging like a pendulum.

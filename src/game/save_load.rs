@@ -94,7 +94,7 @@ fn save_or_load(
             SaveAction::Load => match load_path(&path.0) {
                 Ok(loaded) => {
                     if let (Some(view), Ok((mut transform, mut player, _))) = (loaded.view(None), camera.single_mut()) {
-                        *transform = crate::render::camera::view_transform(view);
+                        *transform = crate::world::view_transform(view);
                         *player = Player { walking: player.walking, ..Player::looking(view) };
                     }
                     status.show(format!("loaded {}", path.0.display()));

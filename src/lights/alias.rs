@@ -1,7 +1,7 @@
 //! Vose's alias method over light power: O(n) build, O(1) sampling with two uniform numbers. The thesis picked
 //! candidates uniformly and named power sampling as future work (seed 000 §6.4); this is that.
 
-/// One column of the table, as the GPU reads it (`shaders/lights.wgsl` once the ReSTIR passes use it).
+/// One column of the table, as the GPU reads it (`AliasEntry` in `shaders/lib/lights.wgsl`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct AliasEntry {

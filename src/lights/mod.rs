@@ -11,10 +11,11 @@
 
 pub mod alias;
 pub mod plugin;
-pub mod upload;
+pub mod summary;
 
 pub use alias::{AliasEntry, AliasTable};
 
+use crate::colour::luminance;
 use crate::world::grid::{BRICK_SIZE, BrickCell, Voxel};
 use crate::world::{AIR, VoxelWorld};
 use bevy::math::IVec3;
@@ -73,11 +74,6 @@ pub struct LightPool {
     alias_stale: bool,
     /// Voxel lights per brick, so edits can skip bricks that have none and can have none.
     voxel_lights_per_brick: HashMap<IVec3, u32>,
-}
-
-/// Rec. 709 luminance of linear RGB.
-pub fn luminance(rgb: [f32; 3]) -> f32 {
-    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
 }
 
 const NEIGHBOURS: [IVec3; 6] = [IVec3::X, IVec3::NEG_X, IVec3::Y, IVec3::NEG_Y, IVec3::Z, IVec3::NEG_Z];

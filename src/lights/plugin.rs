@@ -1,15 +1,10 @@
 //! Keeps the `LightPool` resource in step with the world: a full scan when a world is loaded or replaced,
-//! `update_region` after every applied edit, then the GPU upload.
+//! `update_region` after every applied edit. (Its GPU copy is `render::scene::lights`.)
 
 use super::LightPool;
-use super::upload::{
-    LightUpload, LightUploadState, LightsLayout, PendingLightUploads, extract_light_upload, prepare_gpu_lights,
-    stage_light_upload,
-};
 use crate::world::VoxelWorld;
 use crate::world::events::{ApplyEdits, EditApplied};
 use bevy::prelude::*;
-use bevy::render::{ExtractSchedule, Render, RenderApp, RenderSystems};
 
 /// Which world the pool was built from.
 #[derive(Resource, Default)]
@@ -19,25 +14,10 @@ pub struct LightsPlugin;
 
 impl Plugin for LightsPlugin {
     fn build(&self, app: &mut App) {
-        app.init_resource::<LightPool>()
-            .init_resource::<PoolWorld>()
-            .init_resource::<LightUpload>()
-            .init_resource::<LightUploadState>()
-            .add_systems(
-                Update,
-                (rebuild_on_new_world, update_after_edits)
-                    .chain()
-                    .after(ApplyEdits)
-                    .run_if(resource_exists::<VoxelWorld>),
-            )
-            .add_systems(PostUpdate, stage_light_upload);
-        if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
-            render_app
-                .init_resource::<PendingLightUploads>()
-                .init_resource::<LightsLayout>()
-                .add_systems(ExtractSchedule, extract_light_upload)
-                .add_systems(Render, prepare_gpu_lights.in_set(RenderSystems::PrepareResources));
-        }
+        app.init_resource::<LightPool>().init_resource::<PoolWorld>().add_systems(
+            Update,
+            (rebuild_on_new_world, update_after_edits).chain().after(ApplyEdits).run_if(resource_exists::<VoxelWorld>),
+        );
     }
 }
 

@@ -5,8 +5,8 @@
 //! - relMSE = mean over pixels and channels of d^2 / (reference^2 + 0.01) (the 0.01 keeps black pixels finite)
 //! - bias = mean luminance of the image minus that of the reference (negative: darker, as biased ReSTIR is)
 
+use crate::colour::luminance;
 use crate::image_io::LinearImage;
-use crate::lights::luminance;
 
 /// Errors of an image against a reference.
 #[derive(Clone, Copy, Debug, PartialEq)]

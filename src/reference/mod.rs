@@ -14,8 +14,9 @@ pub mod sampling;
 
 use crate::image_io::LinearImage;
 use crate::lights::{AliasTable, LightPool};
-use crate::render::camera::{camera_ray, view_transform, world_from_clip};
+use crate::world::traversal::RAY_OFFSET;
 use crate::world::{CameraView, Ray, VoxelWorld, trace};
+use crate::world::{camera_ray, view_transform, world_from_clip};
 use bevy::math::{UVec2, Vec3};
 use rayon::prelude::*;
 use sampling::{Pcg, cosine_direction, light_contains, sample_light_point};
@@ -48,9 +49,6 @@ pub struct Reference {
     pub spp: u32,
     pub elapsed: Duration,
 }
-
-/// Offset that keeps secondary rays from hitting the voxel they start on.
-const RAY_OFFSET: f32 = 1e-3;
 
 /// What the integrator needs besides the world: the lights and their sampling table.
 pub struct Scene<'a> {

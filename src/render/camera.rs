@@ -1,7 +1,7 @@
-//! Cameras: the component that enables voxel rendering, placement from a named view, and the CPU version of the
-//! primary ray (the same formula as `primary_ray_dir` in `shaders/primary.wgsl`).
+//! The component that enables voxel rendering on a camera, and the bundle a voxel camera needs. The camera math
+//! itself (transform from a view, primary rays) is in `world::camera`, where the CPU reference uses it too.
 
-use crate::world::{CameraView, Ray};
+use crate::world::{CameraView, view_transform};
 use bevy::prelude::*;
 use bevy::render::extract_component::ExtractComponent;
 
@@ -25,25 +25,11 @@ pub fn voxel_camera_bundle(view: &CameraView) -> impl Bundle {
     )
 }
 
-/// The transform of a camera at `view` (y up; a view looking straight up or down uses +z as up).
-pub fn view_transform(view: &CameraView) -> Transform {
-    let dir = view.direction();
-    let up = if dir.cross(Vec3::Y).length_squared() < 1e-8 { Vec3::Z } else { Vec3::Y };
-    Transform::from_translation(view.origin()).looking_to(dir, up)
-}
-
-/// `world_from_clip` of a perspective camera, as Bevy's view uniform computes it.
-pub fn world_from_clip(transform: &Transform, fov_y: f32, width: u32, height: u32) -> Mat4 {
-    let projection = PerspectiveProjection { fov: fov_y, aspect_ratio: width as f32 / height as f32, ..default() };
-    let clip_from_view =
-        Mat4::perspective_infinite_reverse_rh(projection.fov, projection.aspect_ratio, projection.near);
-    transform.to_matrix() * clip_from_view.inverse()
-}
-
-/// The primary ray through the centre of `pixel` (y down) of a `width` x `height` image.
-pub fn camera_ray(world_from_clip: Mat4, origin: Vec3, pixel: UVec2, width: u32, height: u32) -> Ray {
-    let uv = (pixel.as_vec2() + 0.5) / Vec2::new(width as f32, height as f32);
-    let ndc = Vec2::new(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
-    let p = world_from_clip * Vec4::new(ndc.x, ndc.y, 1.0, 1.0);
-    Ray::new(origin, p.truncate() / p.w - origin)
+#[cfg(test)]
+mod tests {
+    /// The CPU camera math (`world::camera`) assumes the voxel camera's near plane.
+    #[test]
+    fn the_cpu_camera_uses_the_voxel_cameras_near_plane() {
+        assert_eq!(bevy::prelude::PerspectiveProjection::default().near, crate::world::camera::NEAR_PLANE);
+    }
 }

@@ -1,99 +1,84 @@
 //! The per-voxel-face GI cache (DESIGN.md "GI cache"; seed 001 adapted to voxels with seed 002's hash table).
 //!
-//! Entries are (surface voxel, face) pairs in a fixed-capacity GPU hash table (`shaders/gi.wgsl`). The primary
-//! pass inserts the entries of the faces it sees; `gi_refresh.wgsl` keeps K static ray hits per entry, traced once
-//! and traced again only for rays that cross a brick edited since (the edit log below); `gi_update.wgsl`
-//! re-shades a few of them per frame (and traces moving objects' entries outright); `gi_filter.wgsl` averages
+//! Entries are (surface voxel, face) pairs in a fixed-capacity GPU hash table (`shaders/gi/cache.wgsl`). The primary
+//! pass inserts the entries of the faces it sees; `shaders/gi/refresh.wgsl` keeps K static ray hits per entry, traced once
+//! and traced again only for rays that cross a brick edited since (the edit log below); `update.wgsl`
+//! re-shades a few of them per frame (and traces moving objects' entries outright); `filter.wgsl` averages
 //! same-orientation neighbours; the shading passes interpolate (one frame of latency). With GI off the buffers
 //! shrink to a placeholder and no GI pass is dispatched; without moving objects their passes are not either.
+//! The passes run once per frame after every camera (`frame::world_frame`), in the order listed there.
 
-use super::gpu_world::{GpuWorld, WorldLayout};
-use super::primary::PrimaryPipeline;
-use super::{GlowbrickShaders, VoxelCamera, shader_defs};
-use crate::lights::upload::{GpuLights, LightsLayout};
+use super::frame::{Dispatch, VoxelPass};
+use super::gpu_types::{
+    GI_BOUNCES, GI_CACHE, GI_FILTER, GI_KEY_BYTES, GI_RADIANCE_BYTES, GI_RAY_BYTES, GiEdit, GiEntry, GiParams,
+};
+use super::scene::SceneUploaded;
+use super::scene::world::GpuWorld;
 use crate::settings::{GiSettings, RenderSettings};
 use bevy::prelude::*;
-use bevy::render::diagnostic::RecordDiagnostics;
-use bevy::render::extract_resource::ExtractResource;
-use bevy::render::render_asset::RenderAssets;
 use bevy::render::render_resource::binding_types::{
     storage_buffer_read_only_sized, storage_buffer_sized, uniform_buffer_sized,
 };
 use bevy::render::render_resource::*;
-use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
-use bevy::render::storage::{GpuShaderBuffer, ShaderBuffer};
-use bevy::render::view::{ViewTarget, ViewUniformOffset, ViewUniforms};
+use bevy::render::renderer::{RenderDevice, RenderQueue};
+use bevy::render::{Render, RenderStartup, RenderSystems};
 use std::collections::VecDeque;
 use std::num::NonZeroU64;
 
 /// Entries in the static world's table and in the dynamic objects' table (powers of two).
 pub const STATIC_CAPACITY: u32 = 1 << 16;
 pub const DYNAMIC_CAPACITY: u32 = 1 << 12;
-/// GPU bytes per entry besides its rays: key 4, payload 64, blended and filtered radiance 16 each.
-pub const ENTRY_BYTES: u64 = 4 + 64 + 16 + 16;
+/// GPU bytes per entry besides its rays: key, payload, blended and filtered radiance.
+pub const ENTRY_BYTES: u64 = GI_KEY_BYTES + size_of::<GiEntry>() as u64 + 2 * GI_RADIANCE_BYTES;
 /// Bytes per cached ray (face and distance packed in a u32).
-pub const RAY_BYTES: u64 = 4;
+pub const RAY_BYTES: u64 = GI_RAY_BYTES;
 /// Edited bricks remembered for invalidation; older edits force a retrace of everything traced before them.
 const EDIT_LOG: usize = 64;
 /// Frames numbering starts here so that "last seen at frame 0" (a fresh entry) is never recent.
 const FIRST_FRAME: u32 = 1000;
 
-/// GPU-time names of the static world's GI passes (update, filter), and of the moving objects' ones, which run
-/// only while objects exist.
-pub const GI_PASS_NAMES: [&str; 3] = ["glowbrick_gi_refresh", "glowbrick_gi_update", "glowbrick_gi_filter"];
-pub const DYNAMIC_GI_PASS_NAMES: [&str; 2] = ["glowbrick_gi_dynamic_update", "glowbrick_gi_dynamic_filter"];
+/// The static world's passes (refresh, update, filter) and the moving objects' (update, filter), which run only
+/// while objects exist. One thread per table slot.
+pub const STATIC_PASSES: [VoxelPass; 3] = [
+    VoxelPass {
+        name: "glowbrick_gi_refresh",
+        shader: "gi/refresh.wgsl",
+        entry_point: "refresh_static",
+        dispatch: Dispatch::Slots(STATIC_CAPACITY),
+    },
+    VoxelPass {
+        name: "glowbrick_gi_update",
+        shader: "gi/update.wgsl",
+        entry_point: "update_static",
+        dispatch: Dispatch::Slots(STATIC_CAPACITY),
+    },
+    VoxelPass {
+        name: "glowbrick_gi_filter",
+        shader: "gi/filter.wgsl",
+        entry_point: "filter_static",
+        dispatch: Dispatch::Slots(STATIC_CAPACITY),
+    },
+];
+pub const DYNAMIC_PASSES: [VoxelPass; 2] = [
+    VoxelPass {
+        name: "glowbrick_gi_dynamic_update",
+        shader: "gi/update.wgsl",
+        entry_point: "update_dynamic",
+        dispatch: Dispatch::Slots(DYNAMIC_CAPACITY),
+    },
+    VoxelPass {
+        name: "glowbrick_gi_dynamic_filter",
+        shader: "gi/filter.wgsl",
+        entry_point: "filter_dynamic",
+        dispatch: Dispatch::Slots(DYNAMIC_CAPACITY),
+    },
+];
 
-/// What the GI counters buffer counts each frame (`COUNT_*` in `shaders/gi.wgsl`).
-#[derive(Clone, Copy, Debug)]
-pub enum GiCounter {
-    /// Entries re-shaded this frame.
-    Updated = 0,
-    /// Entries with at least one of their K static hits (re)traced this frame.
-    Retraced = 1,
-    /// Entries in the tables.
-    Live = 2,
-    /// Entries freed after going unused.
-    Evicted = 3,
-    /// Inserts that found their probe window full.
-    Full = 4,
-    /// Entries inserted this frame.
-    Inserted = 5,
-    /// Static rays traced to (re)fill the cached hits this frame.
-    RaysTraced = 6,
-    /// Ray hits whose face had no cached value and borrowed the shooting entry's indirect light.
-    Borrowed = 7,
-    /// Since the renderer started: ReSTIR reservoirs read with a non-finite field (reset to empty).
-    ReservoirResets = 8,
-    /// Since the renderer started: GI estimates that came out non-finite (replaced by zero).
-    GiResets = 9,
-}
-/// Counter words; the first `PER_FRAME_COUNTERS` restart every frame, the rest count since the start.
-pub const GI_COUNTERS: usize = 16;
-const PER_FRAME_COUNTERS: usize = 8;
+/// GPU-time names of the static world's GI passes, and of the moving objects' ones.
+pub const GI_PASS_NAMES: [&str; 3] = [STATIC_PASSES[0].name, STATIC_PASSES[1].name, STATIC_PASSES[2].name];
+pub const DYNAMIC_GI_PASS_NAMES: [&str; 2] = [DYNAMIC_PASSES[0].name, DYNAMIC_PASSES[1].name];
 
-/// `GiParams` in `shaders/gi.wgsl`.
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-struct GiParams {
-    enabled: u32,
-    flags: u32,
-    rays: u32,
-    update_rays: u32,
-    alpha: f32,
-    epoch: u32,
-    lost_epoch: u32,
-    edit_count: u32,
-    static_capacity: u32,
-    dynamic_capacity: u32,
-    frame: u32,
-    _pad: u32,
-}
-
-const GI_FILTER: u32 = 1;
-const GI_BOUNCES: u32 = 2;
-const GI_CACHE: u32 = 4;
-
-/// Layout of group 3 (`shaders/gi.wgsl`), shared by every voxel pass.
+/// Layout of group 3 (`shaders/gi/cache.wgsl`), shared by every voxel pass.
 #[derive(Resource)]
 pub struct GiLayout(pub BindGroupLayoutDescriptor);
 
@@ -110,18 +95,9 @@ pub fn gi_bind_group_layout() -> BindGroupLayoutDescriptor {
                 storage_buffer_sized(false, None),
                 storage_buffer_sized(false, None),
                 storage_buffer_read_only_sized(false, None),
-                storage_buffer_sized(false, None),
             ),
         ),
     )
-}
-
-/// The counters buffer, an asset of the main world so tests and the bench can read it back.
-#[derive(Resource, ExtractResource, Clone)]
-pub struct GiCountersBuffer(pub Handle<ShaderBuffer>);
-
-pub fn counters_asset() -> ShaderBuffer {
-    ShaderBuffer::new(&[0u8; GI_COUNTERS * 4], bevy::asset::RenderAssetUsages::default())
 }
 
 /// What the table buffers were sized for: nothing (GI off) or K rays per entry.
@@ -168,10 +144,10 @@ impl Tables {
         };
         let n = shape.entries as u64;
         Tables {
-            keys: storage("glowbrick_gi_keys", n * 4),
-            entries: storage("glowbrick_gi_entries", n * 64),
-            irradiance: storage("glowbrick_gi_irradiance", n * 16),
-            filtered: storage("glowbrick_gi_filtered", n * 16),
+            keys: storage("glowbrick_gi_keys", n * GI_KEY_BYTES),
+            entries: storage("glowbrick_gi_entries", n * size_of::<GiEntry>() as u64),
+            irradiance: storage("glowbrick_gi_irradiance", n * GI_RADIANCE_BYTES),
+            filtered: storage("glowbrick_gi_filtered", n * GI_RADIANCE_BYTES),
             rays: storage("glowbrick_gi_rays", n * shape.rays as u64 * RAY_BYTES),
         }
     }
@@ -184,8 +160,8 @@ pub struct GiCache {
     edits: Buffer,
     tables: Tables,
     shape: Shape,
-    /// (min voxel, epoch), (max voxel exclusive, 0) per edited brick, oldest first.
-    log: VecDeque<[i32; 8]>,
+    /// Edited bricks, oldest first.
+    log: VecDeque<GiEdit>,
     epoch: u32,
     lost_epoch: u32,
     frame: u32,
@@ -204,7 +180,7 @@ pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
     });
     let edits = device.create_buffer(&BufferDescriptor {
         label: Some("glowbrick_gi_edits"),
-        size: (EDIT_LOG * 32) as u64,
+        size: (EDIT_LOG * size_of::<GiEdit>()) as u64,
         usage: BufferUsages::STORAGE | BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
@@ -251,9 +227,9 @@ impl GiCache {
                 && let Some(oldest) = self.log.pop_front()
             {
                 // Entries traced before the forgotten edit can no longer tell whether it reached them.
-                self.lost_epoch = self.lost_epoch.max(oldest[3] as u32);
+                self.lost_epoch = self.lost_epoch.max(oldest.epoch as u32);
             }
-            self.log.push_back([lo.x, lo.y, lo.z, self.epoch as i32, hi.x, hi.y, hi.z, 0]);
+            self.log.push_back(GiEdit { min: lo.to_array(), epoch: self.epoch as i32, max: hi.to_array(), _pad: 0 });
         }
     }
 }
@@ -265,8 +241,6 @@ pub fn prepare_gi(
     mut cache: ResMut<GiCache>,
     settings: Option<Res<RenderSettings>>,
     gpu_world: Option<Res<GpuWorld>>,
-    counters: Option<Res<GiCountersBuffer>>,
-    buffers: Res<RenderAssets<GpuShaderBuffer>>,
     layout: Res<GiLayout>,
     pipeline_cache: Res<PipelineCache>,
     device: Res<RenderDevice>,
@@ -302,14 +276,9 @@ pub fn prepare_gi(
     };
     queue.write_buffer(&cache.params, 0, bytemuck::bytes_of(&params));
     if log_changed {
-        let log: Vec<i32> = cache.log.iter().flatten().copied().collect();
+        let log: Vec<GiEdit> = cache.log.iter().copied().collect();
         queue.write_buffer(&cache.edits, 0, bytemuck::cast_slice(&log));
     }
-    let Some(counters) = counters.and_then(|c| buffers.get(&c.0)) else {
-        cache.bind_group = None;
-        return;
-    };
-    queue.write_buffer(&counters.buffer, 0, &[0u8; PER_FRAME_COUNTERS * 4]);
     let t = &cache.tables;
     cache.bind_group = Some(device.create_bind_group(
         "glowbrick_gi",
@@ -322,131 +291,14 @@ pub fn prepare_gi(
             t.filtered.as_entire_binding(),
             t.rays.as_entire_binding(),
             cache.edits.as_entire_binding(),
-            counters.buffer.as_entire_binding(),
         )),
     ));
 }
 
-/// Refresh, update and filter of the static table, then update and filter of the objects' table.
-#[derive(Resource)]
-pub struct GiPipelines {
-    passes: [CachedComputePipelineId; 5],
-}
-
-/// Pass names in the order of `GiPipelines::passes`.
-const PIPELINE_NAMES: [&str; 5] =
-    [GI_PASS_NAMES[0], GI_PASS_NAMES[1], GI_PASS_NAMES[2], DYNAMIC_GI_PASS_NAMES[0], DYNAMIC_GI_PASS_NAMES[1]];
-
-pub fn init_gi_pipelines(
-    mut commands: Commands,
-    pipeline_cache: Res<PipelineCache>,
-    shaders: Res<GlowbrickShaders>,
-    world_layout: Res<WorldLayout>,
-    lights_layout: Res<LightsLayout>,
-    gi_layout: Res<GiLayout>,
-    primary: Res<PrimaryPipeline>,
-) {
-    let queue = |name: &'static str, shader: &Handle<Shader>, entry: &'static str| {
-        pipeline_cache.queue_compute_pipeline(ComputePipelineDescriptor {
-            label: Some(name.into()),
-            layout: vec![
-                world_layout.0.clone(),
-                primary.view_layout.clone(),
-                lights_layout.0.clone(),
-                gi_layout.0.clone(),
-            ],
-            shader: shader.clone(),
-            shader_defs: shader_defs(),
-            entry_point: Some(entry.into()),
-            ..default()
-        })
-    };
-    let passes = [
-        queue(PIPELINE_NAMES[0], &shaders.gi_refresh, "refresh_static"),
-        queue(PIPELINE_NAMES[1], &shaders.gi_update, "update_static"),
-        queue(PIPELINE_NAMES[2], &shaders.gi_filter, "filter_static"),
-        queue(PIPELINE_NAMES[3], &shaders.gi_update, "update_dynamic"),
-        queue(PIPELINE_NAMES[4], &shaders.gi_filter, "filter_dynamic"),
-    ];
-    commands.insert_resource(GiPipelines { passes });
-}
-
-/// A GI pipeline's compile error, if one failed.
-pub fn pipeline_error(render_world: &World) -> Option<String> {
-    let pipelines = render_world.get_resource::<GiPipelines>()?;
-    super::compile_error(render_world, &pipelines.passes, &PIPELINE_NAMES)
-}
-
-/// Updates and filters the cache after the camera's passes inserted this frame's entries (which shade with
-/// last frame's values: one frame of latency).
-#[allow(clippy::too_many_arguments)]
-pub fn gi_passes(
-    view: ViewQuery<(&ViewTarget, &ViewUniformOffset, &super::primary::PrimaryViewResources), With<VoxelCamera>>,
-    primary: Option<Res<PrimaryPipeline>>,
-    pipelines: Option<Res<GiPipelines>>,
-    cache: Option<Res<GiCache>>,
-    pipeline_cache: Res<PipelineCache>,
-    view_uniforms: Res<ViewUniforms>,
-    gpu_world: Option<Res<GpuWorld>>,
-    gpu_lights: Option<Res<GpuLights>>,
-    objects: Option<Res<crate::dynamic::upload::GpuObjects>>,
-    mut ctx: RenderContext,
-) {
-    let (target, view_offset, resources) = view.into_inner();
-    let (Some(primary), Some(pipelines), Some(cache), Some(gpu_world), Some(gpu_lights)) =
-        (primary, pipelines, cache, gpu_world, gpu_lights)
-    else {
-        return;
-    };
-    let with_objects = objects.is_some_and(|o| o.count > 0);
-    let Some(gi_group) = cache.bind_group.as_ref().filter(|_| cache.enabled) else { return };
-    let Some(computes) =
-        pipelines.passes.iter().map(|id| pipeline_cache.get_compute_pipeline(*id)).collect::<Option<Vec<_>>>()
-    else {
-        return;
-    };
-    let Some(view_binding) = view_uniforms.uniforms.binding() else { return };
-    let view_group =
-        super::primary::view_bind_group(&ctx, &pipeline_cache, &primary.view_layout, target, view_binding, resources);
-    let diagnostics = ctx.diagnostic_recorder();
-    let diagnostics = diagnostics.as_deref();
-    let encoder = ctx.command_encoder();
-    // Refresh before update, updates before filters (a filter reads its neighbours' new values); the objects'
-    // table only while objects exist.
-    let order = [
-        (0, STATIC_CAPACITY),
-        (1, STATIC_CAPACITY),
-        (3, DYNAMIC_CAPACITY),
-        (2, STATIC_CAPACITY),
-        (4, DYNAMIC_CAPACITY),
-    ];
-    for (index, threads) in order {
-        if index >= 3 && !with_objects {
-            continue;
-        }
-        let (compute, name) = (computes[index], PIPELINE_NAMES[index]);
-        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor { label: Some(name), timestamp_writes: None });
-        let span = diagnostics.pass_span(&mut pass, name);
-        pass.set_pipeline(compute);
-        pass.set_bind_group(0, &gpu_world.bind_group, &[]);
-        pass.set_bind_group(1, &view_group, &[view_offset.offset]);
-        pass.set_bind_group(2, &gpu_lights.bind_group, &[]);
-        pass.set_bind_group(3, gi_group, &[]);
-        pass.dispatch_workgroups(threads.div_ceil(64), 1, 1);
-        span.end(&mut pass);
-    }
-}
-
-/// Adds the cache's systems to the render app.
-pub fn add_gi(render_app: &mut SubApp) {
-    use bevy::core_pipeline::{Core3d, Core3dSystems};
-    use bevy::render::{Render, RenderStartup, RenderSystems};
+/// Adds the cache and its preparation to the render app (its passes are in `frame::world_frame`).
+pub fn add(render_app: &mut SubApp) {
     render_app
         .insert_resource(GiLayout(gi_bind_group_layout()))
-        .add_systems(RenderStartup, (init_gi_cache, init_gi_pipelines.after(super::primary::init_primary_pipeline)))
-        .add_systems(
-            Render,
-            prepare_gi.after(super::gpu_world::prepare_gpu_world).in_set(RenderSystems::PrepareResources),
-        )
-        .add_systems(Core3d, gi_passes.after(super::restir::restir_passes).in_set(Core3dSystems::MainPass));
+        .add_systems(RenderStartup, init_gi_cache)
+        .add_systems(Render, prepare_gi.after(SceneUploaded).in_set(RenderSystems::PrepareResources));
 }

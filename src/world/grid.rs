@@ -1,6 +1,6 @@
 //! The brick grid (seed 000 §2.3, §4.1): a top grid of 8^3 bricks, each empty, homogeneous or pooled.
 //!
-//! Top cell encoding (shared with `shaders/world.wgsl` through shader defs, see `render::shader_defs`):
+//! Top cell encoding (shared with `shaders/lib/world.wgsl` through shader defs, see `render::gpu_types`):
 //! - `0`: empty brick (all air),
 //! - `1..=0xFFFF`: homogeneous brick of that material id,
 //! - `POOLED_FLAG | slot`: the brick's 512 voxels live in pool slot `slot`.

@@ -1,5 +1,6 @@
 //! The voxel world: brick grid, palette, named camera views, edits, traversal, generation and files.
 
+pub mod camera;
 pub mod edit;
 pub mod events;
 pub mod font;
@@ -9,10 +10,10 @@ pub mod import;
 pub mod palette;
 pub mod scene;
 pub mod source;
-pub mod summary;
 pub mod terrain;
 pub mod traversal;
 
+pub use camera::{camera_ray, view_transform, world_from_clip};
 pub use edit::{Edit, EditError};
 pub use grid::{AIR, BRICK_SIZE, BrickCell, BrickGrid, Voxel};
 pub use palette::{Material, Palette};

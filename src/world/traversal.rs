@@ -1,5 +1,5 @@
 //! CPU ray traversal: a DDA over bricks that skips empty cells, then a DDA over the voxels of non-uniform bricks
-//! (Amanatides & Woo). `shaders/traversal.wgsl` mirrors this function step for step, so the GPU and CPU agree
+//! (Amanatides & Woo). `shaders/lib/traversal.wgsl` mirrors this function step for step, so the GPU and CPU agree
 //! per pixel; keep the two in sync.
 //!
 //! Conventions shared by both: `t` is distance along the unit direction; every boundary crossing is computed as
@@ -8,6 +8,11 @@
 
 use super::grid::{BRICK_SIZE, BrickCell, BrickGrid, Voxel};
 use bevy::math::{IVec3, Vec3};
+
+/// Secondary rays start this far off the surface they leave (the GPU passes use the same, as
+/// `1.0 / RAY_OFFSET_INVERSE`: a quotient of two exact values, so both sides get the same f32).
+pub const RAY_OFFSET_INVERSE: u32 = 1000;
+pub const RAY_OFFSET: f32 = 1.0 / RAY_OFFSET_INVERSE as f32;
 
 /// A voxel face, by outward normal: +X, -X, +Y, -Y, +Z, -Z (index 0..6).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -4,8 +4,8 @@
 use bevy::math::{IVec3, UVec2};
 use glowbrick::headless::{HeadlessOptions, HeadlessRenderer};
 use glowbrick::image_io::LinearImage;
-use glowbrick::render::camera::{camera_ray, view_transform, world_from_clip};
 use glowbrick::world::{CameraView, VoxelWorld, trace};
+use glowbrick::world::{camera_ray, view_transform, world_from_clip};
 
 /// With `GLOWBRICK_REQUIRE_GPU=1` (CI) a missing adapter is a failure, otherwise a skip.
 pub fn require_gpu() -> bool {

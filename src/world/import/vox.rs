@@ -4,6 +4,7 @@
 //! file gives one error, never a panic, and memory stays within the file's declared (and checked) sizes.
 
 use super::BrickBuilder;
+use crate::colour::srgb_to_linear;
 use crate::world::format::LoadError;
 use crate::world::grid::MAX_WORLD_EDGE;
 use crate::world::{Material, Palette, VoxelWorld};
@@ -112,12 +113,6 @@ fn default_palette() -> Vec<[u8; 4]> {
             [(r * 51) as u8, (g * 51) as u8, (b * 51) as u8, 255]
         })
         .collect()
-}
-
-/// An 8-bit sRGB channel as a linear value.
-pub fn srgb_to_linear(c: u8) -> f32 {
-    let c = c as f32 / 255.0;
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
 }
 
 /// Builds a world holding every model side by side along x (2 voxels apart), standing on y = 0.

@@ -1,13 +1,11 @@
 // Voxel ReSTIR pass 2: spatial reuse. Each pixel merges its reservoir with k neighbours' in a disk of radius r
 // pixels that share its face orientation and depth (within 10%). With spatial reuse off, it copies.
 
-#import glowbrick::frame::{frame, view, gbuffer, unpack_surface, pixel_index, RESTIR_SPATIAL}
-#import glowbrick::lights::{Rng, rng_next, PI}
-#import glowbrick::restir::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
+#import glowbrick::frame::{frame, view, gbuffer, unpack_surface, pixel_index}
+#import glowbrick::constants::{RESTIR_SPATIAL, MAX_TAPS, PI}
+#import glowbrick::random::{Rng, rng_next}
+#import glowbrick::restir::common::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
     shading, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, pixel_rng}
-
-// Settings clamp taps to this (src/settings.rs).
-const MAX_TAPS: u32 = 16u;
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {

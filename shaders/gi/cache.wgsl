@@ -1,11 +1,13 @@
 // The per-voxel-face GI cache (DESIGN.md "GI cache", seed 001 adapted with seed 002's hash table): bindings
 // (group 3), the hash table of (voxel, face) entries, the fixed ray directions, the cached static hits, and the
-// lookups the shading passes use. Updated by gi_update.wgsl and gi_filter.wgsl.
-#define_import_path glowbrick::gi
+// lookups the shading passes use. Kept by refresh.wgsl, update.wgsl and filter.wgsl in this folder.
+#define_import_path glowbrick::gi::cache
 
 #import glowbrick::world::{voxel_at, objects, object_voxel, object_index, object_count}
 #import glowbrick::traversal::face_normal
-#import glowbrick::lights::pcg
+#import glowbrick::random::pcg
+#import glowbrick::counters::counters
+#import glowbrick::constants::{RAY_OFFSET, COUNT_GI_INSERTED, COUNT_GI_FULL}
 
 struct GiParams {
     // 1 when the cache is on (the shading passes read it and the primary pass inserts into it).
@@ -48,10 +50,6 @@ struct GiEntry {
     _pad: u32,
 }
 
-const GI_FILTER: u32 = 1u;
-const GI_BOUNCES: u32 = 2u;
-const GI_CACHE: u32 = 4u;
-
 // Frames an entry may go unused before it stops being updated, and before its slot is freed.
 const UPDATE_AGE: u32 = 16u;
 const MAX_AGE: u32 = 240u;
@@ -62,18 +60,6 @@ const MAX_PROBES: u32 = 16u;
 const MISS_FACE: u32 = 7u;
 const DISTANCE_SCALE: f32 = 256.0;
 
-// Counters the tests and the bench read back (src/render/gi.rs, GiCounter).
-const COUNT_UPDATED: u32 = 0u;
-const COUNT_RETRACED: u32 = 1u;
-const COUNT_LIVE: u32 = 2u;
-const COUNT_EVICTED: u32 = 3u;
-const COUNT_FULL: u32 = 4u;
-const COUNT_INSERTED: u32 = 5u;
-const COUNT_RAYS_TRACED: u32 = 6u;
-const COUNT_BORROWED: u32 = 7u;
-// Counted since the renderer started (never cleared): non-finite values found and reset.
-const COUNT_RESERVOIR_RESETS: u32 = 8u;
-const COUNT_GI_RESETS: u32 = 9u;
 
 @group(3) @binding(0) var<uniform> gi: GiParams;
 @group(3) @binding(1) var<storage, read_write> gi_keys: array<atomic<u32>>;
@@ -85,7 +71,6 @@ const COUNT_GI_RESETS: u32 = 9u;
 @group(3) @binding(5) var<storage, read_write> gi_rays: array<u32>;
 // Edit log: pairs (min voxel xyz, epoch), (max voxel xyz exclusive, 0) of edited bricks.
 @group(3) @binding(6) var<storage, read> gi_edits: array<vec4<i32>>;
-@group(3) @binding(7) var<storage, read_write> gi_counters: array<atomic<u32>>;
 
 fn key_hash(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
     return pcg(pcg(pcg(pcg(u32(voxel.x)) ^ u32(voxel.y)) ^ u32(voxel.z)) ^ (face | (object << 3u)));
@@ -148,7 +133,7 @@ fn gi_touch(voxel: vec3<i32>, face: u32, object: u32, seen: bool) -> u32 {
                     gi_entries[slot].samples = 0u;
                     gi_entries[slot].last_used = gi.frame;
                     gi_entries[slot].last_seen = select(0u, gi.frame, seen);
-                    atomicAdd(&gi_counters[COUNT_INSERTED], 1u);
+                    atomicAdd(&counters[COUNT_GI_INSERTED], 1u);
                     return slot;
                 }
                 key = result.old_value;
@@ -165,7 +150,7 @@ fn gi_touch(voxel: vec3<i32>, face: u32, object: u32, seen: bool) -> u32 {
             return slot;
         }
     }
-    atomicAdd(&gi_counters[COUNT_FULL], 1u);
+    atomicAdd(&counters[COUNT_GI_FULL], 1u);
     return NOT_FOUND;
 }
 
@@ -293,7 +278,7 @@ fn ray_direction(face: u32, i: u32, k: u32, seed: u32) -> vec3<f32> {
 
 // Where an entry's rays start: the face's centre, just off the surface (`base` is the object's corner, or 0).
 fn ray_origin(voxel: vec3<i32>, face: u32, base: vec3<f32>) -> vec3<f32> {
-    return base + vec3<f32>(voxel) + vec3(0.5) + face_normal(face) * (0.5 + 1e-3);
+    return base + vec3<f32>(voxel) + vec3(0.5) + face_normal(face) * (0.5 + RAY_OFFSET);
 }
 
 // Per-entry seed for its directions: fixed for the entry's life so the cached hits stay valid.

@@ -5,9 +5,10 @@
 
 #import glowbrick::world::materials
 #import glowbrick::frame::{frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output}
-#import glowbrick::restir::{reservoirs_final, validated, finite, shading, unshadowed, reservoir_visible, NO_LIGHT}
+#import glowbrick::constants::DEBUG_RESERVOIR
+#import glowbrick::restir::common::{reservoirs_final, validated, finite, shading, unshadowed, reservoir_visible, NO_LIGHT}
 #import glowbrick::lights::lights
-#import glowbrick::gi::{gi_on, gi_incoming}
+#import glowbrick::gi::cache::{gi_on, gi_incoming}
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -25,7 +26,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let x = shading(surface);
     let raw = reservoirs_final[index];
     var r = validated(raw);
-    if frame.debug_view == 5u {
+    if frame.debug_view == DEBUG_RESERVOIR {
         // The stress run's view of the reservoir: raw W, M, w_sum, and whether validation had to reset it for a
         // non-finite field (counted, never shaded).
         let bad = !(finite(raw.w_sum) && finite(raw.m) && finite(raw.big_w) && finite(raw.target_value));

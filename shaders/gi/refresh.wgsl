@@ -1,12 +1,13 @@
 // GI cache refresh, one thread per static slot, before the update: brings a due entry's K cached static hits up
 // to date. A new entry traces all K; after an edit, only the rays whose segments cross an edited brick are traced
-// again, and entries whose rays cannot reach any edit keep every hit (counted: COUNT_RETRACED, COUNT_RAYS_TRACED).
+// again, and entries whose rays cannot reach any edit keep every hit (counted: COUNT_GI_RETRACED, COUNT_GI_RAYS_TRACED).
 
 #import glowbrick::world::world_info
 #import glowbrick::traversal::{trace, box_entry, INF}
-#import glowbrick::gi::{gi, gi_keys, gi_entries, gi_rays, gi_edits, gi_counters, GiEntry, used_within, ray_direction,
-    ray_origin, slot_seed, encode_hit, hit_face, hit_distance, NEVER_TRACED, MISS_FACE, UPDATE_AGE, GI_CACHE, COUNT_RETRACED,
-    COUNT_RAYS_TRACED}
+#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_rays, gi_edits, GiEntry, used_within, ray_direction,
+    ray_origin, slot_seed, encode_hit, hit_face, hit_distance, NEVER_TRACED, MISS_FACE, UPDATE_AGE}
+#import glowbrick::counters::counters
+#import glowbrick::constants::{GI_CACHE, COUNT_GI_RETRACED, COUNT_GI_RAYS_TRACED}
 
 // Whether an edit since the entry's trace may have reached its rays at all: an edited brick overlaps the box
 // around its ray segments. Cheap; the rays themselves are tested only when it says yes.
@@ -83,8 +84,8 @@ fn refresh(slot: u32, e: GiEntry, origin: vec3<f32>) -> u32 {
     gi_entries[slot].hi = hi + vec3(1.0);
     gi_entries[slot].traced_epoch = gi.epoch;
     if traced > 0u {
-        atomicAdd(&gi_counters[COUNT_RETRACED], 1u);
-        atomicAdd(&gi_counters[COUNT_RAYS_TRACED], traced);
+        atomicAdd(&counters[COUNT_GI_RETRACED], 1u);
+        atomicAdd(&counters[COUNT_GI_RAYS_TRACED], traced);
     }
     return traced;
 }

@@ -1,8 +1,9 @@
-//! A full scan of a world for `check-world`: counts of bricks, voxels, emitters and lights.
+//! A full scan of a world for `check-world`: counts of bricks, voxels, emitters and lights. It lives with the
+//! light pool (the layer above the world) because its light counts are the pool's own.
 
-use super::VoxelWorld;
-use super::grid::BrickCell;
-use crate::lights::LightPool;
+use super::LightPool;
+use crate::world::VoxelWorld;
+use crate::world::grid::BrickCell;
 
 /// What `glowbrick check-world` prints.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

@@ -1,40 +1,81 @@
-//! GPU copy of the light pool: changed slots only, the alias table when it changed, and the light count with a
-//! "no lights" flag for passes that can be skipped. Staged in the main world (PostUpdate), written to GPU
-//! buffers in the render world (PrepareResources), like the world upload in `render::upload`.
+//! The scene's lighting on the GPU (group 2 of every voxel pass, `shaders/lib/lights.wgsl`): the light pool's
+//! changed slots, its alias table when it changed, and this frame's `SceneLighting` (sun, sky, mode, light
+//! count). Staged in the main world (PostUpdate), written to GPU buffers in the render world (PrepareResources).
 
-use super::{AliasEntry, Light, LightPool};
-use crate::render::gpu_world::storage_buffer;
+use super::storage_buffer;
+use crate::lights::{AliasEntry, Light, LightPool};
+use crate::render::gpu_types::{GpuLight, SceneLighting};
+use crate::settings::RenderSettings;
 use bevy::prelude::*;
-use bevy::render::Extract;
-use bevy::render::render_resource::binding_types::storage_buffer_read_only_sized;
+use bevy::render::render_resource::binding_types::{storage_buffer_read_only_sized, uniform_buffer_sized};
 use bevy::render::render_resource::{
-    BindGroup, BindGroupEntries, BindGroupLayoutDescriptor, BindGroupLayoutEntries, Buffer, PipelineCache, ShaderStages,
+    BindGroup, BindGroupEntries, BindGroupLayoutDescriptor, BindGroupLayoutEntries, Buffer, BufferDescriptor,
+    BufferUsages, PipelineCache, ShaderStages,
 };
 use bevy::render::renderer::{RenderDevice, RenderQueue};
+use bevy::render::{Extract, ExtractSchedule, RenderApp, RenderStartup};
+use std::num::NonZeroU64;
 use std::sync::Arc;
 
-/// One light slot as shaders read it; `size == 0` marks a free slot.
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-pub struct GpuLight {
-    pub min: [i32; 3],
-    /// Edge in voxels (bits 0-7; 0 marks a free slot) and the exposed-face mask (bits 8-13).
-    pub size_faces: i32,
-    pub radiance: [f32; 3],
-    pub generation: u32,
+/// Stages the light pool's changes (main world) and keeps its GPU copy (render world).
+pub struct LightUploadPlugin;
+
+impl Plugin for LightUploadPlugin {
+    fn build(&self, app: &mut App) {
+        add(app);
+    }
 }
 
-impl GpuLight {
-    pub fn new(light: Option<&Light>, generation: u32) -> Self {
-        match light {
-            Some(l) => GpuLight {
-                min: l.min.to_array(),
-                size_faces: l.size | (l.faces as i32) << 8,
-                radiance: l.radiance,
-                generation,
-            },
-            None => GpuLight { generation, ..default() },
-        }
+fn add(app: &mut App) {
+    app.init_resource::<LightUpload>()
+        .init_resource::<LightUploadState>()
+        .add_systems(PostUpdate, stage_light_upload.run_if(resource_exists::<LightPool>));
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
+    render_app
+        .init_resource::<PendingLightUploads>()
+        .init_resource::<LightsLayout>()
+        .add_systems(RenderStartup, init_scene_lighting)
+        .add_systems(ExtractSchedule, extract_light_upload);
+}
+
+/// This frame's sun, sky and mode (`settings`) with the light count.
+pub fn scene_lighting(settings: &RenderSettings, light_count: u32) -> SceneLighting {
+    let sun = Vec3::new(0.45, 0.8, 0.3).normalize();
+    SceneLighting {
+        sun: [sun.x, sun.y, sun.z, if settings.sun { 1.0 } else { 0.0 }],
+        sun_radiance: [1.1, 1.0, 0.9, 0.0],
+        sky_zenith: [0.35, 0.55, 0.95, 0.0],
+        sky_horizon: [0.75, 0.82, 0.9, 0.0],
+        mode: settings.lighting as u32,
+        power_pick: settings.power_pick as u32,
+        light_count,
+        shadows: settings.shadows as u32,
+    }
+}
+
+/// The `SceneLighting` uniform (created once, written every frame).
+#[derive(Resource)]
+pub struct SceneLightingBuffer(pub Buffer);
+
+fn init_scene_lighting(mut commands: Commands, device: Res<RenderDevice>) {
+    commands.insert_resource(SceneLightingBuffer(device.create_buffer(&BufferDescriptor {
+        label: Some("glowbrick_scene_lighting"),
+        size: size_of::<SceneLighting>() as u64,
+        usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })));
+}
+
+/// A light slot as the shaders read it.
+fn gpu_light(light: Option<&Light>, generation: u32) -> GpuLight {
+    match light {
+        Some(l) => GpuLight {
+            min: l.min.to_array(),
+            size_faces: l.size | (l.faces as i32) << 8,
+            radiance: l.radiance,
+            generation,
+        },
+        None => GpuLight { generation, ..default() },
     }
 }
 
@@ -75,7 +116,7 @@ pub fn stage_light_upload(
         Some(capacity) if slots <= capacity => {
             for slot in changed {
                 if let Some((light, generation)) = pool.slot(slot) {
-                    upload.slots.push((slot, GpuLight::new(light, generation)));
+                    upload.slots.push((slot, gpu_light(light, generation)));
                 }
             }
         }
@@ -83,7 +124,7 @@ pub fn stage_light_upload(
             // Headroom so a growing pool rarely reallocates.
             let capacity = (slots + slots / 2).max(64);
             let mut all: Vec<GpuLight> =
-                (0..slots).filter_map(|s| pool.slot(s)).map(|(l, g)| GpuLight::new(l, g)).collect();
+                (0..slots).filter_map(|s| pool.slot(s)).map(|(l, g)| gpu_light(l, g)).collect();
             all.resize(capacity as usize, GpuLight::default());
             upload.full = Some(Arc::new(all));
             state.gpu_slots = Some(capacity);
@@ -103,7 +144,7 @@ pub struct GpuLights {
     pub alias_capacity: u32,
     pub light_count: u32,
     pub has_lights: bool,
-    /// Group 2 of the lighting passes (`shaders/lights.wgsl`): slots, then alias table.
+    /// Group 2 of the voxel passes: slots, alias table, scene lighting.
     pub bind_group: BindGroup,
     /// Whether the lights changed this frame (accumulation restarts).
     pub changed: bool,
@@ -119,7 +160,11 @@ impl Default for LightsLayout {
             "glowbrick_lights_layout",
             &BindGroupLayoutEntries::sequential(
                 ShaderStages::COMPUTE,
-                (storage_buffer_read_only_sized(false, None), storage_buffer_read_only_sized(false, None)),
+                (
+                    storage_buffer_read_only_sized(false, None),
+                    storage_buffer_read_only_sized(false, None),
+                    uniform_buffer_sized(false, NonZeroU64::new(size_of::<SceneLighting>() as u64)),
+                ),
             ),
         ))
     }
@@ -129,13 +174,17 @@ fn lights_bind_group(
     device: &RenderDevice,
     cache: &PipelineCache,
     layout: &LightsLayout,
-    lights: &Buffer,
-    alias: &Buffer,
+    buffers: [&Buffer; 3],
 ) -> BindGroup {
+    let [lights, alias, scene] = buffers;
     device.create_bind_group(
         "glowbrick_lights",
         &cache.get_bind_group_layout(&layout.0),
-        &BindGroupEntries::sequential((lights.as_entire_binding(), alias.as_entire_binding())),
+        &BindGroupEntries::sequential((
+            lights.as_entire_binding(),
+            alias.as_entire_binding(),
+            scene.as_entire_binding(),
+        )),
     )
 }
 
@@ -156,24 +205,31 @@ fn alias_bytes(entries: &[AliasEntry]) -> Vec<u8> {
     bytemuck::cast_slice(&padded).to_vec()
 }
 
+/// Applies the queued light uploads and writes this frame's scene lighting.
+#[allow(clippy::too_many_arguments)]
 pub fn prepare_gpu_lights(
     mut commands: Commands,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
     cache: Res<PipelineCache>,
     layout: Res<LightsLayout>,
+    scene: Res<SceneLightingBuffer>,
+    settings: Option<Res<RenderSettings>>,
     mut pending: ResMut<PendingLightUploads>,
     mut gpu: Option<ResMut<GpuLights>>,
 ) {
     if let Some(gpu) = gpu.as_deref_mut() {
         gpu.changed = false;
     }
+    // The count after this frame's uploads (a first `GpuLights` is only inserted at the end of the system).
+    let mut light_count = gpu.as_deref().map_or(0, |g| g.light_count);
     for upload in pending.0.drain(..) {
+        light_count = upload.light_count;
         if let Some(all) = &upload.full {
             let lights = storage_buffer(&device, "glowbrick_lights", bytemuck::cast_slice(all));
             let entries = upload.alias.as_deref().map_or(&[][..], |a| a.as_slice());
             let alias = storage_buffer(&device, "glowbrick_light_alias", &alias_bytes(entries));
-            let bind_group = lights_bind_group(&device, &cache, &layout, &lights, &alias);
+            let bind_group = lights_bind_group(&device, &cache, &layout, [&lights, &alias, &scene.0]);
             let fresh = GpuLights {
                 lights,
                 alias,
@@ -198,7 +254,7 @@ pub fn prepare_gpu_lights(
             if entries.len() as u32 > gpu.alias_capacity {
                 gpu.alias = storage_buffer(&device, "glowbrick_light_alias", &alias_bytes(entries));
                 gpu.alias_capacity = entries.len() as u32;
-                gpu.bind_group = lights_bind_group(&device, &cache, &layout, &gpu.lights, &gpu.alias);
+                gpu.bind_group = lights_bind_group(&device, &cache, &layout, [&gpu.lights, &gpu.alias, &scene.0]);
             } else if !entries.is_empty() {
                 queue.write_buffer(&gpu.alias, 0, bytemuck::cast_slice(entries));
             }
@@ -206,4 +262,6 @@ pub fn prepare_gpu_lights(
         gpu.light_count = upload.light_count;
         gpu.has_lights = upload.light_count > 0;
     }
+    let settings = settings.map(|s| s.clone()).unwrap_or_default();
+    queue.write_buffer(&scene.0, 0, bytemuck::bytes_of(&scene_lighting(&settings, light_count)));
 }

@@ -1,14 +1,16 @@
 // Voxel ReSTIR's shared pieces (seed 000, DESIGN.md "Voxel ReSTIR"): the reservoir, light samples in area
 // measure (a point on one face of a light's cube) or point measure (the cube's centre), the target function, the
-// visibility test and the resampling steps. The passes: restir_initial (candidates + temporal),
-// restir_spatial, restir_shade.
-#define_import_path glowbrick::restir
+// visibility test and the resampling steps. The passes: initial.wgsl (candidates + temporal), spatial.wgsl,
+// shade.wgsl.
+#define_import_path glowbrick::restir::common
 
 #import glowbrick::world::materials
 #import glowbrick::traversal::{trace_scene, face_normal}
-#import glowbrick::lights::{Light, lights, pick_light, light_contains, light_size, face_exposed, Rng, rng_next, pcg, RAY_OFFSET, PI}
-#import glowbrick::gi::{gi_counters, COUNT_RESERVOIR_RESETS}
-#import glowbrick::frame::{frame, view, Surface, RESTIR_POINT, RESTIR_UNBIASED}
+#import glowbrick::lights::{Light, lights, scene, pick_light, light_contains, light_size, face_exposed}
+#import glowbrick::random::{Rng, rng_next, pcg}
+#import glowbrick::counters::counters
+#import glowbrick::constants::{RAY_OFFSET, PI, RESTIR_POINT, RESTIR_UNBIASED, COUNT_RESERVOIR_RESETS}
+#import glowbrick::frame::{frame, view, Surface}
 
 // 32 bytes. `face` is the light cube's face (0 +X, 1 -X, ... as the traversal numbers faces) or POINT_FACE,
 // `uv` the point on it (pack2x16unorm). `w_sum` is only meaningful while a pass streams candidates; `big_w` is the
@@ -26,9 +28,9 @@ struct Reservoir {
     target_value: f32,
 }
 
-// Written by restir_initial (candidates + temporal), read by restir_spatial.
+// Written by initial.wgsl (candidates + temporal), read by spatial.wgsl.
 @group(1) @binding(6) var<storage, read_write> reservoirs_temporal: array<Reservoir>;
-// Written by restir_spatial, read by restir_shade (which zeroes occluded samples) and next frame's temporal reuse.
+// Written by spatial.wgsl, read by shade.wgsl (which zeroes occluded samples) and next frame's temporal reuse.
 @group(1) @binding(7) var<storage, read_write> reservoirs_final: array<Reservoir>;
 
 const NO_LIGHT: u32 = 0xffffffffu;
@@ -47,7 +49,7 @@ fn finite(x: f32) -> bool {
 // A non-finite field is also counted (COUNT_RESERVOIR_RESETS, read back by the stress run).
 fn validated(r: Reservoir) -> Reservoir {
     if !finite(r.w_sum) || !finite(r.m) || !finite(r.big_w) || !finite(r.target_value) {
-        atomicAdd(&gi_counters[COUNT_RESERVOIR_RESETS], 1u);
+        atomicAdd(&counters[COUNT_RESERVOIR_RESETS], 1u);
         return empty_reservoir();
     }
     if r.slot == NO_LIGHT || r.slot >= arrayLength(&lights) || r.m < 0.0 || r.big_w < 0.0 || r.face > POINT_FACE {
@@ -176,7 +178,7 @@ struct Candidate {
 // that see the shading point in proportion to its exact solid angle and a uniform point on it; in point mode the centre.
 fn sample_candidate(x: Shading, rng: ptr<function, Rng>) -> Candidate {
     var c = Candidate(empty_reservoir(), 0.0, 0.0);
-    let picked = pick_light(frame.light_count, frame.power_pick == 1u, rng_next(rng), rng_next(rng));
+    let picked = pick_light(scene.light_count, scene.power_pick == 1u, rng_next(rng), rng_next(rng));
     let u_face = rng_next(rng);
     let uv = vec2(rng_next(rng), rng_next(rng));
     let light = lights[picked.slot];

@@ -1,26 +1,17 @@
-//! Objects to the GPU: each frame the main world lists the objects (position, size, id, where their voxels
-//! start), the render world writes them into two fixed-size buffers that group 0 binds next to the brick grid
-//! (`shaders/world.wgsl`: `objects`, `object_voxels`), and the object count into `world_info.size.w`.
+//! Moving objects on the GPU: each frame the main world lists the objects (position, size, id, where their
+//! voxels start), the render world writes them into two fixed-size buffers that group 0 binds next to the brick
+//! grid (`shaders/lib/world.wgsl`: `objects`, `object_voxels`), and their count into the world's uniform.
 
-use super::{DynamicObject, MAX_OBJECTS, model::MAX_MODEL_EDGE};
+use super::world::GpuWorld;
+use crate::dynamic::model::MAX_MODEL_EDGE;
+use crate::dynamic::{DynamicObject, MAX_OBJECTS};
+use crate::render::gpu_types::GpuObject;
 use bevy::prelude::*;
 use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
 use bevy::render::render_resource::{Buffer, BufferDescriptor, BufferUsages};
 use bevy::render::renderer::{RenderDevice, RenderQueue};
-use bevy::render::{Render, RenderApp, RenderStartup, RenderSystems};
+use bevy::render::{RenderApp, RenderStartup};
 use std::sync::Arc;
-
-/// One object as the shaders read it (`Object` in `shaders/world.wgsl`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-pub struct GpuObject {
-    /// World position of the model's minimum corner.
-    pub min: [f32; 3],
-    pub id: u32,
-    pub size: [u32; 3],
-    /// First voxel in `object_voxels`.
-    pub offset: u32,
-}
 
 /// Voxel slots the GPU holds: every object at the largest model size.
 const VOXEL_CAPACITY: usize = MAX_OBJECTS * (MAX_MODEL_EDGE * MAX_MODEL_EDGE * MAX_MODEL_EDGE) as usize;
@@ -93,11 +84,11 @@ fn init_gpu_objects(mut commands: Commands, device: Res<RenderDevice>) {
 }
 
 /// Writes this frame's objects (Render, PrepareResources, after the world upload so the count lands in the
-/// current `world_info`).
+/// current world uniform).
 pub fn prepare_gpu_objects(
     upload: Option<Res<ObjectsUpload>>,
     mut gpu: ResMut<GpuObjects>,
-    gpu_world: Option<Res<crate::render::gpu_world::GpuWorld>>,
+    gpu_world: Option<ResMut<GpuWorld>>,
     queue: Res<RenderQueue>,
 ) {
     let Some(upload) = upload else { return };
@@ -112,22 +103,24 @@ pub fn prepare_gpu_objects(
     }
     gpu.count = upload.objects.len() as u32;
     gpu.last_objects = upload.objects.clone();
-    if let Some(world) = gpu_world {
-        // world_info.size.w: the object count every trace loops over.
-        queue.write_buffer(&world.info, 12, bytemuck::bytes_of(&gpu.count));
+    if let Some(mut world) = gpu_world {
+        world.set_object_count(&queue, gpu.count);
     }
 }
 
-pub fn add_object_upload(app: &mut App) {
+/// Lists the moving objects (main world) and keeps their GPU copy (render world).
+pub struct ObjectUploadPlugin;
+
+impl Plugin for ObjectUploadPlugin {
+    fn build(&self, app: &mut App) {
+        add(app);
+    }
+}
+
+fn add(app: &mut App) {
     app.init_resource::<ObjectsUpload>()
         .add_plugins(ExtractResourcePlugin::<ObjectsUpload>::default())
         .add_systems(PostUpdate, stage_objects);
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
-    render_app.add_systems(RenderStartup, init_gpu_objects).add_systems(
-        Render,
-        prepare_gpu_objects
-            .after(crate::render::gpu_world::prepare_gpu_world)
-            .before(crate::render::primary::prepare_view_resources)
-            .in_set(RenderSystems::PrepareResources),
-    );
+    render_app.add_systems(RenderStartup, init_gpu_objects);
 }

@@ -2,7 +2,8 @@
 // the same face orientation in the 3x3x3 block around its voxel (filter on), or the entry's own value (off).
 // Same orientation keeps the two sides of a one-voxel wall apart: the far side faces the other way.
 
-#import glowbrick::gi::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_find, used_within, GI_FILTER, NOT_FOUND, UPDATE_AGE}
+#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_find, used_within, NOT_FOUND, UPDATE_AGE}
+#import glowbrick::constants::GI_FILTER
 
 fn filter_entry(slot: u32) {
     if atomicLoad(&gi_keys[slot]) == 0u {

@@ -2,7 +2,8 @@
 // Mirrors src/world/traversal.rs step for step (same boundary formulas and tie rules) so GPU and CPU agree.
 #define_import_path glowbrick::traversal
 
-#import glowbrick::world::{world_info, brick_cell, pooled_voxel, objects, object_count, object_voxel, Object, POOLED_FLAG, BRICK_SIZE}
+#import glowbrick::world::{world_info, brick_cell, pooled_voxel, objects, object_count, object_voxel, Object}
+#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT}
 
 const INF: f32 = 3.0e38;
 
@@ -82,7 +83,7 @@ fn trace_in_brick(origin: vec3<f32>, dir: vec3<f32>, inv: vec3<f32>, brick: vec3
     let step = vec3<i32>(sign(dir));
     let positive = dir > vec3(0.0);
     let lo = brick * BRICK_SIZE;
-    let hi = min(lo + vec3(BRICK_SIZE), world_info.size.xyz) - vec3(1);
+    let hi = min(lo + vec3(BRICK_SIZE), world_info.size) - vec3(1);
     var t = t_start;
     var axis = entry_axis;
     var voxel = clamp(vec3<i32>(floor(origin + dir * t)), lo, hi);
@@ -113,7 +114,7 @@ fn trace_in_brick(origin: vec3<f32>, dir: vec3<f32>, inv: vec3<f32>, brick: vec3
 
 // The first solid voxel along the ray (unit `dir`) within max_distance.
 fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
-    let size = vec3<f32>(world_info.size.xyz);
+    let size = vec3<f32>(world_info.size);
     let entry = box_entry(origin, dir, vec3(0.0), size);
     let t_end = min(entry.y, max_distance);
     var t = max(entry.x, 0.0);
@@ -124,7 +125,7 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
     let step = vec3<i32>(sign(dir));
     let positive = dir > vec3(0.0);
     let edge = f32(BRICK_SIZE);
-    let last_brick = max((world_info.size.xyz - vec3(1)) >> vec3(3u), vec3(0));
+    let last_brick = max((world_info.size - vec3(1)) >> vec3(BRICK_SHIFT), vec3(0));
     var axis = u32(entry.z);
     if entry.x < 0.0 {
         let v = floor(origin);
@@ -142,7 +143,7 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
             if (cell & POOLED_FLAG) == 0u {
                 let lo = brick * BRICK_SIZE;
                 let voxel = min(clamp(vec3<i32>(floor(origin + dir * t)), lo, lo + vec3(BRICK_SIZE - 1)),
-                                world_info.size.xyz - vec3(1));
+                                world_info.size - vec3(1));
                 return Hit(voxel, face_entered(axis, positive[axis]), t, cell, true, 0u);
             }
             let hit = trace_in_brick(origin, dir, inv, brick, cell & ~POOLED_FLAG, t, t_end, axis);

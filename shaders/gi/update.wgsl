@@ -1,25 +1,28 @@
 // GI cache update, one thread per table slot: age out unused entries, then re-shade `update_rays` of an entry's K
-// directions from its cached static hits (brought up to date by gi_refresh.wgsl) or, for a moving object's
+// directions from its cached static hits (brought up to date by refresh.wgsl) or, for a moving object's
 // entry, from rays traced now; light at a hit is its direct light plus its face's cached indirect light from
 // last frame (and emission where the shading passes do not already count it); blend.
 
 #import glowbrick::world::{materials, voxel_at, objects, object_index, object_count}
 #import glowbrick::traversal::{trace, trace_objects, trace_scene, face_normal, INF}
-#import glowbrick::frame::{frame, sky, LIGHTING_SUN}
-#import glowbrick::lights::{Rng, pcg, direct_sample}
-#import glowbrick::gi::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_edits, gi_counters, GiEntry,
+#import glowbrick::lights::{scene, sky, direct_sample}
+#import glowbrick::random::{Rng, pcg}
+#import glowbrick::counters::counters
+#import glowbrick::constants::{LIGHTING_SUN, RAY_OFFSET, GI_BOUNCES, GI_CACHE, COUNT_GI_UPDATED, COUNT_GI_LIVE, COUNT_GI_EVICTED,
+    COUNT_GI_BORROWED, COUNT_GI_RESETS}
+#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_edits, GiEntry,
     gi_touch, gi_find, used_within, slot_seed, ray_direction, ray_origin, encode_hit, hit_face, hit_distance, NEVER_TRACED, NOT_FOUND,
-    MISS_FACE, UPDATE_AGE, MAX_AGE, GI_BOUNCES, GI_CACHE, COUNT_UPDATED, COUNT_RETRACED, COUNT_LIVE, COUNT_EVICTED, COUNT_RAYS_TRACED, COUNT_BORROWED, COUNT_GI_RESETS}
+    MISS_FACE, UPDATE_AGE, MAX_AGE}
 
 // Direct light reflected by a surface at `point` (normal n): the sun with a shadow ray in sun-and-sky mode, else
 // one next-event-estimation sample of the light pool.
 fn direct_at(point: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
-    if frame.lighting != LIGHTING_SUN {
-        return direct_sample(point, n, albedo, frame.light_count, frame.power_pick == 1u, rng);
+    if scene.mode != LIGHTING_SUN {
+        return direct_sample(point, n, albedo, scene.light_count, scene.power_pick == 1u, rng);
     }
-    let cos_sun = dot(n, frame.sun.xyz);
-    if frame.sun.w > 0.0 && cos_sun > 0.0 && (frame.shadows == 0u || !trace_scene(point + n * 1e-3, frame.sun.xyz, INF).found) {
-        return albedo * frame.sun_radiance.rgb * cos_sun;
+    let cos_sun = dot(n, scene.sun.xyz);
+    if scene.sun.w > 0.0 && cos_sun > 0.0 && (scene.shadows == 0u || !trace_scene(point + n * RAY_OFFSET, scene.sun.xyz, INF).found) {
+        return albedo * scene.sun_radiance.rgb * cos_sun;
     }
     return vec3(0.0);
 }
@@ -38,7 +41,7 @@ fn hit_radiance(point: vec3<f32>, face: u32, seen: bool, fallback: vec3<f32>, rn
     }
     let m = materials[id];
     var radiance = direct_at(point, n, m.albedo.rgb, rng);
-    if frame.lighting == LIGHTING_SUN {
+    if scene.mode == LIGHTING_SUN {
         radiance += m.radiance.rgb;
     }
     if (gi.flags & GI_BOUNCES) != 0u {
@@ -56,7 +59,7 @@ fn hit_radiance(point: vec3<f32>, face: u32, seen: bool, fallback: vec3<f32>, rn
         if slot != NOT_FOUND && gi_entries[slot].samples > 0u {
             incoming = gi_filtered[slot].rgb;
         } else {
-            atomicAdd(&gi_counters[COUNT_BORROWED], 1u);
+            atomicAdd(&counters[COUNT_GI_BORROWED], 1u);
         }
         radiance += m.albedo.rgb * incoming;
     }
@@ -78,7 +81,7 @@ fn object_hit_radiance(point: vec3<f32>, face: u32, material: u32, fallback: vec
 }
 
 fn miss_radiance(dir: vec3<f32>) -> vec3<f32> {
-    return select(vec3(0.0), sky(dir), frame.lighting == LIGHTING_SUN);
+    return select(vec3(0.0), sky(dir), scene.mode == LIGHTING_SUN);
 }
 
 fn finite3(v: vec3<f32>) -> bool {
@@ -103,20 +106,20 @@ fn update_entry(slot: u32) {
     if !used_within(e.last_used, MAX_AGE) || gone {
         atomicStore(&gi_keys[slot], 0u);
         gi_entries[slot].samples = 0u;
-        atomicAdd(&gi_counters[COUNT_EVICTED], 1u);
+        atomicAdd(&counters[COUNT_GI_EVICTED], 1u);
         return;
     }
-    atomicAdd(&gi_counters[COUNT_LIVE], 1u);
+    atomicAdd(&counters[COUNT_GI_LIVE], 1u);
     if !used_within(e.last_used, UPDATE_AGE) {
         return;
     }
-    atomicAdd(&gi_counters[COUNT_UPDATED], 1u);
+    atomicAdd(&counters[COUNT_GI_UPDATED], 1u);
     var base = vec3(0.0);
     if dynamic {
         base = objects[index].min;
     }
     let origin = ray_origin(e.voxel, e.face, base);
-    // The refresh pass (gi_refresh.wgsl) has brought the cached hits up to date this frame.
+    // The refresh pass (refresh.wgsl) has brought the cached hits up to date this frame.
     let cached = (gi.flags & GI_CACHE) != 0u && !dynamic;
     let samples = e.samples;
     let seen = used_within(e.last_seen, 1u) && !dynamic;
@@ -155,7 +158,7 @@ fn update_entry(slot: u32) {
     }
     var estimate = sum / f32(gi.update_rays);
     if !finite3(estimate) {
-        atomicAdd(&gi_counters[COUNT_GI_RESETS], 1u);
+        atomicAdd(&counters[COUNT_GI_RESETS], 1u);
         estimate = vec3(0.0);
     }
     // Young entries average evenly; after 1/alpha frames it becomes an exponential blend.

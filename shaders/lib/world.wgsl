@@ -1,15 +1,15 @@
 // The brick grid on the GPU: bindings and voxel lookup. Mirrors src/world/grid.rs.
 #define_import_path glowbrick::world
 
-// Top cell encoding and brick size come from Rust as shader defs (render::shader_defs), never as second literals.
-const POOLED_FLAG: u32 = #{POOLED_FLAG}u;
-const BRICK_SIZE: i32 = #{BRICK_SIZE};
-const BRICK_WORDS: u32 = #{BRICK_WORDS}u;
+#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, BRICK_WORDS}
 
+// WorldInfo in src/render/gpu_types.rs.
 struct WorldInfo {
-    // World size in voxels (xyz) and the number of moving objects (w); bricks (xyz).
-    size: vec4<i32>,
-    bricks: vec4<i32>,
+    // World size in voxels, the number of moving objects, world size in bricks.
+    size: vec3<i32>,
+    object_count: u32,
+    bricks: vec3<i32>,
+    _pad: u32,
 }
 
 struct Material {
@@ -39,7 +39,7 @@ struct Object {
 @group(0) @binding(5) var<storage, read> object_voxels: array<u32>;
 
 fn object_count() -> u32 {
-    return u32(world_info.size.w);
+    return world_info.object_count;
 }
 
 // The voxel id at a local coordinate of object o (air outside it).
@@ -63,7 +63,7 @@ fn object_index(id: u32) -> u32 {
 }
 
 fn brick_cell(brick: vec3<i32>) -> u32 {
-    let b = world_info.bricks.xyz;
+    let b = world_info.bricks;
     if any(brick < vec3(0)) || any(brick >= b) {
         return 0u;
     }
@@ -78,7 +78,7 @@ fn pooled_voxel(slot: u32, local: vec3<i32>) -> u32 {
 }
 
 fn in_world(p: vec3<i32>) -> bool {
-    return all(p >= vec3(0)) && all(p < world_info.size.xyz);
+    return all(p >= vec3(0)) && all(p < world_info.size);
 }
 
 // The voxel id at p; 0 (air) outside the world.
@@ -86,9 +86,9 @@ fn voxel_at(p: vec3<i32>) -> u32 {
     if !in_world(p) {
         return 0u;
     }
-    let cell = brick_cell(p >> vec3(3u));
+    let cell = brick_cell(p >> vec3(BRICK_SHIFT));
     if (cell & POOLED_FLAG) != 0u {
-        return pooled_voxel(cell & ~POOLED_FLAG, p & vec3(7));
+        return pooled_voxel(cell & ~POOLED_FLAG, p & vec3(BRICK_SIZE - 1));
     }
     return cell;
 }

@@ -4,48 +4,32 @@
 
 #import bevy_render::view::View
 #import glowbrick::traversal::face_normal
+#import glowbrick::constants::{GBUFFER_FACE_SHIFT, GBUFFER_MATERIAL_SHIFT, GBUFFER_MATERIAL_MASK, GBUFFER_OBJECT_SHIFT}
 
+// FrameParams in src/render/gpu_types.rs: one view's parameters this frame (the scene's lighting, the same for
+// every view, is SceneLighting in glowbrick::lights).
 struct FrameParams {
     // Last frame's clip_from_world, for temporal reprojection.
     prev_clip_from_world: mat4x4<f32>,
     // Last frame's camera position (xyz); w is 1 when last frame's G-buffer and reservoirs may be reused.
     prev_camera: vec4<f32>,
-    // xyz: unit direction towards the sun; w: 1 when the sun is on.
-    sun: vec4<f32>,
-    sun_radiance: vec4<f32>,
-    sky_zenith: vec4<f32>,
-    sky_horizon: vec4<f32>,
-    // Index of settings::DebugView.
+    // DEBUG_*.
     debug_view: u32,
-    shadows: u32,
     exposure: f32,
     frame: u32,
+    // Frames averaged including this one; 1 restarts the average.
+    accumulated: u32,
     // Targeted voxel (xyz) and face + 1 (w; 0 = none).
     highlight_target: vec4<i32>,
     // Box selection, inclusive corners; selection_min.w is 1 when shown.
     selection_min: vec4<i32>,
     selection_max: vec4<i32>,
-    // 0: sun and sky; 1: next-event estimation; 2: Voxel ReSTIR (both emitters only, no sky).
-    lighting: u32,
-    power_pick: u32,
-    light_count: u32,
-    // Frames averaged including this one; 1 restarts the average.
-    accumulated: u32,
     // ReSTIR: candidates per pixel, spatial taps, spatial radius in pixels, RESTIR_* flags.
     candidates: u32,
     taps: u32,
     radius: f32,
     restir_flags: u32,
 }
-
-const LIGHTING_SUN: u32 = 0u;
-const LIGHTING_NEE: u32 = 1u;
-const LIGHTING_RESTIR: u32 = 2u;
-
-const RESTIR_TEMPORAL: u32 = 1u;
-const RESTIR_SPATIAL: u32 = 2u;
-const RESTIR_POINT: u32 = 4u;
-const RESTIR_UNBIASED: u32 = 8u;
 
 @group(1) @binding(0) var output: texture_storage_2d<rgba16float, write>;
 @group(1) @binding(1) var<uniform> view: View;
@@ -56,10 +40,11 @@ const RESTIR_UNBIASED: u32 = 8u;
 @group(1) @binding(4) var<storage, read_write> gbuffer: array<vec4<f32>>;
 @group(1) @binding(5) var<storage, read_write> prev_gbuffer: array<vec4<f32>>;
 
-// The G-buffer's w: bit 0 hit, bits 1-3 face, bits 4-19 material, bits 20-31 the moving object's id (0: the
-// static world). Zero (a cleared buffer) reads as a miss.
+// The G-buffer's w: bit 0 hit, then the face (3 bits), the material and the moving object's id (0: the static
+// world), at the GBUFFER_* shifts. Zero (a cleared buffer) reads as a miss.
 fn pack_surface(face: u32, material: u32, object: u32) -> f32 {
-    return bitcast<f32>(1u | (face << 1u) | ((material & 0xFFFFu) << 4u) | (object << 20u));
+    return bitcast<f32>(1u | (face << GBUFFER_FACE_SHIFT) | ((material & GBUFFER_MATERIAL_MASK) << GBUFFER_MATERIAL_SHIFT)
+        | (object << GBUFFER_OBJECT_SHIFT));
 }
 
 struct Surface {
@@ -72,7 +57,8 @@ struct Surface {
 
 fn unpack_surface(texel: vec4<f32>) -> Surface {
     let bits = bitcast<u32>(texel.w);
-    return Surface((bits & 1u) == 1u, texel.xyz, (bits >> 1u) & 7u, (bits >> 4u) & 0xFFFFu, bits >> 20u);
+    return Surface((bits & 1u) == 1u, texel.xyz, (bits >> GBUFFER_FACE_SHIFT) & 7u,
+        (bits >> GBUFFER_MATERIAL_SHIFT) & GBUFFER_MATERIAL_MASK, bits >> GBUFFER_OBJECT_SHIFT);
 }
 
 fn pixel_index(pixel: vec2<u32>) -> u32 {
@@ -102,12 +88,6 @@ fn highlight(colour: vec3<f32>, hit_voxel: vec3<i32>, face: u32, point: vec3<f32
         c = c * 1.2 + vec3(0.04);
     }
     return c;
-}
-
-// Sky radiance in direction `dir` (sun-and-sky lighting only).
-fn sky(dir: vec3<f32>) -> vec3<f32> {
-    let up = clamp(dir.y * 0.5 + 0.5, 0.0, 1.0);
-    return mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, up);
 }
 
 // A voxel coordinate no highlight or selection contains.

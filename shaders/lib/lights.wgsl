@@ -1,9 +1,11 @@
-// The light pool on the GPU: slots and the power alias table (src/lights), and next-event estimation with one
-// light sample and a shadow ray. Mirrors src/reference (Scene::direct_sample) so GPU and CPU estimate the same
+// The scene's lighting on the GPU (group 2): this frame's sun and sky, the light pool's slots and power alias
+// table (src/lights), and next-event estimation with one light sample and a shadow ray. Mirrors src/reference (Scene::direct_sample) so GPU and CPU estimate the same
 // integral: pick a light (power or uniform), a uniform point on a cube face that sees the point, one shadow ray.
 #define_import_path glowbrick::lights
 
 #import glowbrick::traversal::trace_scene
+#import glowbrick::random::{Rng, rng_next}
+#import glowbrick::constants::{RAY_OFFSET, PI}
 
 struct Light {
     min: vec3<i32>,
@@ -21,27 +23,29 @@ struct AliasEntry {
     pdf: f32,
 }
 
+// SceneLighting in src/render/gpu_types.rs: the same for every camera and for the GI cache.
+struct SceneLighting {
+    // xyz: unit direction towards the sun; w: 1 when the sun is on.
+    sun: vec4<f32>,
+    sun_radiance: vec4<f32>,
+    sky_zenith: vec4<f32>,
+    sky_horizon: vec4<f32>,
+    // LIGHTING_*: sun and sky, or emitters only (next-event estimation or Voxel ReSTIR).
+    mode: u32,
+    // 1: pick lights by power (alias table); 0: uniformly.
+    power_pick: u32,
+    light_count: u32,
+    shadows: u32,
+}
+
 @group(2) @binding(0) var<storage, read> lights: array<Light>;
 @group(2) @binding(1) var<storage, read> alias_table: array<AliasEntry>;
+@group(2) @binding(2) var<uniform> scene: SceneLighting;
 
-const PI: f32 = 3.14159265;
-// Keeps secondary rays off the voxel they start on; src/reference uses the same.
-const RAY_OFFSET: f32 = 1e-3;
-
-// PCG hash (Jarzynski & Olano 2020) for per-pixel random numbers.
-fn pcg(v: u32) -> u32 {
-    let state = v * 747796405u + 2891336453u;
-    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    return (word >> 22u) ^ word;
-}
-
-struct Rng {
-    state: u32,
-}
-
-fn rng_next(rng: ptr<function, Rng>) -> f32 {
-    (*rng).state = pcg((*rng).state);
-    return f32((*rng).state >> 8u) * (1.0 / 16777216.0);
+// Sky radiance in direction `dir` (sun-and-sky lighting only).
+fn sky(dir: vec3<f32>) -> vec3<f32> {
+    let up = clamp(dir.y * 0.5 + 0.5, 0.0, 1.0);
+    return mix(scene.sky_horizon.rgb, scene.sky_zenith.rgb, up);
 }
 
 struct PickedLight {

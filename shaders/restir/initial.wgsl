@@ -1,9 +1,10 @@
 // Voxel ReSTIR pass 1: M_init candidates per pixel by resampled importance sampling, one visibility ray for the
 // chosen one, then temporal reuse of last frame's final reservoir at the reprojected pixel.
 
-#import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index, RESTIR_TEMPORAL}
-#import glowbrick::lights::{Rng, rng_next}
-#import glowbrick::restir::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
+#import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index}
+#import glowbrick::constants::RESTIR_TEMPORAL
+#import glowbrick::random::{Rng, rng_next}
+#import glowbrick::restir::common::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
     shading, sample_candidate, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, pixel_rng}
 
 // Temporal history is capped at this many times M_init (DESIGN.md), so old samples cannot dominate forever.

@@ -1,0 +1,55 @@
+// Every constant the shaders share with Rust, from the one table in src/render/gpu_types.rs (shader defs). This
+// is the only WGSL file that reads a shader def: import the names from here, never write the numbers again.
+#define_import_path glowbrick::constants
+
+// The brick grid (src/world/grid.rs): top-cell flag of a pooled brick, brick edge, log2 of it, u32 words per brick.
+const POOLED_FLAG: u32 = #{POOLED_FLAG}u;
+const BRICK_SIZE: i32 = #{BRICK_SIZE};
+const BRICK_SHIFT: u32 = #{BRICK_SHIFT}u;
+const BRICK_WORDS: u32 = #{BRICK_WORDS}u;
+
+// Secondary rays start RAY_OFFSET off their surface (src/world/traversal.rs; the CPU reference uses the same).
+const RAY_OFFSET_INVERSE: u32 = #{RAY_OFFSET_INVERSE}u;
+const RAY_OFFSET: f32 = 1.0 / f32(RAY_OFFSET_INVERSE);
+const PI: f32 = 3.14159265;
+
+// Lighting modes and debug views (src/settings.rs).
+const LIGHTING_SUN: u32 = #{LIGHTING_SUN}u;
+const LIGHTING_NEE: u32 = #{LIGHTING_NEE}u;
+const LIGHTING_RESTIR: u32 = #{LIGHTING_RESTIR}u;
+const DEBUG_NONE: u32 = #{DEBUG_NONE}u;
+const DEBUG_ALBEDO: u32 = #{DEBUG_ALBEDO}u;
+const DEBUG_NORMAL: u32 = #{DEBUG_NORMAL}u;
+const DEBUG_HIT: u32 = #{DEBUG_HIT}u;
+const DEBUG_DEPTH: u32 = #{DEBUG_DEPTH}u;
+const DEBUG_RESERVOIR: u32 = #{DEBUG_RESERVOIR}u;
+
+// FrameParams.restir_flags bits and the largest spatial tap count.
+const RESTIR_TEMPORAL: u32 = #{RESTIR_TEMPORAL}u;
+const RESTIR_SPATIAL: u32 = #{RESTIR_SPATIAL}u;
+const RESTIR_POINT: u32 = #{RESTIR_POINT}u;
+const RESTIR_UNBIASED: u32 = #{RESTIR_UNBIASED}u;
+const MAX_TAPS: u32 = #{MAX_TAPS}u;
+
+// GiParams.flags bits.
+const GI_FILTER: u32 = #{GI_FILTER}u;
+const GI_BOUNCES: u32 = #{GI_BOUNCES}u;
+const GI_CACHE: u32 = #{GI_CACHE}u;
+
+// The G-buffer's packed hit: bit 0 hit, then the face, the material and the moving object's id.
+const GBUFFER_FACE_SHIFT: u32 = #{GBUFFER_FACE_SHIFT}u;
+const GBUFFER_MATERIAL_SHIFT: u32 = #{GBUFFER_MATERIAL_SHIFT}u;
+const GBUFFER_MATERIAL_MASK: u32 = #{GBUFFER_MATERIAL_MASK}u;
+const GBUFFER_OBJECT_SHIFT: u32 = #{GBUFFER_OBJECT_SHIFT}u;
+
+// Counter indices (GpuCounter): the first eight restart every frame, the rest count since the start.
+const COUNT_GI_UPDATED: u32 = #{COUNT_GI_UPDATED}u;
+const COUNT_GI_RETRACED: u32 = #{COUNT_GI_RETRACED}u;
+const COUNT_GI_LIVE: u32 = #{COUNT_GI_LIVE}u;
+const COUNT_GI_EVICTED: u32 = #{COUNT_GI_EVICTED}u;
+const COUNT_GI_FULL: u32 = #{COUNT_GI_FULL}u;
+const COUNT_GI_INSERTED: u32 = #{COUNT_GI_INSERTED}u;
+const COUNT_GI_RAYS_TRACED: u32 = #{COUNT_GI_RAYS_TRACED}u;
+const COUNT_GI_BORROWED: u32 = #{COUNT_GI_BORROWED}u;
+const COUNT_RESERVOIR_RESETS: u32 = #{COUNT_RESERVOIR_RESETS}u;
+const COUNT_GI_RESETS: u32 = #{COUNT_GI_RESETS}u;

@@ -1,0 +1,333 @@
+//! The CPU/GPU contract in one place: every struct a buffer holds, with its size checked at compile time, and
+//! one table of every constant, mode, flag, counter index and bit width the WGSL shares with Rust. The table
+//! reaches the shaders as shader defs, which `shaders/lib/constants.wgsl` (and only it) turns into WGSL
+//! constants of the same names; no number is written on both sides.
+
+use crate::dynamic::MAX_OBJECT_ID;
+use crate::settings::{DebugView, Lighting};
+use crate::world::grid::{BRICK_SIZE, BRICK_VOXELS, POOLED_FLAG};
+use crate::world::traversal::RAY_OFFSET_INVERSE;
+use bevy::shader::ShaderDefVal;
+
+/// Group 0, binding 0 (`WorldInfo` in `shaders/lib/world.wgsl`): the world's size and the moving-object count
+/// every trace loops over.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct WorldInfo {
+    /// World size in voxels.
+    pub size: [i32; 3],
+    pub object_count: u32,
+    /// World size in bricks.
+    pub bricks: [i32; 3],
+    pub _pad: u32,
+}
+
+/// One material (`Material` in `shaders/lib/world.wgsl`), indexed by voxel id (entry 0 is air).
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GpuMaterial {
+    pub albedo: [f32; 4],
+    pub radiance: [f32; 4],
+}
+
+/// One moving object (`Object` in `shaders/lib/world.wgsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GpuObject {
+    /// World position of the model's minimum corner.
+    pub min: [f32; 3],
+    pub id: u32,
+    pub size: [u32; 3],
+    /// First voxel in `object_voxels`.
+    pub offset: u32,
+}
+
+/// One light slot (`Light` in `shaders/lib/lights.wgsl`); `size == 0` marks a free slot.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GpuLight {
+    pub min: [i32; 3],
+    /// Edge in voxels (bits 0-7; 0 marks a free slot) and the exposed-face mask (bits 8-13).
+    pub size_faces: i32,
+    pub radiance: [f32; 3],
+    pub generation: u32,
+}
+
+/// Group 2, binding 2 (`SceneLighting` in `shaders/lib/lights.wgsl`): how the scene is lit this frame, the
+/// same for every camera and for the GI cache.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct SceneLighting {
+    /// xyz: unit direction towards the sun; w: 1 when the sun is on.
+    pub sun: [f32; 4],
+    pub sun_radiance: [f32; 4],
+    pub sky_zenith: [f32; 4],
+    pub sky_horizon: [f32; 4],
+    /// `LIGHTING_*`.
+    pub mode: u32,
+    /// 1: pick lights by power (alias table); 0: uniformly.
+    pub power_pick: u32,
+    pub light_count: u32,
+    pub shadows: u32,
+}
+
+/// Group 1, binding 2 (`FrameParams` in `shaders/lib/frame.wgsl`): one view's parameters this frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct FrameParams {
+    /// Last frame's clip_from_world (temporal reprojection).
+    pub prev_clip_from_world: [[f32; 4]; 4],
+    /// Last frame's camera position; w = 1 when last frame's G-buffer and reservoirs may be reused.
+    pub prev_camera: [f32; 4],
+    /// `DEBUG_*`.
+    pub debug_view: u32,
+    pub exposure: f32,
+    /// Frame number, seeds the per-pixel random numbers.
+    pub frame: u32,
+    /// Frames averaged including this one; 1 restarts the average.
+    pub accumulated: u32,
+    /// Targeted voxel (xyz) and face + 1 (w; 0 = none).
+    pub highlight_target: [i32; 4],
+    /// Box selection corners, inclusive; `selection_min.w` is 1 when a selection is shown.
+    pub selection_min: [i32; 4],
+    pub selection_max: [i32; 4],
+    /// Voxel ReSTIR: M_init, spatial taps, radius in pixels, `RESTIR_*` flags.
+    pub candidates: u32,
+    pub taps: u32,
+    pub radius: f32,
+    pub restir_flags: u32,
+}
+
+/// Group 3, binding 0 (`GiParams` in `shaders/gi/cache.wgsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GiParams {
+    pub enabled: u32,
+    /// `GI_*` flags.
+    pub flags: u32,
+    pub rays: u32,
+    pub update_rays: u32,
+    pub alpha: f32,
+    pub epoch: u32,
+    pub lost_epoch: u32,
+    pub edit_count: u32,
+    pub static_capacity: u32,
+    pub dynamic_capacity: u32,
+    pub frame: u32,
+    pub _pad: u32,
+}
+
+/// One GI cache entry's payload (`GiEntry` in `shaders/gi/cache.wgsl`); only the GPU writes it, Rust sizes it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GiEntry {
+    pub voxel: [i32; 3],
+    pub face: u32,
+    pub last_used: u32,
+    pub traced_epoch: u32,
+    pub samples: u32,
+    pub object: u32,
+    pub lo: [f32; 3],
+    pub last_seen: u32,
+    pub hi: [f32; 3],
+    pub _pad: u32,
+}
+
+/// One edit-log record (two `vec4<i32>` in `gi_edits`): an edited brick's box and the epoch of the edit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GiEdit {
+    pub min: [i32; 3],
+    pub epoch: i32,
+    /// Exclusive.
+    pub max: [i32; 3],
+    pub _pad: i32,
+}
+
+/// A G-buffer texel (`vec4<f32>` in `shaders/lib/frame.wgsl`): hit point and the packed hit.
+pub const GBUFFER_TEXEL_BYTES: u64 = 16;
+/// A reservoir (`Reservoir` in `shaders/restir/common.wgsl`): light slot, generation, sample, w_sum, M, W and
+/// the target at the sample.
+pub const RESERVOIR_BYTES: u64 = 32;
+/// An accumulation texel (rgb sum, `vec4<f32>`).
+pub const ACCUMULATION_TEXEL_BYTES: u64 = 16;
+/// A GI entry's radiance (blended or filtered, `vec4<f32>`) and a GI table key (`u32`).
+pub const GI_RADIANCE_BYTES: u64 = 16;
+pub const GI_KEY_BYTES: u64 = 4;
+/// A cached GI ray hit (face and distance packed in a u32, `GI_DISTANCE_SCALE` steps per voxel).
+pub const GI_RAY_BYTES: u64 = 4;
+
+// The shaders read these structs at exactly these sizes (WGSL alignment rules included).
+const _: () = assert!(size_of::<WorldInfo>() == 32);
+const _: () = assert!(size_of::<GpuMaterial>() == 32);
+const _: () = assert!(size_of::<GpuObject>() == 32);
+const _: () = assert!(size_of::<GpuLight>() == 32);
+const _: () = assert!(size_of::<crate::lights::AliasEntry>() == 16);
+const _: () = assert!(size_of::<SceneLighting>() == 80);
+const _: () = assert!(size_of::<FrameParams>() == 160);
+const _: () = assert!(size_of::<GiParams>() == 48);
+const _: () = assert!(size_of::<GiEntry>() == 64);
+const _: () = assert!(size_of::<GiEdit>() == 32);
+
+/// What the counters buffer counts (`COUNT_*`; group 0, `shaders/lib/counters.wgsl`). The first
+/// `PER_FRAME_COUNTERS` restart every frame, the rest count since the renderer started.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GpuCounter {
+    /// GI entries re-shaded this frame.
+    GiUpdated = 0,
+    /// GI entries with at least one of their K static hits (re)traced this frame.
+    GiRetraced = 1,
+    /// GI entries in the tables.
+    GiLive = 2,
+    /// GI entries freed after going unused.
+    GiEvicted = 3,
+    /// GI inserts that found their probe window full.
+    GiFull = 4,
+    /// GI entries inserted this frame.
+    GiInserted = 5,
+    /// Static GI rays traced to (re)fill the cached hits this frame.
+    GiRaysTraced = 6,
+    /// GI ray hits whose face had no cached value and borrowed the shooting entry's indirect light.
+    GiBorrowed = 7,
+    /// Since the start: ReSTIR reservoirs read with a non-finite field (reset to empty).
+    ReservoirResets = 8,
+    /// Since the start: GI estimates that came out non-finite (replaced by zero).
+    GiResets = 9,
+}
+
+impl GpuCounter {
+    pub const ALL: [(GpuCounter, &'static str); 10] = [
+        (GpuCounter::GiUpdated, "COUNT_GI_UPDATED"),
+        (GpuCounter::GiRetraced, "COUNT_GI_RETRACED"),
+        (GpuCounter::GiLive, "COUNT_GI_LIVE"),
+        (GpuCounter::GiEvicted, "COUNT_GI_EVICTED"),
+        (GpuCounter::GiFull, "COUNT_GI_FULL"),
+        (GpuCounter::GiInserted, "COUNT_GI_INSERTED"),
+        (GpuCounter::GiRaysTraced, "COUNT_GI_RAYS_TRACED"),
+        (GpuCounter::GiBorrowed, "COUNT_GI_BORROWED"),
+        (GpuCounter::ReservoirResets, "COUNT_RESERVOIR_RESETS"),
+        (GpuCounter::GiResets, "COUNT_GI_RESETS"),
+    ];
+}
+
+/// Words in the counters buffer, and how many of the first ones restart every frame.
+pub const COUNTERS: usize = 16;
+pub const PER_FRAME_COUNTERS: usize = 8;
+const _: () = assert!(GpuCounter::GiBorrowed as usize + 1 == PER_FRAME_COUNTERS);
+const _: () = assert!(GpuCounter::GiResets as usize + 1 <= COUNTERS);
+
+/// `restir_flags` bits.
+pub const RESTIR_TEMPORAL: u32 = 1;
+pub const RESTIR_SPATIAL: u32 = 2;
+pub const RESTIR_POINT: u32 = 4;
+pub const RESTIR_UNBIASED: u32 = 8;
+
+/// `GiParams::flags` bits.
+pub const GI_FILTER: u32 = 1;
+pub const GI_BOUNCES: u32 = 2;
+pub const GI_CACHE: u32 = 4;
+
+/// The G-buffer's packed hit: bit 0 hit, bits 1-3 face, bits 4-19 material, bits 20-31 the moving object's id.
+pub const GBUFFER_FACE_SHIFT: u32 = 1;
+pub const GBUFFER_MATERIAL_SHIFT: u32 = 4;
+pub const GBUFFER_MATERIAL_BITS: u32 = 16;
+pub const GBUFFER_OBJECT_SHIFT: u32 = GBUFFER_MATERIAL_SHIFT + GBUFFER_MATERIAL_BITS;
+pub const GBUFFER_OBJECT_BITS: u32 = 32 - GBUFFER_OBJECT_SHIFT;
+// Every object id must fit in its G-buffer bits, and every material id in its.
+const _: () = assert!(MAX_OBJECT_ID < 1 << GBUFFER_OBJECT_BITS);
+const _: () = assert!(crate::world::palette::MAX_MATERIALS < 1 << GBUFFER_MATERIAL_BITS);
+
+/// Spatial taps a ReSTIR pixel merges at most (the `taps` setting's upper end).
+pub const MAX_TAPS: u32 = crate::settings::MAX_TAPS;
+
+/// A constant's value as a shader def.
+#[derive(Clone, Copy, Debug)]
+pub enum Shared {
+    U32(u32),
+    I32(i32),
+}
+
+/// Every constant the WGSL shares with Rust, by the name both sides use.
+pub fn shared_constants() -> Vec<(&'static str, Shared)> {
+    use Shared::{I32, U32};
+    let brick_shift = BRICK_SIZE.trailing_zeros();
+    let mut table = vec![
+        // The brick grid (src/world/grid.rs).
+        ("POOLED_FLAG", U32(POOLED_FLAG)),
+        ("BRICK_SIZE", I32(BRICK_SIZE)),
+        ("BRICK_SHIFT", U32(brick_shift)),
+        ("BRICK_WORDS", U32((BRICK_VOXELS / 2) as u32)),
+        // Secondary rays start this far off their surface (the CPU reference uses the same).
+        ("RAY_OFFSET_INVERSE", U32(RAY_OFFSET_INVERSE)),
+        // Lighting modes and debug views (src/settings.rs).
+        ("LIGHTING_SUN", U32(Lighting::Sun as u32)),
+        ("LIGHTING_NEE", U32(Lighting::Nee as u32)),
+        ("LIGHTING_RESTIR", U32(Lighting::Restir as u32)),
+        ("DEBUG_NONE", U32(DebugView::None.shader_index())),
+        ("DEBUG_ALBEDO", U32(DebugView::Albedo.shader_index())),
+        ("DEBUG_NORMAL", U32(DebugView::Normal.shader_index())),
+        ("DEBUG_HIT", U32(DebugView::Hit.shader_index())),
+        ("DEBUG_DEPTH", U32(DebugView::Depth.shader_index())),
+        ("DEBUG_RESERVOIR", U32(DebugView::Reservoir.shader_index())),
+        // Flags.
+        ("RESTIR_TEMPORAL", U32(RESTIR_TEMPORAL)),
+        ("RESTIR_SPATIAL", U32(RESTIR_SPATIAL)),
+        ("RESTIR_POINT", U32(RESTIR_POINT)),
+        ("RESTIR_UNBIASED", U32(RESTIR_UNBIASED)),
+        ("MAX_TAPS", U32(MAX_TAPS)),
+        ("GI_FILTER", U32(GI_FILTER)),
+        ("GI_BOUNCES", U32(GI_BOUNCES)),
+        ("GI_CACHE", U32(GI_CACHE)),
+        // The G-buffer's packed hit.
+        ("GBUFFER_FACE_SHIFT", U32(GBUFFER_FACE_SHIFT)),
+        ("GBUFFER_MATERIAL_SHIFT", U32(GBUFFER_MATERIAL_SHIFT)),
+        ("GBUFFER_MATERIAL_MASK", U32((1 << GBUFFER_MATERIAL_BITS) - 1)),
+        ("GBUFFER_OBJECT_SHIFT", U32(GBUFFER_OBJECT_SHIFT)),
+    ];
+    table.extend(GpuCounter::ALL.iter().map(|&(counter, name)| (name, U32(counter as u32))));
+    table
+}
+
+/// The shared constants as shader defs, for every voxel pipeline.
+pub fn shader_defs() -> Vec<ShaderDefVal> {
+    shared_constants()
+        .into_iter()
+        .map(|(name, value)| match value {
+            Shared::U32(v) => ShaderDefVal::UInt(name.into(), v),
+            Shared::I32(v) => ShaderDefVal::Int(name.into(), v),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `constants.wgsl` declares every shared constant once, from its def, and no other shader reads a def.
+    #[test]
+    fn every_shared_constant_reaches_the_wgsl_once_and_only_through_constants_wgsl() {
+        let constants = include_str!("../../shaders/lib/constants.wgsl");
+        for (name, value) in shared_constants() {
+            let suffix = if matches!(value, Shared::U32(_)) { "u" } else { "" };
+            let declaration =
+                format!("const {name}: {} = #{{{name}}}{suffix};", if suffix == "u" { "u32" } else { "i32" });
+            assert_eq!(constants.matches(&declaration).count(), 1, "constants.wgsl lacks `{declaration}`");
+        }
+        let defs = constants.matches("#{").count();
+        assert_eq!(defs, shared_constants().len(), "constants.wgsl reads a def the table does not have");
+        for (path, source) in super::super::shaders::SOURCES {
+            if !path.ends_with("constants.wgsl") {
+                assert!(!source.contains("#{"), "{path} reads a shader def; use glowbrick::constants instead");
+            }
+        }
+    }
+
+    #[test]
+    fn names_are_unique() {
+        let mut names: Vec<&str> = shared_constants().iter().map(|(n, _)| *n).collect();
+        names.sort();
+        let count = names.len();
+        names.dedup();
+        assert_eq!(names.len(), count);
+    }
+}

@@ -1,0 +1,47 @@
+//! The WGSL, embedded at compile time so the binary runs from any directory. `shaders/lib/` holds the libraries
+//! every pass imports (`glowbrick::world`, `::traversal`, `::random`, `::lights`, `::frame`, `::constants`,
+//! `::counters`); `shaders/restir/` and `shaders/gi/` one technique each.
+
+use bevy::prelude::*;
+use bevy::shader::Shader;
+
+/// Every shader file: its path under `shaders/` and its source. Libraries first (they only define imports).
+pub const SOURCES: [(&str, &str); 16] = [
+    ("lib/constants.wgsl", include_str!("../../shaders/lib/constants.wgsl")),
+    ("lib/random.wgsl", include_str!("../../shaders/lib/random.wgsl")),
+    ("lib/counters.wgsl", include_str!("../../shaders/lib/counters.wgsl")),
+    ("lib/world.wgsl", include_str!("../../shaders/lib/world.wgsl")),
+    ("lib/traversal.wgsl", include_str!("../../shaders/lib/traversal.wgsl")),
+    ("lib/lights.wgsl", include_str!("../../shaders/lib/lights.wgsl")),
+    ("lib/frame.wgsl", include_str!("../../shaders/lib/frame.wgsl")),
+    ("gi/cache.wgsl", include_str!("../../shaders/gi/cache.wgsl")),
+    ("restir/common.wgsl", include_str!("../../shaders/restir/common.wgsl")),
+    ("primary.wgsl", include_str!("../../shaders/primary.wgsl")),
+    ("restir/initial.wgsl", include_str!("../../shaders/restir/initial.wgsl")),
+    ("restir/spatial.wgsl", include_str!("../../shaders/restir/spatial.wgsl")),
+    ("restir/shade.wgsl", include_str!("../../shaders/restir/shade.wgsl")),
+    ("gi/refresh.wgsl", include_str!("../../shaders/gi/refresh.wgsl")),
+    ("gi/update.wgsl", include_str!("../../shaders/gi/update.wgsl")),
+    ("gi/filter.wgsl", include_str!("../../shaders/gi/filter.wgsl")),
+];
+
+/// Handles of every embedded shader, by its path under `shaders/`. Holding them keeps the libraries loaded.
+#[derive(Resource, Clone)]
+pub struct GlowbrickShaders(pub Vec<(&'static str, Handle<Shader>)>);
+
+impl GlowbrickShaders {
+    /// Adds every shader to the asset store.
+    pub fn load(shaders: &mut Assets<Shader>) -> Self {
+        GlowbrickShaders(
+            SOURCES
+                .iter()
+                .map(|&(path, source)| (path, shaders.add(Shader::from_wgsl(source, format!("glowbrick/{path}")))))
+                .collect(),
+        )
+    }
+
+    /// The handle of the shader at `path` (one of `SOURCES`; a typo is a programming error caught by every test).
+    pub fn get(&self, path: &str) -> Handle<Shader> {
+        self.0.iter().find(|(p, _)| *p == path).map(|(_, h)| h.clone()).unwrap_or_else(|| panic!("no shader {path}"))
+    }
+}
