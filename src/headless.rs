@@ -132,6 +132,15 @@ impl HeadlessRenderer {
         }
     }
 
+    /// Adds another voxel camera at `view`, rendering into an image of its own that is never read back (for tests
+    /// of what several cameras share). `frames_rendered` then counts each camera's frames.
+    pub fn add_camera(&mut self, view: &CameraView) {
+        let mut image = Image::new_target_texture(self.width, self.height, TextureFormat::Rgba32Float, None);
+        image.texture_descriptor.usage |= TextureUsages::COPY_SRC;
+        let target = self.app.world_mut().resource_mut::<Assets<Image>>().add(image);
+        self.app.world_mut().spawn((voxel_camera_bundle(view), Tonemapping::None, RenderTarget::Image(target.into())));
+    }
+
     /// Frames the primary pass has dispatched so far.
     pub fn frames_rendered(&self) -> u32 {
         self.frames.0.load(Ordering::Relaxed)

@@ -243,3 +243,29 @@ fn a_glowing_object_behind_a_wall_does_not_leak_through_it() {
     assert!(with_in_front > 1.1 * without, "the glowing object lights the room it is in: {with_in_front} vs {without}");
     assert!((with_behind - without).abs() < 0.02 * without, "no light through the wall: {with_behind} vs {without}");
 }
+
+/// The cache is world-level: with two cameras on the same view it is updated once per frame, not once per
+/// camera (each update pass counts the entries it re-shades).
+#[test]
+fn two_cameras_update_the_cache_once_per_frame() {
+    let world = load_scene("window-room").unwrap();
+    let view = world.view("inside").unwrap().clone();
+    let pairs = ["lighting=nee", "gi=on"];
+    let Some(mut one) = renderer(&world, &view, &pairs) else { return };
+    for _ in 0..8 {
+        one.step();
+    }
+    let single = one.counters().unwrap();
+    drop(one);
+    let Some(mut two) = renderer(&world, &view, &pairs) else { return };
+    two.add_camera(&view);
+    for _ in 0..8 {
+        two.step();
+    }
+    let double = two.counters().unwrap();
+    let updated = |c: &[u32]| c[GpuCounter::GiUpdated as usize] as f64;
+    eprintln!("entries updated per frame: one camera {}, two cameras {}", updated(&single), updated(&double));
+    assert!(updated(&single) > 100.0, "{single:?}");
+    let ratio = updated(&double) / updated(&single);
+    assert!((0.9..1.1).contains(&ratio), "two cameras updated {ratio:.2}x the entries of one: {double:?}");
+}
