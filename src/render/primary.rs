@@ -5,7 +5,7 @@
 use super::gpu_world::{GpuWorld, WorldLayout};
 use super::{FramesRendered, GlowbrickShaders, Highlight, VoxelCamera, shader_defs};
 use crate::lights::upload::{GpuLights, LightsLayout};
-use crate::settings::{Lighting, RenderSettings};
+use crate::settings::{LightPick, LightSample, Lighting, RenderSettings, Reuse};
 use bevy::prelude::*;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::binding_types::{
@@ -83,7 +83,7 @@ impl FrameParams {
                 Lighting::Nee => 1,
                 Lighting::Restir => 2,
             },
-            power_pick: settings.power_pick as u32,
+            power_pick: (settings.pick == LightPick::Power) as u32,
             light_count: 0,
             accumulated: 1,
             candidates: restir.candidates,
@@ -91,8 +91,8 @@ impl FrameParams {
             radius: restir.radius,
             restir_flags: flag(restir.temporal, RESTIR_TEMPORAL)
                 | flag(restir.spatial, RESTIR_SPATIAL)
-                | flag(restir.point_lights, RESTIR_POINT)
-                | flag(restir.unbiased, RESTIR_UNBIASED),
+                | flag(restir.sample == LightSample::Point, RESTIR_POINT)
+                | flag(restir.reuse == Reuse::Unbiased, RESTIR_UNBIASED),
         }
     }
 }
