@@ -6,7 +6,7 @@ use glowbrick::game::models::ModelToPlace;
 use glowbrick::headless::{HeadlessOptions, render_headless};
 use glowbrick::image_io::{read_image, write_image, write_png_plain};
 use glowbrick::reference::{ReferenceOptions, metrics, render_reference};
-use glowbrick::settings::{RenderSettings, SETTING_KEYS};
+use glowbrick::settings::{RenderSettings, valid_pairs};
 use glowbrick::world::import::vox::parse_vox;
 use glowbrick::world::source::{WorldSource, load_path};
 use glowbrick::world::{CameraView, VoxelWorld};
@@ -182,7 +182,7 @@ struct WorldArgs {
 #[derive(Args, Default)]
 struct SettingArgs {
     /// A render setting KEY=VALUE (repeatable).
-    #[arg(long = "set", value_name = "KEY=VALUE", help = format!("A render setting KEY=VALUE (repeatable): {SETTING_KEYS}"))]
+    #[arg(long = "set", value_name = "KEY=VALUE", help = format!("A render setting KEY=VALUE (repeatable): {}", valid_pairs()))]
     pairs: Vec<String>,
     /// A RON file of settings, e.g. {"lighting": "restir", "candidates": 16}; `--set` pairs apply after it.
     #[arg(long, value_name = "FILE.ron")]

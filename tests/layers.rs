@@ -63,7 +63,8 @@ fn no_source_file_imports_from_a_layer_above_its_own() {
     for file in &files {
         let relative = file.strip_prefix(&src).unwrap();
         let module = relative.components().next().unwrap().as_os_str().to_str().unwrap().trim_end_matches(".rs");
-        let own = layer(module).unwrap_or_else(|| panic!("{module} (src/{}) has no layer in LAYERS", relative.display()));
+        let own =
+            layer(module).unwrap_or_else(|| panic!("{module} (src/{}) has no layer in LAYERS", relative.display()));
         let source = std::fs::read_to_string(file).unwrap();
         for import in crate_imports(&source) {
             match layer(import) {

@@ -1,4 +1,5 @@
-//! The HUD (Bevy UI): crosshair, hotbar swatches, the selected material, frame rate and light count, a status
+//! The HUD (Bevy UI): crosshair, hotbar swatches, the selected material, frame rate, light count and the render
+//! settings that apply (as `--set` pairs), a status
 //! line for saves and errors, a one-line hint, and a help panel toggled with F1.
 
 use super::interaction::{Brush, Hotbar, Target};
@@ -210,17 +211,11 @@ fn update_texts(
     let (voxel_lights, brick_lights) = pool.counts();
     if let Ok(mut t) = texts.p0().single_mut() {
         t.0 = format!(
-            "{:.0} fps  {:.1} ms\nlights {} (voxel {voxel_lights}, brick {brick_lights})\nlighting {}{} | {}\n{mode} | brush {brush}\ntarget {target}",
+            "{:.0} fps  {:.1} ms\nlights {} (voxel {voxel_lights}, brick {brick_lights})\n{}\n{mode} | brush {brush}\ntarget {target}",
             1.0 / smoothed_dt.max(1e-6),
             *smoothed_dt * 1000.0,
             pool.len(),
-            settings.lighting.name(),
-            if settings.lighting == crate::settings::Lighting::Restir {
-                format!(" ({})", settings.restir.summary())
-            } else {
-                String::new()
-            },
-            settings.gi.summary(),
+            settings.summary(),
         );
     }
     if let Ok(mut t) = texts.p1().single_mut() {

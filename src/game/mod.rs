@@ -74,7 +74,7 @@ fn toggle_debug_view(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<Rende
     use crate::settings::DebugView;
     if keys.just_pressed(KeyCode::KeyG) {
         settings.gi.enabled = !settings.gi.enabled;
-        info!("{}", settings.gi.summary());
+        info!("{}", settings.summary());
     }
     if keys.just_pressed(KeyCode::F3) {
         settings.debug = match settings.debug {

@@ -1,10 +1,11 @@
-//! The in-game render settings panel (F4): Up/Down choose a row, Left/Right change it. Values step within the
-//! same ranges `--set` accepts (`crate::settings`), clamped at the ends. L cycles the lighting mode at any time.
+//! The in-game render settings panel (F4): Up/Down choose a row, Left/Right change it. Each row is a setting of
+//! `crate::settings::SETTINGS`, which says how it steps: choices cycle, numbers step within the range `--set`
+//! accepts. L cycles the lighting mode at any time.
 
-use crate::settings::{CANDIDATES_RANGE, Lighting, RADIUS_RANGE, RenderSettings, TAPS_RANGE};
+use crate::settings::{RenderSettings, setting};
 use bevy::prelude::*;
 
-/// The rows of the panel, top to bottom.
+/// The settings the panel shows, top to bottom (keys of `crate::settings::SETTINGS`).
 pub const ROWS: [&str; 10] =
     ["lighting", "candidates", "taps", "radius", "temporal", "spatial", "sample", "reuse", "pick", "accumulate"];
 
@@ -17,47 +18,10 @@ pub struct SettingsPanel {
 #[derive(Component)]
 struct PanelText;
 
-/// Changes row `row` of `settings` by `step` (+1 / -1): numbers double or halve (radius in steps of 5), switches
-/// flip, the lighting mode cycles. Results stay inside the valid ranges.
+/// Changes row `row` of `settings` by `step` (+1 / -1), as its setting steps.
 pub fn adjust(settings: &mut RenderSettings, row: usize, step: i32) {
-    let r = &mut settings.restir;
-    match ROWS.get(row).copied() {
-        Some("lighting") => {
-            let names = Lighting::NAMES;
-            let i = names.iter().position(|(_, l)| *l == settings.lighting).unwrap_or(0) as i32;
-            settings.lighting = names[(i + step).rem_euclid(names.len() as i32) as usize].1;
-        }
-        Some("candidates") => {
-            let v = if step > 0 { r.candidates.saturating_mul(2) } else { r.candidates / 2 };
-            r.candidates = v.clamp(CANDIDATES_RANGE.0, CANDIDATES_RANGE.1);
-        }
-        Some("taps") => r.taps = (r.taps as i32 + step).clamp(TAPS_RANGE.0 as i32, TAPS_RANGE.1 as i32) as u32,
-        Some("radius") => r.radius = (r.radius + 5.0 * step as f32).clamp(RADIUS_RANGE.0, RADIUS_RANGE.1),
-        Some("temporal") => r.temporal = !r.temporal,
-        Some("spatial") => r.spatial = !r.spatial,
-        Some("sample") => r.point_lights = !r.point_lights,
-        Some("reuse") => r.unbiased = !r.unbiased,
-        Some("pick") => settings.power_pick = !settings.power_pick,
-        Some("accumulate") => settings.accumulate = !settings.accumulate,
-        _ => {}
-    }
-}
-
-fn value(settings: &RenderSettings, row: &str) -> String {
-    let r = &settings.restir;
-    let on = |b: bool| if b { "on" } else { "off" }.to_string();
-    match row {
-        "lighting" => settings.lighting.name().to_string(),
-        "candidates" => r.candidates.to_string(),
-        "taps" => r.taps.to_string(),
-        "radius" => format!("{} px", r.radius),
-        "temporal" => on(r.temporal),
-        "spatial" => on(r.spatial),
-        "sample" => if r.point_lights { "point" } else { "area" }.to_string(),
-        "reuse" => if r.unbiased { "unbiased" } else { "biased" }.to_string(),
-        "pick" => if settings.power_pick { "power" } else { "uniform" }.to_string(),
-        "accumulate" => on(settings.accumulate),
-        _ => String::new(),
+    if let Some(setting) = ROWS.get(row).and_then(|key| setting(key)) {
+        setting.step(settings, step);
     }
 }
 
@@ -66,7 +30,8 @@ pub fn panel_text(settings: &RenderSettings, panel: &SettingsPanel) -> String {
     let mut text = String::from("render settings (F4 closes)\nUp/Down choose, Left/Right change\n\n");
     for (i, row) in ROWS.iter().enumerate() {
         let mark = if i == panel.row { ">" } else { " " };
-        text += &format!("{mark} {row:<11} {}\n", value(settings, row));
+        let value = setting(row).map_or(String::new(), |s| s.show(settings));
+        text += &format!("{mark} {row:<11} {value}\n");
     }
     text
 }
@@ -134,6 +99,14 @@ fn panel_keys(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::settings::Lighting;
+
+    #[test]
+    fn every_row_is_a_setting() {
+        for row in ROWS {
+            assert!(setting(row).is_some(), "{row}");
+        }
+    }
 
     #[test]
     fn keys_step_within_the_command_line_ranges() {
@@ -161,6 +134,7 @@ mod tests {
         assert_eq!(s.lighting, Lighting::Restir);
         adjust(&mut s, row("lighting"), 1);
         assert_eq!(s.lighting, Lighting::Sun);
-        assert!(panel_text(&s, &SettingsPanel { open: true, row: 1 }).contains("> candidates  1"));
+        let text = panel_text(&s, &SettingsPanel { open: true, row: 1 });
+        assert!(text.contains("> candidates  1") && text.contains("  radius      0 px"), "{text}");
     }
 }

@@ -20,7 +20,7 @@ use super::scene::objects::GpuObjects;
 use super::scene::world::{GpuWorld, WorldLayout};
 use super::shaders::GlowbrickShaders;
 use super::{FramesRendered, Highlight, VoxelCamera, primary, restir};
-use crate::settings::{DebugView, Lighting, RenderSettings};
+use crate::settings::{DebugView, LightSample, Lighting, RenderSettings, Reuse};
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy::render::diagnostic::RecordDiagnostics;
@@ -81,8 +81,8 @@ pub fn frame_params(settings: &RenderSettings, highlight: &Highlight, frame: u32
         radius: restir.radius,
         restir_flags: flag(restir.temporal, RESTIR_TEMPORAL)
             | flag(restir.spatial, RESTIR_SPATIAL)
-            | flag(restir.point_lights, RESTIR_POINT)
-            | flag(restir.unbiased, RESTIR_UNBIASED),
+            | flag(restir.sample == LightSample::Point, RESTIR_POINT)
+            | flag(restir.reuse == Reuse::Unbiased, RESTIR_UNBIASED),
     }
 }
 
@@ -453,4 +453,25 @@ pub fn add(render_app: &mut SubApp) {
         .add_systems(Render, prepare_view_resources.after(SceneUploaded).in_set(RenderSystems::PrepareResources))
         .add_systems(Core3d, view_frame.after(main_transparent_pass_3d).in_set(Core3dSystems::MainPass))
         .add_systems(RenderGraph, world_frame.after(camera_driver).in_set(RenderGraphSystems::Render));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::scene::lights::scene_lighting;
+
+    /// The named choices reach the GPU as the bits the shaders test.
+    #[test]
+    fn named_choices_reach_the_gpu_as_flag_bits() {
+        let settings = |pairs: &[&str]| {
+            RenderSettings::default().with_pairs(&pairs.iter().map(|p| p.to_string()).collect::<Vec<_>>()).unwrap()
+        };
+        let default = settings(&[]);
+        let params = frame_params(&default, &Highlight::default(), 0);
+        assert_eq!((scene_lighting(&default, 3).power_pick, params.restir_flags), (1, 1 | 2));
+        let changed = settings(&["pick=uniform", "sample=point", "reuse=unbiased", "temporal=off"]);
+        let params = frame_params(&changed, &Highlight::default(), 0);
+        assert_eq!((scene_lighting(&changed, 3).power_pick, params.restir_flags), (0, 2 | 4 | 8));
+        assert_eq!(scene_lighting(&changed, 3).light_count, 3);
+    }
 }

@@ -5,7 +5,7 @@
 use super::storage_buffer;
 use crate::lights::{AliasEntry, Light, LightPool};
 use crate::render::gpu_types::{GpuLight, SceneLighting};
-use crate::settings::RenderSettings;
+use crate::settings::{LightPick, RenderSettings};
 use bevy::prelude::*;
 use bevy::render::render_resource::binding_types::{storage_buffer_read_only_sized, uniform_buffer_sized};
 use bevy::render::render_resource::{
@@ -47,7 +47,7 @@ pub fn scene_lighting(settings: &RenderSettings, light_count: u32) -> SceneLight
         sky_zenith: [0.35, 0.55, 0.95, 0.0],
         sky_horizon: [0.75, 0.82, 0.9, 0.0],
         mode: settings.lighting as u32,
-        power_pick: settings.power_pick as u32,
+        power_pick: (settings.pick == LightPick::Power) as u32,
         light_count,
         shadows: settings.shadows as u32,
     }
