@@ -249,7 +249,7 @@ fn a_glowing_object_behind_a_wall_does_not_leak_through_it() {
 #[test]
 fn two_cameras_update_the_cache_once_per_frame() {
     let world = load_scene("window-room").unwrap();
-    let view = world.view("inside").unwrap().clone();
+    let view = world.view(Some("inside")).unwrap().clone();
     let pairs = ["lighting=nee", "gi=on"];
     let Some(mut one) = renderer(&world, &view, &pairs) else { return };
     for _ in 0..8 {
