@@ -86,7 +86,7 @@ impl HeadlessRenderer {
         )
         .insert_resource(world)
         .insert_resource(options.settings.clone())
-        .add_plugins((crate::GlowbrickCorePlugin, RenderDiagnosticsPlugin));
+        .add_plugins((crate::core_plugin::GlowbrickCorePlugin, RenderDiagnosticsPlugin));
 
         let mut image = Image::new_target_texture(w, h, TextureFormat::Rgba32Float, None);
         image.texture_descriptor.usage |= TextureUsages::COPY_SRC;

@@ -1,10 +1,13 @@
 //! glowbrick: a voxel sandbox lit by Voxel ReSTIR direct lighting and a per-voxel-face GI cache.
 //!
-//! Layers, bottom up: `world` (the brick grid and its files), `render` (GPU upload and passes as Bevy systems),
-//! `game` (the playable app), `headless` (rendering to files without a window).
+//! Layers, bottom up (a module imports only from its own layer and those below; `tests/` checks it):
+//! `colour`, `image_io` -> `world` (the brick grid, its files, traversal, camera math) -> `lights`, `dynamic`,
+//! `reference` (CPU only) -> `render`, `settings`, `core_plugin` -> `game` (the playable app), `headless`
+//! (rendering without a window) -> `bench`, `stress` -> `cli`.
 
 pub mod bench;
 pub mod colour;
+pub mod core_plugin;
 pub mod dynamic;
 pub mod game;
 pub mod headless;
@@ -16,16 +19,4 @@ pub mod settings;
 pub mod stress;
 pub mod world;
 
-/// Everything a running world needs besides a window: the edit path, the light pool and the renderer.
-pub struct GlowbrickCorePlugin;
-
-impl bevy::app::Plugin for GlowbrickCorePlugin {
-    fn build(&self, app: &mut bevy::app::App) {
-        app.add_plugins((
-            world::events::WorldEditPlugin,
-            lights::plugin::LightsPlugin,
-            render::VoxelRenderPlugin,
-            dynamic::DynamicObjectsPlugin,
-        ));
-    }
-}
+pub use core_plugin::GlowbrickCorePlugin;

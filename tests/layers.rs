@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 /// Each top-level module of `src/` and its layer, bottom (0) to top.
-const LAYERS: [(&str, u32); 15] = [
+const LAYERS: [(&str, u32); 16] = [
     ("colour", 0),
     ("image_io", 0),
     ("world", 1),
@@ -13,6 +13,7 @@ const LAYERS: [(&str, u32); 15] = [
     ("reference", 2),
     ("settings", 3),
     ("render", 3),
+    ("core_plugin", 3),
     ("game", 4),
     ("headless", 4),
     ("bench", 5),

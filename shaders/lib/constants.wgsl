@@ -13,6 +13,10 @@ const RAY_OFFSET_INVERSE: u32 = #{RAY_OFFSET_INVERSE}u;
 const RAY_OFFSET: f32 = 1.0 / f32(RAY_OFFSET_INVERSE);
 const PI: f32 = 3.14159265;
 
+// A light slot's packed edge (low bits) and exposed-face mask (src/render/gpu_types.rs, GpuLight).
+const LIGHT_FACES_SHIFT: u32 = #{LIGHT_FACES_SHIFT}u;
+const LIGHT_SIZE_MASK: u32 = #{LIGHT_SIZE_MASK}u;
+
 // Lighting modes and debug views (src/settings.rs).
 const LIGHTING_SUN: u32 = #{LIGHTING_SUN}u;
 const LIGHTING_NEE: u32 = #{LIGHTING_NEE}u;

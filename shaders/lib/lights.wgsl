@@ -5,12 +5,13 @@
 
 #import glowbrick::traversal::trace_scene
 #import glowbrick::random::{Rng, rng_next}
-#import glowbrick::constants::{RAY_OFFSET, PI}
+#import glowbrick::constants::{RAY_OFFSET, PI, LIGHT_FACES_SHIFT, LIGHT_SIZE_MASK}
 
 struct Light {
     min: vec3<i32>,
-    // Edge in voxels (bits 0-7; 0 marks a free slot) and the faces that touch air (bits 8-13, bit f = face f
-    // numbered as the traversal numbers faces: 0 +X, 1 -X, ...). Read through light_size and face_exposed.
+    // Edge in voxels (below LIGHT_FACES_SHIFT; 0 marks a free slot) and the faces that touch air (bit
+    // LIGHT_FACES_SHIFT + f for face f as the traversal numbers faces: 0 +X, 1 -X, ...). Read through light_size
+    // and face_exposed.
     size_faces: i32,
     radiance: vec3<f32>,
     generation: u32,
@@ -68,11 +69,11 @@ fn pick_light(count: u32, power: bool, u_column: f32, u_pick: f32) -> PickedLigh
 }
 
 fn light_size(light: Light) -> i32 {
-    return light.size_faces & 255;
+    return light.size_faces & i32(LIGHT_SIZE_MASK);
 }
 
 fn face_exposed(light: Light, face: u32) -> bool {
-    return ((u32(light.size_faces) >> (8u + face)) & 1u) == 1u;
+    return ((u32(light.size_faces) >> (LIGHT_FACES_SHIFT + face)) & 1u) == 1u;
 }
 
 fn light_contains(light: Light, voxel: vec3<i32>) -> bool {

@@ -54,7 +54,7 @@ pub fn run_game(
     .insert_resource(settings)
     .insert_resource(save_load::SavePath(save_path))
     .add_plugins((
-        crate::GlowbrickCorePlugin,
+        crate::core_plugin::GlowbrickCorePlugin,
         GameLogicPlugin,
         player::PlayerPlugin,
         interaction::InteractionInputPlugin,

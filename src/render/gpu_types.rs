@@ -47,11 +47,17 @@ pub struct GpuObject {
 #[repr(C)]
 pub struct GpuLight {
     pub min: [i32; 3],
-    /// Edge in voxels (bits 0-7; 0 marks a free slot) and the exposed-face mask (bits 8-13).
+    /// Edge in voxels (bits 0-7; 0 marks a free slot) and the exposed-face mask (bit `LIGHT_FACES_SHIFT + f`).
     pub size_faces: i32,
     pub radiance: [f32; 3],
     pub generation: u32,
 }
+
+/// `GpuLight::size_faces`: the edge in the low bits, the exposed-face mask above them.
+pub const LIGHT_FACES_SHIFT: u32 = 8;
+pub const LIGHT_SIZE_MASK: u32 = (1 << LIGHT_FACES_SHIFT) - 1;
+// A brick light's edge must fit below the face mask.
+const _: () = assert!(crate::world::grid::BRICK_SIZE as u32 <= LIGHT_SIZE_MASK);
 
 /// Group 2, binding 2 (`SceneLighting` in `shaders/lib/lights.wgsl`): how the scene is lit this frame, the
 /// same for every camera and for the GI cache.
@@ -259,6 +265,9 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("BRICK_WORDS", U32((BRICK_VOXELS / 2) as u32)),
         // Secondary rays start this far off their surface (the CPU reference uses the same).
         ("RAY_OFFSET_INVERSE", U32(RAY_OFFSET_INVERSE)),
+        // A light slot's packed edge and exposed faces.
+        ("LIGHT_FACES_SHIFT", U32(LIGHT_FACES_SHIFT)),
+        ("LIGHT_SIZE_MASK", U32(LIGHT_SIZE_MASK)),
         // Lighting modes and debug views (src/settings.rs).
         ("LIGHTING_SUN", U32(Lighting::Sun as u32)),
         ("LIGHTING_NEE", U32(Lighting::Nee as u32)),

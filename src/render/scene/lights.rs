@@ -4,7 +4,7 @@
 
 use super::storage_buffer;
 use crate::lights::{AliasEntry, Light, LightPool};
-use crate::render::gpu_types::{GpuLight, SceneLighting};
+use crate::render::gpu_types::{GpuLight, LIGHT_FACES_SHIFT, SceneLighting};
 use crate::settings::{LightPick, RenderSettings};
 use bevy::prelude::*;
 use bevy::render::render_resource::binding_types::{storage_buffer_read_only_sized, uniform_buffer_sized};
@@ -71,7 +71,7 @@ fn gpu_light(light: Option<&Light>, generation: u32) -> GpuLight {
     match light {
         Some(l) => GpuLight {
             min: l.min.to_array(),
-            size_faces: l.size | (l.faces as i32) << 8,
+            size_faces: l.size | (l.faces as i32) << LIGHT_FACES_SHIFT,
             radiance: l.radiance,
             generation,
         },
