@@ -4,6 +4,7 @@
 //! `game` (the playable app), `headless` (rendering to files without a window).
 
 pub mod bench;
+pub mod cli;
 pub mod dynamic;
 pub mod game;
 pub mod headless;
