@@ -6,6 +6,7 @@
 //! (rendering without a window) -> `bench`, `stress` -> `cli`.
 
 pub mod bench;
+pub mod cli;
 pub mod colour;
 pub mod core_plugin;
 pub mod dynamic;

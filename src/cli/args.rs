@@ -1,0 +1,132 @@
+//! Argument groups that several commands share: a world, a camera view of it, render settings, and the parsers
+//! of `--camera` and `--size`.
+
+use crate::settings::{RenderSettings, help_text, valid_pairs};
+use crate::world::source::WorldSource;
+use crate::world::{CameraView, VoxelWorld};
+use bevy::math::UVec3;
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Default)]
+pub struct WorldArgs {
+    /// A world file (.ron) or scene recipe.
+    #[arg(long, conflicts_with = "scene")]
+    pub world: Option<PathBuf>,
+    /// A bundled scene: assets/scenes/NAME.ron.
+    #[arg(long)]
+    pub scene: Option<String>,
+}
+
+impl WorldArgs {
+    pub fn source(&self) -> Option<WorldSource> {
+        match (&self.world, &self.scene) {
+            (Some(path), _) => Some(WorldSource::Path(path.clone())),
+            (None, Some(name)) => Some(WorldSource::Scene(name.clone())),
+            (None, None) => None,
+        }
+    }
+}
+
+/// A world, a camera view of it and an image size: what `render` and `reference` both take.
+#[derive(Args)]
+pub struct ShotArgs {
+    #[command(flatten)]
+    pub world: WorldArgs,
+    /// A named camera view of the world (default: its first view, or an overview).
+    #[arg(long, conflicts_with = "camera")]
+    pub view: Option<String>,
+    /// A camera in voxel units, y up: OX,OY,OZ,DX,DY,DZ[,FOV_DEG] (vertical field of view, default 60).
+    #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
+    pub camera: Option<CameraView>,
+    #[arg(long, default_value_t = 320)]
+    pub width: u32,
+    #[arg(long, default_value_t = 180)]
+    pub height: u32,
+}
+
+impl ShotArgs {
+    /// Loads the world of `--world`/`--scene` and its camera: `--camera`, the view named `--view`, or the
+    /// world's first view, or an overview.
+    pub fn world_and_view(&self, command: &str) -> Result<(VoxelWorld, CameraView), String> {
+        let source = self.world.source().ok_or_else(|| format!("{command} needs --world PATH or --scene NAME"))?;
+        let world = source.load().map_err(|e| e.to_string())?;
+        if let Some(camera) = &self.camera {
+            return Ok((world, camera.clone()));
+        }
+        pick_view(world, self.view.as_deref())
+    }
+}
+
+/// The view named `view`, or the world's first, or an overview.
+fn pick_view(world: VoxelWorld, view: Option<&str>) -> Result<(VoxelWorld, CameraView), String> {
+    let view = match view {
+        Some(name) => world.view(Some(name)).cloned().ok_or_else(|| {
+            let names: Vec<&str> = world.views.iter().map(|v| v.name.as_str()).collect();
+            let names = if names.is_empty() { "none".to_string() } else { names.join(", ") };
+            format!("no view '{name}' (this world has: {names})")
+        })?,
+        None => world.view(None).cloned().unwrap_or_else(|| world.overview()),
+    };
+    Ok((world, view))
+}
+
+#[derive(Args, Default)]
+pub struct SettingArgs {
+    /// A render setting KEY=VALUE (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE", help = format!("A render setting KEY=VALUE (repeatable): {}", valid_pairs()), long_help = format!("A render setting KEY=VALUE (repeatable).\n\n{}", help_text()))]
+    pub pairs: Vec<String>,
+    /// A RON file of settings, e.g. {"lighting": "restir", "candidates": 16}; `--set` pairs apply after it.
+    #[arg(long, value_name = "FILE.ron")]
+    pub config: Option<PathBuf>,
+}
+
+impl SettingArgs {
+    pub fn settings(&self) -> Result<RenderSettings, String> {
+        self.settings_over(RenderSettings::default())
+    }
+
+    /// The settings file and pairs applied over `base`.
+    pub fn settings_over(&self, base: RenderSettings) -> Result<RenderSettings, String> {
+        let mut settings = base;
+        if let Some(path) = &self.config {
+            let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            settings = settings.with_ron(&text, &path.display().to_string())?;
+        }
+        settings.with_pairs(&self.pairs)
+    }
+}
+
+/// `--camera OX,OY,OZ,DX,DY,DZ[,FOV_DEG]`, refused when the view has a problem (zero direction, odd fov).
+pub fn parse_camera(text: &str) -> Result<CameraView, String> {
+    let numbers: Vec<f32> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f32>().map_err(|_| format!("'{s}' is not a number")))
+        .collect::<Result<_, _>>()?;
+    if !(6..=7).contains(&numbers.len()) {
+        return Err(format!("'{text}' is not OX,OY,OZ,DX,DY,DZ[,FOV_DEG]"));
+    }
+    let view = CameraView {
+        name: "camera".into(),
+        origin: [numbers[0], numbers[1], numbers[2]],
+        direction: [numbers[3], numbers[4], numbers[5]],
+        fov_deg: numbers.get(6).copied().unwrap_or(60.0),
+    };
+    match view.problem() {
+        Some(problem) => Err(problem),
+        None => Ok(view),
+    }
+}
+
+/// `--size X,Y,Z` of a generated world, each edge within what the grid can hold.
+pub fn parse_size(text: &str) -> Result<UVec3, String> {
+    let parts: Vec<&str> = text.split(',').collect();
+    let [x, y, z] = parts.as_slice() else { return Err(format!("'{text}' is not X,Y,Z")) };
+    let parse = |s: &str| s.trim().parse::<u32>().map_err(|_| format!("'{s}' is not a whole number"));
+    let size = UVec3::new(parse(x)?, parse(y)?, parse(z)?);
+    let max = crate::world::grid::MAX_WORLD_EDGE;
+    if size.cmplt(UVec3::splat(8)).any() || size.cmpgt(UVec3::splat(max)).any() {
+        return Err(format!("size {text} must be within 8..={max} on each axis"));
+    }
+    Ok(size)
+}

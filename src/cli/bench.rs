@@ -1,0 +1,101 @@
+//! `glowbrick bench`: run time against error, in one of three modes. Each mode's flags are refused in the other
+//! modes by clap, as a conflict or as a missing `--thesis`/`--gi`, so no flag is ever silently ignored. Conflicts
+//! are listed flag by flag, not by group: clap names every member of a group in its error, given or not.
+
+use super::args::parse_camera;
+use super::on_gpu;
+use crate::bench::{ALL_SCENES, BenchConfig, QUICK_SCENES, gi::run_gi_bench, run_bench, thesis::run_thesis_bench};
+use crate::world::CameraView;
+use clap::{ArgGroup, Args};
+use std::path::{Path, PathBuf};
+
+/// The flags of the settings sweep and the flags that pick another mode: each set refuses the other.
+const SWEEP: [&str; 4] = ["scenes", "quick", "settings", "camera"];
+const MODES: [&str; 2] = ["thesis", "gi"];
+
+#[derive(Args)]
+#[command(group(ArgGroup::new("mode").args(["thesis", "gi"])))]
+pub struct BenchArgs {
+    /// Comma-separated scene names (default: all thesis-like scenes, or a small set with --quick).
+    #[arg(long, value_delimiter = ',', conflicts_with_all = MODES)]
+    scenes: Vec<String>,
+    /// A small, fast run (96x64, few frames, 256-spp references) for CI.
+    #[arg(long, conflicts_with_all = MODES)]
+    quick: bool,
+    /// The thesis protocol instead: its .vx scenes and views, 32 frames, M = 32, area and point, the cornell
+    /// box with brick lights on and off; writes thesis.md beside the thesis' Table 3.
+    #[arg(long)]
+    thesis: bool,
+    /// The GI cache bench instead: K, the static cache, the filter and bounces against an 8-bounce reference,
+    /// the cost of edits, memory; writes gi.md.
+    #[arg(long)]
+    gi: bool,
+    /// With --thesis: image size as a fraction of the thesis' 1600x1024.
+    #[arg(long, default_value_t = 0.2, requires = "thesis", conflicts_with = "gi", conflicts_with_all = SWEEP)]
+    scale: f32,
+    /// With --thesis or --gi: samples per pixel of the CPU reference.
+    #[arg(long, default_value_t = 1024, requires = "mode", conflicts_with_all = SWEEP)]
+    spp: u32,
+    /// Comma-separated bench settings to run (default: all), e.g. restir,nee-power.
+    #[arg(long, value_delimiter = ',', conflicts_with_all = MODES)]
+    settings: Vec<String>,
+    /// A camera for every scene instead of its first view: OX,OY,OZ,DX,DY,DZ[,FOV_DEG] (voxel units, y up).
+    #[arg(long, value_parser = parse_camera, allow_hyphen_values = true, conflicts_with_all = MODES)]
+    camera: Option<CameraView>,
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// What a bench run measures, with only the options that mode reads.
+enum BenchMode {
+    /// Scenes x bench settings (the default): results.csv, report.md, plot.png.
+    Settings { scenes: Vec<String>, quick: bool, only: Vec<String>, camera: Option<CameraView> },
+    /// The thesis protocol: thesis.md.
+    Thesis { scale: f32, spp: u32 },
+    /// The GI cache bench: gi.md.
+    Gi { spp: u32 },
+}
+
+impl BenchArgs {
+    pub fn run(self) -> Result<(), String> {
+        let out = self.out.clone();
+        match self.mode() {
+            BenchMode::Settings { scenes, quick, only, camera } => run_settings(scenes, quick, only, camera, &out),
+            BenchMode::Thesis { scale, spp } => {
+                on_gpu(|| run_thesis_bench(scale, spp, &out)).map(|text| println!("{text}"))
+            }
+            BenchMode::Gi { spp } => {
+                let config = BenchConfig { width: 128, height: 72, reference_spp: spp, ..BenchConfig::full() };
+                on_gpu(|| run_gi_bench(&config, &out)).map(|text| println!("{text}"))
+            }
+        }
+    }
+
+    /// The mode the flags pick; clap has already refused `--thesis` with `--gi` and every flag of another mode.
+    fn mode(self) -> BenchMode {
+        if self.thesis {
+            BenchMode::Thesis { scale: self.scale, spp: self.spp }
+        } else if self.gi {
+            BenchMode::Gi { spp: self.spp }
+        } else {
+            BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }
+        }
+    }
+}
+
+fn run_settings(
+    scenes: Vec<String>,
+    quick: bool,
+    only: Vec<String>,
+    camera: Option<CameraView>,
+    out: &Path,
+) -> Result<(), String> {
+    let defaults = if quick { QUICK_SCENES } else { ALL_SCENES };
+    let scenes = if scenes.is_empty() { defaults.iter().map(|s| s.to_string()).collect() } else { scenes };
+    let mut config = if quick { BenchConfig::quick() } else { BenchConfig::full() };
+    config.camera = camera;
+    config.only = only;
+    let rows = on_gpu(|| run_bench(&scenes, &config, out))?;
+    println!("wrote {} rows to {}/results.csv, report.md, plot.png", rows.len(), out.display());
+    Ok(())
+}

@@ -1,0 +1,60 @@
+//! `glowbrick play`: open a window on a world (the default command).
+
+use super::args::{SettingArgs, WorldArgs, parse_size};
+use crate::game::models::ModelToPlace;
+use crate::settings::RenderSettings;
+use crate::world::import::vox::parse_vox;
+use crate::world::source::WorldSource;
+use bevy::math::UVec3;
+use clap::Args;
+use std::path::{Path, PathBuf};
+
+#[derive(Args)]
+pub struct PlayArgs {
+    #[command(flatten)]
+    world: WorldArgs,
+    /// Generate a new world (with --seed and --size) instead of opening one.
+    #[arg(long, conflicts_with_all = ["world", "scene"])]
+    new: bool,
+    /// Seed of the generated world.
+    #[arg(long, default_value_t = 1, conflicts_with_all = ["world", "scene"])]
+    seed: u32,
+    /// Size of the generated world in voxels, X,Y,Z.
+    #[arg(long, default_value = "192,64,192", value_parser = parse_size, conflicts_with_all = ["world", "scene"])]
+    size: UVec3,
+    /// A MagicaVoxel model (.vox) that V drops in front of the player.
+    #[arg(long)]
+    model: Option<PathBuf>,
+    /// Where F5 saves and F9 loads (default: saves/<name of --world>.ron, or saves/world.ron).
+    #[arg(long)]
+    save: Option<PathBuf>,
+    #[command(flatten)]
+    settings: SettingArgs,
+}
+
+impl PlayArgs {
+    pub fn run(self) -> Result<(), String> {
+        // The game lights with the GI cache unless told otherwise (`--set gi=off`, or G in game).
+        let mut base = RenderSettings::default();
+        base.gi.enabled = true;
+        let settings = self.settings.settings_over(base)?;
+        // Without --world or --scene the game generates a world, --new or not (clap refuses --new with either).
+        let source = self.world.source().unwrap_or(WorldSource::Generated { seed: self.seed, size: self.size });
+        let save = self.save.unwrap_or_else(|| {
+            let name = self.world.world.as_ref().and_then(|p| p.file_stem()).map(|s| s.to_string_lossy().into_owned());
+            PathBuf::from("saves").join(format!("{}.ron", name.as_deref().unwrap_or("world")))
+        });
+        let model = self.model.as_deref().map(load_model).transpose()?;
+        let world = source.load().map_err(|e| e.to_string())?;
+        crate::game::run_game(world, settings, save, model);
+        Ok(())
+    }
+}
+
+/// The `--model` file as a model V can place.
+fn load_model(path: &Path) -> Result<ModelToPlace, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let file = parse_vox(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    let name = path.file_stem().map_or("model".into(), |s| s.to_string_lossy().into_owned());
+    ModelToPlace::from_vox(&name, &file).ok_or_else(|| format!("{}: no model", path.display()))
+}
