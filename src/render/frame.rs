@@ -348,15 +348,14 @@ pub fn view_frame(
         return;
     };
     let Some(gi_group) = scene.gi.as_ref().and_then(|g| g.bind_group.as_ref()) else { return };
-    let Some([primary_pipeline]) = pipelines.get(&pipeline_cache, &[primary::PRIMARY]).map(|p| [p[0]]) else {
-        return;
-    };
+    let Some(primary_pipeline) = pipelines.get(&pipeline_cache, &[primary::PRIMARY]).map(|p| p[0]) else { return };
     // A ReSTIR frame waits until all its passes compiled rather than showing half a frame.
-    let restir = if resources.run_restir {
-        let Some(restir) = pipelines.get(&pipeline_cache, &restir::PASSES) else { return };
-        Some(restir)
-    } else {
-        None
+    let restir = match resources.run_restir {
+        true => match pipelines.get(&pipeline_cache, &restir::PASSES) {
+            Some(restir) => Some(restir),
+            None => return,
+        },
+        false => None,
     };
     let Some(view_binding) = view_uniforms.uniforms.binding() else { return };
     let size = target.main_texture().size();
