@@ -1,6 +1,7 @@
 //! The tests that need a GPU adapter, one binary (one link of Bevy) with a module per subject, under a harness
-//! (`libtest-mimic`, same arguments as the standard one) that asks once, when the first test starts, whether an
-//! adapter exists, exactly as the renderer asks Bevy for one (so `WGPU_BACKEND` and the like count):
+//! (`libtest-mimic`, the standard one's arguments but a single name filter) that asks once, before the tests
+//! run, whether an adapter exists, exactly as the renderer asks Bevy for one (so `WGPU_BACKEND` and the like
+//! count), and not at all when a filter leaves no GPU test:
 //! - an adapter: every test runs, the quick bench and the quick stress soak included;
 //! - none, and `GLOWBRICK_REQUIRE_GPU=1` (CI): every test fails and says why;
 //! - none otherwise: every test is reported `ignored` in the summary, and one line after it says why and how to
@@ -91,7 +92,7 @@ fn probe_adapter() -> Result<String, String> {
     }
 }
 
-/// The probe's answer, asked once by the first test that runs (none when a filter leaves no GPU test).
+/// The probe's answer, asked once.
 static ADAPTER: OnceLock<Result<String, String>> = OnceLock::new();
 
 fn adapter() -> &'static Result<String, String> {
@@ -119,7 +120,10 @@ fn main() {
                 Err(_) => Ok(Completion::ignored_with("no GPU adapter")),
             })
         })
-        .collect();
+        .collect::<Vec<_>>();
+    if !args.list && trials.iter().any(|t| !args.is_filtered_out(t)) {
+        adapter();
+    }
     let conclusion = libtest_mimic::run(&args, trials);
     if let Some(Err(why)) = ADAPTER.get()
         && !require
