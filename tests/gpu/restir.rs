@@ -1,6 +1,6 @@
 //! Voxel ReSTIR on the GPU against the CPU direct-light reference, and its defects that must not come back:
 //! shading a removed light, carrying samples across a face-normal flip, darkening from biased reuse beyond a
-//! stated bound. Pixels compared as in `gpu_nee_converges` (same primary hit as the CPU, not touching an emitter).
+//! stated bound. Pixels compared as in `nee_converges` (same primary hit as the CPU, not touching an emitter).
 //!
 //! Stated bounds, 96x64, 256 accumulated frames (5 taps, radius 8 px: the thesis' 30 px at 1600 wide is 1.9% of
 //! the width, 2 px here; 8 px keeps 5 taps meaningful), against a 4096-spp reference over the compared pixels:
