@@ -2,7 +2,7 @@
 //! world equals the CPU world: the GPU's primary hits match the CPU traversal of the edited world, and the render
 //! world's light buffers follow the light pool (count and the "no lights" flag).
 
-mod common;
+use crate::common;
 
 use bevy::prelude::*;
 use bevy::render::RenderApp;
@@ -22,13 +22,12 @@ fn gpu_light_state(app: &mut App) -> (u32, bool) {
     (gpu.light_count, gpu.has_lights)
 }
 
-#[test]
-fn gpu_world_follows_edits() {
+pub fn gpu_world_follows_edits() {
     let world = load_scene("test-room").unwrap();
     let view = world.view(Some("inside")).unwrap().clone();
     let settings = RenderSettings::default().with_pairs(&["debug=hit".to_string()]).unwrap();
     let options = HeadlessOptions { width: 96, height: 64, settings, ..Default::default() };
-    let Some(mut renderer) = common::renderer(world, &view, &options) else { return };
+    let mut renderer = common::renderer(world, &view, &options);
     renderer.render(1).unwrap();
     let lamp = renderer.app_mut().world().resource::<VoxelWorld>().palette.id_of("lamp").unwrap();
     let red = renderer.app_mut().world().resource::<VoxelWorld>().palette.id_of("red").unwrap();

@@ -1,5 +1,5 @@
-//! Helpers shared by the GPU tests: adapter policy and the per-pixel hit comparison against the CPU traversal.
-#![allow(dead_code)]
+//! Helpers shared by the GPU tests: adapter policy, renderers and the per-pixel hit comparison against the CPU
+//! traversal.
 
 use bevy::math::{IVec3, UVec2};
 use glowbrick::headless::{HeadlessOptions, HeadlessRenderer};
@@ -7,21 +7,14 @@ use glowbrick::image_io::LinearImage;
 use glowbrick::world::{CameraView, VoxelWorld, trace};
 use glowbrick::world::{camera_ray, view_transform, world_from_clip};
 
-/// With `GLOWBRICK_REQUIRE_GPU=1` (CI) a missing adapter is a failure, otherwise a skip.
+/// With `GLOWBRICK_REQUIRE_GPU=1` (CI) a missing adapter is a failure, otherwise a skip (decided in `main`).
 pub fn require_gpu() -> bool {
     std::env::var("GLOWBRICK_REQUIRE_GPU").is_ok_and(|v| v == "1")
 }
 
-/// A headless renderer, or `None` (with a message) when no adapter exists and the GPU is not required.
-pub fn renderer(world: VoxelWorld, view: &CameraView, options: &HeadlessOptions) -> Option<HeadlessRenderer> {
-    match std::panic::catch_unwind(|| HeadlessRenderer::new(world, view, options)) {
-        Ok(result) => Some(result.expect("headless renderer")),
-        Err(_) if !require_gpu() => {
-            eprintln!("skipping GPU test: no adapter (set GLOWBRICK_REQUIRE_GPU=1 to make this a failure)");
-            None
-        }
-        Err(panic) => std::panic::resume_unwind(panic),
-    }
+/// A headless renderer (the harness runs GPU tests only when an adapter exists).
+pub fn renderer(world: VoxelWorld, view: &CameraView, options: &HeadlessOptions) -> HeadlessRenderer {
+    HeadlessRenderer::new(world, view, options).expect("headless renderer")
 }
 
 /// Render settings from `--set` pairs (panics on a bad pair: a test's own typo).
@@ -30,14 +23,8 @@ pub fn settings(pairs: &[&str]) -> glowbrick::settings::RenderSettings {
     glowbrick::settings::RenderSettings::default().with_pairs(&pairs).unwrap()
 }
 
-/// A `w` x `h` headless renderer with `pairs`, or `None` as `renderer` says.
-pub fn renderer_with(
-    world: &VoxelWorld,
-    view: &CameraView,
-    w: u32,
-    h: u32,
-    pairs: &[&str],
-) -> Option<HeadlessRenderer> {
+/// A `w` x `h` headless renderer with `pairs`.
+pub fn renderer_with(world: &VoxelWorld, view: &CameraView, w: u32, h: u32, pairs: &[&str]) -> HeadlessRenderer {
     let options = HeadlessOptions { width: w, height: h, settings: settings(pairs), ..Default::default() };
     renderer(world.clone(), view, &options)
 }
@@ -85,28 +72,26 @@ pub fn compare_hits(world: &VoxelWorld, view: &CameraView, gpu: &LinearImage) ->
 
 /// Pixels fit for comparing lighting with the CPU: the GPU's primary hit (a `debug=hit` render) is the CPU's, and
 /// the hit voxel does not touch an emitter (where a surface meets a light, area sampling has unbounded variance:
-/// neither side converges there and one firefly decides the number). `None` when no adapter exists.
-pub fn comparable_pixels(world: &VoxelWorld, view: &CameraView, w: u32, h: u32) -> Option<Vec<bool>> {
+/// neither side converges there and one firefly decides the number).
+pub fn comparable_pixels(world: &VoxelWorld, view: &CameraView, w: u32, h: u32) -> Vec<bool> {
     let transform = view_transform(view);
     let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
     let settings = glowbrick::settings::RenderSettings::default().with_pairs(&["debug=hit".to_string()]).unwrap();
     let options = HeadlessOptions { width: w, height: h, settings, ..Default::default() };
-    let hits = renderer(world.clone(), view, &options)?.render(1).unwrap();
-    Some(
-        (0..w * h)
-            .map(|i| {
-                let ray = camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h);
-                let p = hits.pixels[i as usize];
-                match trace(&world.grid, &ray, f32::INFINITY) {
-                    Some(hit) => {
-                        let same = p[3] > 0.0 && [p[0], p[1], p[2]] == hit.voxel.as_vec3().to_array();
-                        same && !touches_emitter(world, hit.voxel)
-                    }
-                    None => p[3] == 0.0,
+    let hits = renderer(world.clone(), view, &options).render(1).unwrap();
+    (0..w * h)
+        .map(|i| {
+            let ray = camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h);
+            let p = hits.pixels[i as usize];
+            match trace(&world.grid, &ray, f32::INFINITY) {
+                Some(hit) => {
+                    let same = p[3] > 0.0 && [p[0], p[1], p[2]] == hit.voxel.as_vec3().to_array();
+                    same && !touches_emitter(world, hit.voxel)
                 }
-            })
-            .collect(),
-    )
+                None => p[3] == 0.0,
+            }
+        })
+        .collect()
 }
 
 /// Whether an emissive voxel lies within one voxel (26-neighbourhood) of `v`, or is `v`.

@@ -3,9 +3,9 @@
 //! The pass runs with `debug=hit`, which writes `(voxel.x, voxel.y, voxel.z, face + 1)` (exact in f16), and the
 //! CPU traces the same camera rays. Tolerance: at most 0.5% of pixels may differ, and only where the two disagree
 //! about a ray through a voxel edge or corner (the hit voxels are neighbours) or grazing a silhouette.
-//! With `GLOWBRICK_REQUIRE_GPU=1` a missing adapter fails the test; otherwise it is skipped with a message.
+//! With `GLOWBRICK_REQUIRE_GPU=1` a missing adapter fails the test; otherwise it is reported ignored (main.rs).
 
-mod common;
+use crate::common;
 
 use bevy::math::{UVec2, UVec3};
 use common::compare_hits;
@@ -16,14 +16,12 @@ use glowbrick::world::scene::{generated_world, load_scene};
 use glowbrick::world::{CameraView, VoxelWorld, trace};
 use glowbrick::world::{camera_ray, view_transform, world_from_clip};
 
-/// Renders, or returns None when no adapter exists and the GPU is not required.
-fn render(world: VoxelWorld, view: &CameraView, settings: RenderSettings, w: u32, h: u32) -> Option<LinearImage> {
+fn render(world: VoxelWorld, view: &CameraView, settings: RenderSettings, w: u32, h: u32) -> LinearImage {
     let options = HeadlessOptions { width: w, height: h, frames: 2, settings, ..Default::default() };
-    Some(common::renderer(world, view, &options)?.render(options.frames).expect("render"))
+    common::renderer(world, view, &options).render(options.frames).expect("render")
 }
 
-#[test]
-fn gpu_primary_rays_match_cpu_traversal() {
+pub fn gpu_primary_rays_match_cpu_traversal() {
     let hit_view = RenderSettings::default().with_pairs(&["debug=hit".to_string()]).unwrap();
     let room = load_scene("test-room").unwrap();
     let terrain = generated_world(9, UVec3::new(64, 40, 64)).unwrap();
@@ -33,7 +31,7 @@ fn gpu_primary_rays_match_cpu_traversal() {
         ("terrain overview", terrain.clone(), terrain.overview()),
     ];
     for (name, world, view) in cases {
-        let Some(gpu) = render(world.clone(), &view, hit_view.clone(), 96, 64) else { return };
+        let gpu = render(world.clone(), &view, hit_view.clone(), 96, 64);
         let c = compare_hits(&world, &view, &gpu);
         eprintln!("{name}: {} pixels, {} hits, {} mismatches", c.pixels, c.hits, c.mismatches);
         assert!(c.hits * 3 > c.pixels, "{name}: the view should mostly hit voxels ({} of {})", c.hits, c.pixels);
@@ -41,13 +39,12 @@ fn gpu_primary_rays_match_cpu_traversal() {
     }
 }
 
-#[test]
-fn lit_render_is_finite_and_shows_emission() {
+pub fn lit_render_is_finite_and_shows_emission() {
     let room = load_scene("test-room").unwrap();
     let view = room.view(Some("inside")).unwrap().clone();
     // Sun off: inside the closed room only the window's sky light and the lamp remain.
     let settings = RenderSettings::default().with_pairs(&["sun=off".to_string()]).unwrap();
-    let Some(image) = render(room.clone(), &view, settings, 96, 64) else { return };
+    let image = render(room.clone(), &view, settings, 96, 64);
     assert_eq!(image.non_finite_pixels(), 0);
     // Every pixel that sees the lamp is at least as bright as the lamp's own radiance.
     let transform = view_transform(&view);

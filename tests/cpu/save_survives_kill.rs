@@ -39,7 +39,7 @@ fn killed_saves_leave_a_complete_save() {
     save_with_backup(&a, &path).unwrap();
     for (round, wait_ms) in [35u64, 60, 80, 105, 120, 150, 170, 210, 260, 290, 330, 370].into_iter().enumerate() {
         let mut child = Command::new(std::env::current_exe().unwrap())
-            .args(["--ignored", "--exact", "saver_child", "--test-threads", "1"])
+            .args(["--ignored", "--exact", "save_survives_kill::saver_child", "--test-threads", "1"])
             .env("GLOWBRICK_SAVE_LOOP", &path)
             .stdout(Stdio::null())
             .stderr(Stdio::null())

@@ -9,7 +9,7 @@
 //!   filter and interpolation blur, the one-level insertion rule that leaves some far hits without a value) is
 //!   part of what these bound; the measured numbers are printed.
 
-mod common;
+use crate::common;
 
 use bevy::math::{IVec3, UVec3, Vec3};
 use glowbrick::headless::HeadlessRenderer;
@@ -27,7 +27,7 @@ use glowbrick::world::{CameraView, Edit, VoxelWorld};
 const W: u32 = 96;
 const H: u32 = 64;
 
-fn renderer(world: &VoxelWorld, view: &CameraView, pairs: &[&str]) -> Option<HeadlessRenderer> {
+fn renderer(world: &VoxelWorld, view: &CameraView, pairs: &[&str]) -> HeadlessRenderer {
     common::renderer_with(world, view, W, H, pairs)
 }
 
@@ -51,14 +51,14 @@ fn reference(world: &VoxelWorld, view: &CameraView, bounces: u32, spp: u32) -> L
 fn check_against_reference(scene: &str, view_name: &str, direct: &[&str]) {
     let world = load_scene(scene).unwrap();
     let view = world.view(Some(view_name)).unwrap().clone();
-    let Some(keep) = common::comparable_pixels(&world, &view, W, H) else { return };
+    let keep = common::comparable_pixels(&world, &view, W, H);
     let cases = [("gi_bounces=off", 1, 0.03, 0.02), ("gi_bounces=on", 8, 0.06, 0.03)];
     for (pair, bounces, bias_bound, relmse_bound) in cases {
         let truth = common::masked(&reference(&world, &view, bounces, 1024), &keep);
         let direct_only = common::masked(&reference(&world, &view, 0, 256), &keep);
         let mut pairs = vec!["gi=on", "gi_alpha=0.1", pair];
         pairs.extend_from_slice(direct);
-        let Some(mut r) = renderer(&world, &view, &pairs) else { return };
+        let mut r = renderer(&world, &view, &pairs);
         let image = common::masked(&converged(&mut r, 100, 128), &keep);
         eprintln!("{scene} {pair}: GI counters {:?}", r.counters().unwrap());
         let m = compare(&image, &truth).unwrap();
@@ -76,13 +76,11 @@ fn check_against_reference(scene: &str, view_name: &str, direct: &[&str]) {
     }
 }
 
-#[test]
-fn the_gi_cache_converges_to_the_path_traced_reference_in_the_window_room() {
+pub fn the_gi_cache_converges_to_the_path_traced_reference_in_the_window_room() {
     check_against_reference("window-room", "inside", &["lighting=nee"]);
 }
 
-#[test]
-fn the_gi_cache_converges_to_the_path_traced_reference_in_the_cornell_box() {
+pub fn the_gi_cache_converges_to_the_path_traced_reference_in_the_cornell_box() {
     // ReSTIR for the direct light here: NEE's noise among 256 brick lights (relMSE 0.07 at 128 frames) would
     // hide the cache's error.
     check_against_reference("cornell", "front", &["lighting=restir", "reuse=unbiased", "radius=8"]);
@@ -103,11 +101,10 @@ fn walled_floor() -> (VoxelWorld, CameraView) {
     (world, view)
 }
 
-#[test]
-fn an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_follows() {
+pub fn an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_follows() {
     let (world, view) = walled_floor();
     let pairs = ["lighting=nee", "gi=on"];
-    let Some(mut r) = renderer(&world, &view, &pairs) else { return };
+    let mut r = renderer(&world, &view, &pairs);
     r.render(8).unwrap();
     let quiet = r.counters().unwrap();
     assert_eq!(quiet[GpuCounter::GiRetraced as usize], 0, "nothing retraces without an edit: {quiet:?}");
@@ -146,11 +143,11 @@ fn an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_follows(
     let mut opened = world.clone();
     opened.grid.fill_box(IVec3::new(60, 1, 1), IVec3::new(63, 4, 4), 1).unwrap();
     opened.grid.fill_box(IVec3::new(20, 1, 5), IVec3::new(21, 6, 11), 0).unwrap();
-    let Some(mut fresh) = renderer(&opened, &beyond_wall, &pairs) else { return };
+    let mut fresh = renderer(&opened, &beyond_wall, &pairs);
     let truth = converged(&mut fresh, 16, 64).mean_luminance();
-    let Some(mut direct) = renderer(&opened, &beyond_wall, &["lighting=nee", "accumulate=on"]) else { return };
+    let mut direct = renderer(&opened, &beyond_wall, &["lighting=nee", "accumulate=on"]);
     let direct = direct.render(64).unwrap().mean_luminance();
-    let Some(mut closed) = renderer(&world, &beyond_wall, &pairs) else { return };
+    let mut closed = renderer(&world, &beyond_wall, &pairs);
     let before = converged(&mut closed, 16, 64).mean_luminance();
     let (a, b) = (followed - direct, truth - direct);
     eprintln!(
@@ -161,15 +158,14 @@ fn an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_follows(
     assert!((a - b).abs() < 0.1 * b, "the cache follows the edit: {a} vs {b}");
 }
 
-#[test]
-fn with_gi_off_no_gi_pass_runs() {
+pub fn with_gi_off_no_gi_pass_runs() {
     let (world, view) = walled_floor();
-    let Some(mut off) = renderer(&world, &view, &["lighting=nee"]) else { return };
+    let mut off = renderer(&world, &view, &["lighting=nee"]);
     off.render(4).unwrap();
     for name in GI_PASS_NAMES {
         assert_eq!(off.gpu_pass_ms(name), None, "{name} ran with GI off");
     }
-    let Some(mut on) = renderer(&world, &view, &["lighting=nee", "gi=on"]) else { return };
+    let mut on = renderer(&world, &view, &["lighting=nee", "gi=on"]);
     on.render(16).unwrap();
     for name in [glowbrick::render::primary::PRIMARY_PASS_NAME].into_iter().chain(GI_PASS_NAMES) {
         eprintln!("{name}: {:?} ms", on.gpu_pass_ms(name));
@@ -206,8 +202,7 @@ fn mean_of_frames(r: &mut HeadlessRenderer, frames: u32) -> f64 {
     (0..frames).map(|_| r.render(1).unwrap().mean_luminance()).sum::<f64>() / frames as f64
 }
 
-#[test]
-fn a_glowing_object_behind_a_wall_does_not_leak_through_it() {
+pub fn a_glowing_object_behind_a_wall_does_not_leak_through_it() {
     use glowbrick::dynamic::{Motion, VoxelModel, spawn_object_in};
     use std::sync::Arc;
     let (world, view, glare) = walled_room();
@@ -215,7 +210,7 @@ fn a_glowing_object_behind_a_wall_does_not_leak_through_it() {
     let pairs = ["lighting=nee", "gi=on", "gi_alpha=0.1"];
     let slide = |anchor: Vec3| (Motion::Slide { offset: Vec3::new(0.0, 0.0, 10.0), period: 2.0 }, anchor);
 
-    let Some(mut empty) = renderer(&world, &view, &pairs) else { return };
+    let mut empty = renderer(&world, &view, &pairs);
     empty.render(60).unwrap();
     let without = mean_of_frames(&mut empty, 48);
     for name in DYNAMIC_GI_PASS_NAMES {
@@ -223,7 +218,7 @@ fn a_glowing_object_behind_a_wall_does_not_leak_through_it() {
     }
 
     // The object slides along the far side of the wall, one voxel from it.
-    let Some(mut behind) = renderer(&world, &view, &pairs) else { return };
+    let mut behind = renderer(&world, &view, &pairs);
     let (motion, anchor) = slide(Vec3::new(13.0, 2.0, 2.0));
     spawn_object_in(behind.app_mut().world_mut(), model.clone(), motion, anchor).unwrap();
     behind.render(60).unwrap();
@@ -234,7 +229,7 @@ fn a_glowing_object_behind_a_wall_does_not_leak_through_it() {
 
     // The same object on the camera's side of the wall, high up and out of view: its light reaches the room only
     // through the cache, and must brighten it, or the comparison above says nothing.
-    let Some(mut in_front) = renderer(&world, &view, &pairs) else { return };
+    let mut in_front = renderer(&world, &view, &pairs);
     let (motion, anchor) = slide(Vec3::new(23.0, 13.0, 2.0));
     spawn_object_in(in_front.app_mut().world_mut(), model, motion, anchor).unwrap();
     in_front.render(60).unwrap();

@@ -1,0 +1,14 @@
+//! The tests that need no GPU, one binary (one link of Bevy) with a module per subject. The GPU tests are in
+//! `tests/gpu`.
+
+mod cli;
+mod game_building;
+mod hostile_files;
+mod imports;
+mod light_pool;
+mod reference_converges;
+mod save_survives_kill;
+mod traversal_matches_brute_force;
+mod world_edits;
+mod world_files;
+mod world_upload;

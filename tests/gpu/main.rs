@@ -1,0 +1,138 @@
+//! The tests that need a GPU adapter, one binary (one link of Bevy) with a module per subject, under a harness
+//! (`libtest-mimic`, the standard one's arguments but a single name filter) that asks once, before the tests
+//! run, whether an adapter exists, exactly as the renderer asks Bevy for one (so `WGPU_BACKEND` and the like
+//! count), and not at all when a filter leaves no GPU test:
+//! - an adapter: every test runs, the quick bench and the quick stress soak included;
+//! - none, and `GLOWBRICK_REQUIRE_GPU=1` (CI): every test fails and says why;
+//! - none otherwise: every test is reported `ignored` in the summary, and one line after it says why and how to
+//!   run them.
+//!
+//! Unlike the standard harness this one does not capture a test's output: the tests' measurements are printed as
+//! they run.
+
+mod bench_quick;
+mod cli;
+mod common;
+mod extreme_scenes;
+mod gi;
+mod nee_converges;
+mod primary_matches_cpu;
+mod restir;
+mod stress;
+mod world_after_edits;
+
+use libtest_mimic::{Arguments, Completion, Failed, Trial};
+use std::sync::OnceLock;
+
+/// `(module::test, test)` for each listed test; a test left out of the list is a dead-code warning.
+macro_rules! gpu_tests {
+    ($($module:ident: [$($test:ident),* $(,)?]),* $(,)?) => {
+        vec![$($((concat!(stringify!($module), "::", stringify!($test)), $module::$test as fn())),*),*]
+    };
+}
+
+fn tests() -> Vec<(&'static str, fn())> {
+    gpu_tests![
+        bench_quick: [quick_bench_writes_csv_markdown_and_plot],
+        cli: [render_writes_exr_and_png_headless],
+        extreme_scenes: [
+            a_hundred_thousand_lights,
+            a_light_one_voxel_above_the_floor,
+            a_million_lights,
+            a_room_in_the_far_corner_of_the_largest_world,
+            a_single_light_behind_a_one_voxel_hole,
+            emission_over_eight_decades_in_one_scene,
+            lights_embedded_in_the_surface_the_camera_sees,
+        ],
+        gi: [
+            a_glowing_object_behind_a_wall_does_not_leak_through_it,
+            an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_follows,
+            the_gi_cache_converges_to_the_path_traced_reference_in_the_cornell_box,
+            the_gi_cache_converges_to_the_path_traced_reference_in_the_window_room,
+            with_gi_off_no_gi_pass_runs,
+        ],
+        nee_converges: [
+            gpu_nee_converges_to_the_cpu_reference_on_the_cornell_box,
+            gpu_nee_converges_to_the_cpu_reference_on_the_letters,
+        ],
+        primary_matches_cpu: [gpu_primary_rays_match_cpu_traversal, lit_render_is_finite_and_shows_emission],
+        restir: [
+            a_removed_light_is_never_shaded,
+            point_lights_give_hard_shadows_and_area_lights_converge,
+            temporal_reuse_does_not_cross_a_face_normal_flip,
+            unbiased_restir_converges_to_the_reference_on_the_cornell_box,
+            unbiased_restir_converges_to_the_reference_on_the_letters,
+            without_lights_no_restir_pass_runs,
+        ],
+        stress: [quick_stress_run_finds_no_non_finite_value_and_no_drift],
+        world_after_edits: [gpu_world_follows_edits],
+    ]
+}
+
+/// The adapter's name, or why there is none. Asked of Bevy as `RenderPlugin` asks (same settings, read from the
+/// same environment variables), with the panic Bevy raises when it finds none caught and kept quiet.
+fn probe_adapter() -> Result<String, String> {
+    use bevy::render::renderer::initialize_renderer;
+    use bevy::render::settings::WgpuSettings;
+    let settings = WgpuSettings::default();
+    let Some(backends) = settings.backends else { return Err("no wgpu backend enabled".into()) };
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let found = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        bevy::tasks::block_on(initialize_renderer(backends, None, &settings))
+    }));
+    std::panic::set_hook(hook);
+    match found {
+        Ok(resources) => Ok(format!("{} ({:?})", resources.2.name, resources.2.backend)),
+        Err(panic) => Err(panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "the renderer could not start".into())),
+    }
+}
+
+/// The probe's answer, asked once.
+static ADAPTER: OnceLock<Result<String, String>> = OnceLock::new();
+
+fn adapter() -> &'static Result<String, String> {
+    ADAPTER.get_or_init(|| {
+        let adapter = probe_adapter();
+        if let Ok(name) = &adapter {
+            eprintln!("GPU tests on {name}");
+        }
+        adapter
+    })
+}
+
+fn main() {
+    let args = Arguments::from_args();
+    let require = common::require_gpu();
+    let trials = tests()
+        .into_iter()
+        .map(|(name, test)| {
+            Trial::ignorable_test(name, move || match adapter() {
+                Ok(_) => {
+                    test();
+                    Ok(Completion::Completed)
+                }
+                Err(why) if require => Err(Failed::from(format!("no GPU adapter and GLOWBRICK_REQUIRE_GPU=1: {why}"))),
+                Err(_) => Ok(Completion::ignored_with("no GPU adapter")),
+            })
+        })
+        .collect::<Vec<_>>();
+    if !args.list && trials.iter().any(|t| !args.is_filtered_out(t)) {
+        adapter();
+    }
+    let conclusion = libtest_mimic::run(&args, trials);
+    if let Some(Err(why)) = ADAPTER.get()
+        && !require
+    {
+        println!(
+            "note: the GPU tests were ignored: no GPU adapter ({why}). Install a Vulkan driver to run them (Debian: \
+             `apt-get install mesa-vulkan-drivers` gives software Vulkan); GLOWBRICK_REQUIRE_GPU=1 makes a missing \
+             adapter a failure.\n"
+        );
+    }
+    conclusion.exit()
+}
