@@ -77,8 +77,21 @@ pub struct LoadError {
 
 impl std::fmt::Display for LoadError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}: {}", self.location, self.message)
+        write!(f, "{}: {}", one_line(&self.location), one_line(&self.message))
     }
+}
+
+/// `text` with its control characters escaped (`\n`), so an error quoting hostile input stays one line.
+fn one_line(text: &str) -> String {
+    let mut line = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_control() {
+            line.extend(c.escape_default());
+        } else {
+            line.push(c);
+        }
+    }
+    line
 }
 
 impl std::error::Error for LoadError {}
@@ -280,4 +293,16 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::LoadError;
+
+    /// Found by the recipe fuzzer: a text quoting a newline from the file printed as two lines.
+    #[test]
+    fn an_error_quoting_a_control_character_stays_one_line() {
+        let e = LoadError { location: "a.ron".into(), message: "the font has no '\n' (A-Z)".into() };
+        assert_eq!(e.to_string(), "a.ron: the font has no '\\n' (A-Z)");
+    }
 }

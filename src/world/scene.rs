@@ -206,7 +206,7 @@ fn apply_op(world: &mut VoxelWorld, seed: u32, op_index: u32, op: &SceneOp) -> R
             }
             let [right, up, into] = axes;
             for (i, c) in text.chars().enumerate() {
-                let rows = glyph(c).ok_or_else(|| format!("the font has no '{c}' (A-Z, 0-9 and space)"))?;
+                let rows = glyph(c).ok_or_else(|| format!("the font has no {c:?} (A-Z, 0-9 and space)"))?;
                 for (row, bits) in rows.iter().enumerate() {
                     for col in 0..5 {
                         if bits & (0b10000 >> col) == 0 {

@@ -5,6 +5,7 @@ mod cli;
 mod game_building;
 mod hostile_files;
 mod imports;
+mod layers;
 mod light_pool;
 mod reference_converges;
 mod save_survives_kill;

@@ -10,6 +10,9 @@
 //! Unlike the standard harness this one does not capture a test's output: the tests' measurements are printed as
 //! they run.
 
+// A test function left out of `tests()` below would never run: make that a compile error.
+#![deny(dead_code)]
+
 mod bench_quick;
 mod cli;
 mod common;
@@ -24,7 +27,7 @@ mod world_after_edits;
 use libtest_mimic::{Arguments, Completion, Failed, Trial};
 use std::sync::OnceLock;
 
-/// `(module::test, test)` for each listed test; a test left out of the list is a dead-code warning.
+/// `(module::test, test)` for each listed test; a test left out of the list is a dead-code error.
 macro_rules! gpu_tests {
     ($($module:ident: [$($test:ident),* $(,)?]),* $(,)?) => {
         vec![$($((concat!(stringify!($module), "::", stringify!($test)), $module::$test as fn())),*),*]
@@ -49,6 +52,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_follows,
             the_gi_cache_converges_to_the_path_traced_reference_in_the_cornell_box,
             the_gi_cache_converges_to_the_path_traced_reference_in_the_window_room,
+            two_cameras_update_the_cache_once_per_frame,
             with_gi_off_no_gi_pass_runs,
         ],
         nee_converges: [
