@@ -268,7 +268,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         // A light slot's packed edge and exposed faces.
         ("LIGHT_FACES_SHIFT", U32(LIGHT_FACES_SHIFT)),
         ("LIGHT_SIZE_MASK", U32(LIGHT_SIZE_MASK)),
-        // Lighting modes and debug views (src/settings.rs).
+        // Lighting modes and debug views (src/settings).
         ("LIGHTING_SUN", U32(Lighting::Sun as u32)),
         ("LIGHTING_NEE", U32(Lighting::Nee as u32)),
         ("LIGHTING_RESTIR", U32(Lighting::Restir as u32)),

@@ -1,0 +1,309 @@
+//! Render settings: one resource, editable in game (F4 panel) and from the command line (`--set KEY=VALUE`,
+//! `--config FILE.ron`). This module holds the values (the resource, its parts and the named choices); every key
+//! is one entry of the table [`SETTINGS`] (`table.rs`): parsing, the error messages, `--help`, the HUD line and
+//! the F4 panel all read it, so adding a setting means adding one entry.
+
+mod table;
+
+pub use table::{Choice, Field, Range, SETTINGS, Section, Setting, Step, help_text, setting, valid_pairs};
+
+use bevy::prelude::Resource;
+use bevy::render::extract_resource::ExtractResource;
+use std::fmt::Display;
+
+/// A value with names, as `--set` spells them; the F4 panel cycles through them in this order.
+pub trait Named: Copy + PartialEq + Sync + 'static {
+    const NAMES: &'static [(&'static str, Self)];
+
+    fn name(self) -> &'static str {
+        Self::NAMES.iter().find(|(_, v)| *v == self).map_or("?", |(n, _)| n)
+    }
+
+    /// The value called `name`, if any.
+    fn named(name: &str) -> Option<Self> {
+        Self::NAMES.iter().find(|(n, _)| *n == name).map(|(_, v)| *v)
+    }
+}
+
+/// On/off switches.
+impl Named for bool {
+    const NAMES: &'static [(&'static str, bool)] = &[("on", true), ("off", false)];
+
+    /// Also the spellings a RON file or a script may use.
+    fn named(name: &str) -> Option<bool> {
+        match name {
+            "on" | "true" | "1" => Some(true),
+            "off" | "false" | "0" => Some(false),
+            _ => None,
+        }
+    }
+}
+
+/// What the primary pass writes: the lit image or one of its inputs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DebugView {
+    /// Albedo lit by the sun and sky, plus emission.
+    #[default]
+    None,
+    /// Material albedo only.
+    Albedo,
+    /// Face normal mapped to colour (`n * 0.5 + 0.5`).
+    Normal,
+    /// Exact hit ids for tests: `(voxel.x, voxel.y, voxel.z, face + 1)`, zero on a miss.
+    Hit,
+    /// Hit distance in voxels.
+    Depth,
+    /// Voxel ReSTIR's final reservoir per pixel, raw: (W, M, w_sum, 1 if a field was non-finite and was reset).
+    /// For the stress run; only meaningful with `lighting=restir`.
+    Reservoir,
+}
+
+impl Named for DebugView {
+    const NAMES: &'static [(&'static str, DebugView)] = &[
+        ("none", DebugView::None),
+        ("albedo", DebugView::Albedo),
+        ("normal", DebugView::Normal),
+        ("hit", DebugView::Hit),
+        ("depth", DebugView::Depth),
+        ("reservoir", DebugView::Reservoir),
+    ];
+}
+
+impl DebugView {
+    /// The value the shader switches on.
+    pub fn shader_index(self) -> u32 {
+        self as u32
+    }
+}
+
+/// How surfaces are lit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Lighting {
+    /// A sun with shadows and sky light, plus emission: the game's look before the ReSTIR passes exist.
+    #[default]
+    Sun,
+    /// Emitters only (the thesis' convention, no sky): one next-event-estimation light sample per pixel with a
+    /// shadow ray. The baseline ReSTIR is measured against, and what the CPU reference converges to.
+    Nee,
+    /// Emitters only, by Voxel ReSTIR: candidates, temporal and spatial reuse, then one shadow ray per pixel.
+    Restir,
+}
+
+impl Named for Lighting {
+    const NAMES: &'static [(&'static str, Lighting)] =
+        &[("sun", Lighting::Sun), ("nee", Lighting::Nee), ("restir", Lighting::Restir)];
+}
+
+/// How NEE and ReSTIR's candidates pick a light from the pool.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightPick {
+    /// In proportion to power (alias table).
+    #[default]
+    Power,
+    Uniform,
+}
+
+impl Named for LightPick {
+    const NAMES: &'static [(&'static str, LightPick)] = &[("power", LightPick::Power), ("uniform", LightPick::Uniform)];
+}
+
+/// Where ReSTIR samples a light cube.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightSample {
+    /// A point on a face: soft shadows.
+    #[default]
+    Area,
+    /// The cube's centre: hard shadows, less noise.
+    Point,
+}
+
+impl Named for LightSample {
+    const NAMES: &'static [(&'static str, LightSample)] = &[("area", LightSample::Area), ("point", LightSample::Point)];
+}
+
+/// How ReSTIR normalises reused reservoirs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Reuse {
+    /// The thesis' 1/M.
+    #[default]
+    Biased,
+    /// 1/Z, with a visibility ray per neighbour.
+    Unbiased,
+}
+
+impl Named for Reuse {
+    const NAMES: &'static [(&'static str, Reuse)] = &[("biased", Reuse::Biased), ("unbiased", Reuse::Unbiased)];
+}
+
+/// Voxel ReSTIR's knobs (seed 000's defaults).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RestirSettings {
+    /// Initial candidates per pixel (M_init).
+    pub candidates: u32,
+    /// Spatial neighbours merged per pixel (k).
+    pub taps: u32,
+    /// Spatial disk radius in pixels (r).
+    pub radius: f32,
+    pub temporal: bool,
+    pub spatial: bool,
+    pub sample: LightSample,
+    pub reuse: Reuse,
+}
+
+impl Default for RestirSettings {
+    fn default() -> Self {
+        RestirSettings {
+            candidates: 32,
+            taps: 5,
+            radius: 30.0,
+            temporal: true,
+            spatial: true,
+            sample: LightSample::Area,
+            reuse: Reuse::Biased,
+        }
+    }
+}
+
+impl RestirSettings {
+    /// Brings every field into its valid range (for settings written by code rather than `--set` or the panel).
+    pub fn clamped(mut self) -> Self {
+        self.candidates = self.candidates.clamp(CANDIDATES_RANGE.0, CANDIDATES_RANGE.1);
+        self.taps = self.taps.clamp(TAPS_RANGE.0, TAPS_RANGE.1);
+        self.radius = if self.radius.is_finite() { self.radius.clamp(RADIUS_RANGE.0, RADIUS_RANGE.1) } else { 30.0 };
+        self
+    }
+}
+
+/// The per-voxel-face GI cache's knobs (seed 001 adapted, DESIGN.md "GI cache").
+#[derive(Clone, Debug, PartialEq)]
+pub struct GiSettings {
+    /// Indirect light from the cache; off, the cache holds no memory and no GI pass runs.
+    pub enabled: bool,
+    /// Fixed directions per face entry (K), traced against the static world once and cached.
+    pub rays: u32,
+    /// Of those, how many each visible entry re-shades per frame (round robin).
+    pub update_rays: u32,
+    /// Weight of a new frame in the temporal blend (a fresh entry averages its first 1/alpha frames evenly).
+    pub alpha: f32,
+    /// Average each entry with its same-orientation neighbours in a 3x3x3 block.
+    pub filter: bool,
+    /// Read last frame's indirect light at ray hits (multiple bounces); off gives one bounce.
+    pub bounces: bool,
+    /// Keep each entry's static hits until an edit can reach them; off retraces every ray every frame.
+    pub cache: bool,
+}
+
+impl Default for GiSettings {
+    fn default() -> Self {
+        GiSettings { enabled: false, rays: 64, update_rays: 8, alpha: 0.03, filter: true, bounces: true, cache: true }
+    }
+}
+
+/// Most spatial taps a ReSTIR pixel merges (the `taps` range's end; the shaders loop to it).
+pub const MAX_TAPS: u32 = 16;
+
+/// Valid ranges, shared by `--set` (which rejects) and the F4 panel (which clamps).
+pub const GI_RAYS_RANGE: (u32, u32) = (4, 128);
+pub const GI_UPDATE_RAYS_RANGE: (u32, u32) = (1, 64);
+pub const GI_ALPHA_RANGE: (f32, f32) = (0.001, 1.0);
+pub const CANDIDATES_RANGE: (u32, u32) = (1, 64);
+pub const TAPS_RANGE: (u32, u32) = (0, MAX_TAPS);
+pub const RADIUS_RANGE: (f32, f32) = (0.0, 100.0);
+pub const EXPOSURE_RANGE: (f32, f32) = (0.001, 1000.0);
+
+/// Settings every pass reads.
+#[derive(Resource, ExtractResource, Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub debug: DebugView,
+    pub lighting: Lighting,
+    pub pick: LightPick,
+    /// Average frames while nothing changes (camera, world, lights, settings).
+    pub accumulate: bool,
+    /// Sun light on or off (off leaves only sky light and emission).
+    pub sun: bool,
+    /// Shadow rays towards the sun.
+    pub shadows: bool,
+    /// Linear scale applied before tonemapping.
+    pub exposure: f32,
+    pub restir: RestirSettings,
+    pub gi: GiSettings,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            debug: DebugView::None,
+            lighting: Lighting::Sun,
+            pick: LightPick::Power,
+            accumulate: false,
+            sun: true,
+            shadows: true,
+            exposure: 1.0,
+            restir: RestirSettings::default(),
+            gi: GiSettings::default(),
+        }
+    }
+}
+
+impl RenderSettings {
+    /// Applies one `KEY=VALUE` pair; unknown keys or values give an error listing the valid ones.
+    pub fn set(&mut self, pair: &str) -> Result<(), String> {
+        let Some((key, value)) = pair.split_once('=') else {
+            return Err(format!("setting '{pair}' is not KEY=VALUE (valid: {})", valid_pairs()));
+        };
+        let (key, value) = (key.trim(), value.trim());
+        let setting = setting(key).ok_or_else(|| format!("unknown setting '{key}' (valid: {})", valid_pairs()))?;
+        setting.set(self, value)
+    }
+
+    /// Applies several pairs in order.
+    pub fn with_pairs<'a>(mut self, pairs: impl IntoIterator<Item = &'a String>) -> Result<Self, String> {
+        for pair in pairs {
+            self.set(pair)?;
+        }
+        Ok(self)
+    }
+
+    /// Applies a RON settings file: a map of the `--set` keys to values, e.g.
+    /// `{"lighting": "restir", "candidates": 16, "temporal": true, "sample": "point"}`. Numbers, strings and
+    /// booleans are accepted; each pair goes through `set`, so the ranges and messages are the same.
+    pub fn with_ron(mut self, text: &str, origin: &str) -> Result<Self, String> {
+        let map: std::collections::BTreeMap<String, ron::Value> = ron::from_str(text).map_err(|e| {
+            format!(
+                "{origin}:{}:{}: {} (expected a map such as {{\"lighting\": \"restir\"}})",
+                e.span.start.line, e.span.start.col, e.code
+            )
+        })?;
+        for (key, value) in map {
+            let value = match value {
+                ron::Value::String(s) => s,
+                ron::Value::Bool(b) => b.name().to_string(),
+                ron::Value::Number(n) => match n {
+                    ron::value::Number::F32(f) => f.get().to_string(),
+                    ron::value::Number::F64(f) => f.get().to_string(),
+                    other => format!("{}", other.into_f64()),
+                },
+                other => return Err(format!("{origin}: setting {key}: {other:?} is not a string, number or bool")),
+            };
+            self.set(&format!("{key}={value}")).map_err(|e| format!("{origin}: {e}"))?;
+        }
+        Ok(self)
+    }
+
+    /// The settings that change the image now, as `--set` pairs, one line per section: the HUD's and the log's
+    /// words are the command line's.
+    pub fn summary(&self) -> String {
+        let line = |section| {
+            SETTINGS
+                .iter()
+                .filter(|s| s.section == section)
+                .map(|s| format!("{}={}", s.key, s.get(self)))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        Section::ALL.into_iter().filter(|s| s.applies(self)).map(line).collect::<Vec<_>>().join("\n")
+    }
+}
+
+#[cfg(test)]
+mod tests;

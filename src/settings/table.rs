@@ -1,0 +1,413 @@
+//! The settings table: one entry per `--set` key (its section, a line of help, and the field it reads and
+//! writes, a named choice or a numeric range), and what is derived from it: parsing with its messages, the
+//! settings section of `--help`, the panel's stepping.
+
+use super::*;
+
+/// Which settings belong together: ReSTIR's only matter with `lighting=restir`, the GI cache's with `gi=on`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Section {
+    General,
+    Restir,
+    Gi,
+}
+
+impl Section {
+    pub const ALL: [Section; 3] = [Section::General, Section::Restir, Section::Gi];
+
+    /// Whether the section's settings change the image now (the HUD shows only those).
+    pub fn applies(self, settings: &RenderSettings) -> bool {
+        match self {
+            Section::General => true,
+            Section::Restir => settings.lighting == Lighting::Restir,
+            Section::Gi => settings.gi.enabled,
+        }
+    }
+
+    fn title(self) -> &'static str {
+        match self {
+            Section::General => "General",
+            Section::Restir => "Voxel ReSTIR (used with lighting=restir)",
+            Section::Gi => "GI cache (used with gi=on)",
+        }
+    }
+}
+
+/// One setting: its `--set` key, a line for `--help`, and the field it reads and writes.
+pub struct Setting {
+    pub key: &'static str,
+    pub section: Section,
+    pub about: &'static str,
+    field: &'static dyn Field,
+}
+
+/// What a setting's field accepts and how it is read, written and stepped: [`Choice`] or [`Range`].
+pub trait Field: Sync {
+    /// What `--set` accepts, as the messages and `--help` list it: `on|off`, `<1..64>`.
+    fn accepts(&self) -> String;
+    /// The current value, spelled as `--set` takes it.
+    fn get(&self, settings: &RenderSettings) -> String;
+    /// Parses `value` and stores it, or says why not.
+    fn set(&self, settings: &mut RenderSettings, value: &str) -> Result<(), String>;
+    /// The F4 panel's Left (-1) / Right (+1): the neighbouring choice (wrapping), or a step within the range.
+    fn step(&self, settings: &mut RenderSettings, direction: i32);
+    /// The value as the panel shows it.
+    fn show(&self, settings: &RenderSettings) -> String {
+        self.get(settings)
+    }
+}
+
+/// A field holding one of `T`'s named values.
+pub struct Choice<T> {
+    pub get: fn(&RenderSettings) -> T,
+    pub set: fn(&mut RenderSettings, T),
+}
+
+impl<T: Named> Field for Choice<T> {
+    fn accepts(&self) -> String {
+        T::NAMES.iter().map(|(name, _)| *name).collect::<Vec<_>>().join("|")
+    }
+
+    fn get(&self, settings: &RenderSettings) -> String {
+        (self.get)(settings).name().to_string()
+    }
+
+    fn set(&self, settings: &mut RenderSettings, value: &str) -> Result<(), String> {
+        let v = T::named(value).ok_or_else(|| format!("'{value}' is not one of {}", self.accepts()))?;
+        (self.set)(settings, v);
+        Ok(())
+    }
+
+    fn step(&self, settings: &mut RenderSettings, direction: i32) {
+        let current = (self.get)(settings);
+        let i = T::NAMES.iter().position(|(_, v)| *v == current).unwrap_or(0) as i32;
+        (self.set)(settings, T::NAMES[(i + direction).rem_euclid(T::NAMES.len() as i32) as usize].1);
+    }
+}
+
+/// How the panel steps a number.
+#[derive(Clone, Copy, Debug)]
+pub enum Step<T> {
+    /// Double (Right) or halve (Left): for counts and scales that matter in powers of two.
+    Double,
+    /// Add or subtract this much.
+    Add(T),
+}
+
+/// A field holding a number within `range` (inclusive).
+pub struct Range<T> {
+    pub range: (T, T),
+    pub step: Step<T>,
+    /// Appended in the panel, e.g. " px".
+    pub unit: &'static str,
+    pub get: fn(&RenderSettings) -> T,
+    pub set: fn(&mut RenderSettings, T),
+}
+
+/// The two kinds of number settings hold: whole (`u32`) and real (`f32`).
+pub trait Number: Copy + PartialOrd + Display + Sync + 'static {
+    /// Parses `value` and checks it against `range`; the message gives the range.
+    fn parse_within(value: &str, range: (Self, Self)) -> Result<Self, String>;
+    /// `self` moved one `step` up (`direction` 1) or down (-1), not yet clamped to a range.
+    fn stepped(self, step: Step<Self>, direction: i32) -> Self;
+}
+
+impl Number for u32 {
+    fn parse_within(value: &str, (lo, hi): (u32, u32)) -> Result<u32, String> {
+        let v: i64 = value.parse().map_err(|_| format!("'{value}' is not a whole number (valid: {lo}..{hi})"))?;
+        if v < lo as i64 || v > hi as i64 {
+            return Err(format!("{value} is out of range (valid: {lo}..{hi})"));
+        }
+        Ok(v as u32)
+    }
+
+    fn stepped(self, step: Step<u32>, direction: i32) -> u32 {
+        match step {
+            Step::Double if direction > 0 => self.saturating_mul(2),
+            Step::Double => self / 2,
+            Step::Add(n) => (self as i64 + n as i64 * direction as i64).clamp(0, u32::MAX as i64) as u32,
+        }
+    }
+}
+
+impl Number for f32 {
+    fn parse_within(value: &str, (lo, hi): (f32, f32)) -> Result<f32, String> {
+        let v: f32 = value.parse().map_err(|_| format!("'{value}' is not a number (valid: {lo}..{hi})"))?;
+        if !(v.is_finite() && (lo..=hi).contains(&v)) {
+            return Err(format!("{value} is out of range (valid: {lo}..{hi})"));
+        }
+        Ok(v)
+    }
+
+    fn stepped(self, step: Step<f32>, direction: i32) -> f32 {
+        match step {
+            Step::Double if direction > 0 => self * 2.0,
+            Step::Double => self / 2.0,
+            Step::Add(d) => self + d * direction as f32,
+        }
+    }
+}
+
+impl<T: Number> Field for Range<T> {
+    fn accepts(&self) -> String {
+        format!("<{}..{}>", self.range.0, self.range.1)
+    }
+
+    fn get(&self, settings: &RenderSettings) -> String {
+        (self.get)(settings).to_string()
+    }
+
+    fn set(&self, settings: &mut RenderSettings, value: &str) -> Result<(), String> {
+        (self.set)(settings, T::parse_within(value, self.range)?);
+        Ok(())
+    }
+
+    fn step(&self, settings: &mut RenderSettings, direction: i32) {
+        let v = (self.get)(settings).stepped(self.step, direction);
+        let (lo, hi) = self.range;
+        (self.set)(
+            settings,
+            if v < lo {
+                lo
+            } else if v > hi {
+                hi
+            } else {
+                v
+            },
+        );
+    }
+
+    fn show(&self, settings: &RenderSettings) -> String {
+        format!("{}{}", self.get(settings), self.unit)
+    }
+}
+
+/// Every setting, in the order `--set`'s messages list them.
+pub static SETTINGS: &[Setting] = &[
+    Setting {
+        key: "lighting",
+        section: Section::General,
+        about: "How surfaces are lit: sun and sky; emitters by next-event estimation; emitters by Voxel ReSTIR.",
+        field: &Choice { get: |s| s.lighting, set: |s, v| s.lighting = v },
+    },
+    Setting {
+        key: "pick",
+        section: Section::General,
+        about: "How NEE and ReSTIR pick lights: in proportion to power (alias table) or uniformly.",
+        field: &Choice { get: |s| s.pick, set: |s, v| s.pick = v },
+    },
+    Setting {
+        key: "accumulate",
+        section: Section::General,
+        about: "Average frames while nothing changes (camera, world, lights, settings).",
+        field: &Choice { get: |s| s.accumulate, set: |s, v| s.accumulate = v },
+    },
+    Setting {
+        key: "debug",
+        section: Section::General,
+        about: "What the image shows: the lit image, or one of its inputs (hit and reservoir are raw data for tests).",
+        field: &Choice { get: |s| s.debug, set: |s, v| s.debug = v },
+    },
+    Setting {
+        key: "sun",
+        section: Section::General,
+        about: "Sun light with lighting=sun (off leaves sky light and emission).",
+        field: &Choice { get: |s| s.sun, set: |s, v| s.sun = v },
+    },
+    Setting {
+        key: "shadows",
+        section: Section::General,
+        about: "Shadow rays towards the sun.",
+        field: &Choice { get: |s| s.shadows, set: |s, v| s.shadows = v },
+    },
+    Setting {
+        key: "exposure",
+        section: Section::General,
+        about: "Linear scale applied before tonemapping.",
+        field: &Range {
+            range: EXPOSURE_RANGE,
+            step: Step::Double,
+            unit: "",
+            get: |s| s.exposure,
+            set: |s, v| s.exposure = v,
+        },
+    },
+    Setting {
+        key: "candidates",
+        section: Section::Restir,
+        about: "Initial light candidates per pixel (M_init).",
+        field: &Range {
+            range: CANDIDATES_RANGE,
+            step: Step::Double,
+            unit: "",
+            get: |s| s.restir.candidates,
+            set: |s, v| s.restir.candidates = v,
+        },
+    },
+    Setting {
+        key: "taps",
+        section: Section::Restir,
+        about: "Spatial neighbours merged per pixel (k).",
+        field: &Range {
+            range: TAPS_RANGE,
+            step: Step::Add(1),
+            unit: "",
+            get: |s| s.restir.taps,
+            set: |s, v| s.restir.taps = v,
+        },
+    },
+    Setting {
+        key: "radius",
+        section: Section::Restir,
+        about: "Spatial disk radius in pixels (r).",
+        field: &Range {
+            range: RADIUS_RANGE,
+            step: Step::Add(5.0),
+            unit: " px",
+            get: |s| s.restir.radius,
+            set: |s, v| s.restir.radius = v,
+        },
+    },
+    Setting {
+        key: "temporal",
+        section: Section::Restir,
+        about: "Temporal reuse: merge last frame's reservoir at the reprojected pixel.",
+        field: &Choice { get: |s| s.restir.temporal, set: |s, v| s.restir.temporal = v },
+    },
+    Setting {
+        key: "spatial",
+        section: Section::Restir,
+        about: "Spatial reuse: merge neighbours' reservoirs.",
+        field: &Choice { get: |s| s.restir.spatial, set: |s, v| s.restir.spatial = v },
+    },
+    Setting {
+        key: "sample",
+        section: Section::Restir,
+        about: "Where a light cube is sampled: a point on a face (soft shadows) or its centre (hard, less noise).",
+        field: &Choice { get: |s| s.restir.sample, set: |s, v| s.restir.sample = v },
+    },
+    Setting {
+        key: "reuse",
+        section: Section::Restir,
+        about: "Normalisation of reuse: the thesis' biased 1/M, or 1/Z with a visibility ray per neighbour.",
+        field: &Choice { get: |s| s.restir.reuse, set: |s, v| s.restir.reuse = v },
+    },
+    Setting {
+        key: "gi",
+        section: Section::General,
+        about: "Indirect light from the per-face GI cache (play turns it on); off, no GI memory or pass.",
+        field: &Choice { get: |s| s.gi.enabled, set: |s, v| s.gi.enabled = v },
+    },
+    Setting {
+        key: "gi_rays",
+        section: Section::Gi,
+        about: "Fixed directions per face entry (K), traced against the static world once and cached.",
+        field: &Range {
+            range: GI_RAYS_RANGE,
+            step: Step::Double,
+            unit: "",
+            get: |s| s.gi.rays,
+            set: |s, v| s.gi.rays = v,
+        },
+    },
+    Setting {
+        key: "gi_update",
+        section: Section::Gi,
+        about: "Of those, how many each visible entry re-shades per frame (round robin).",
+        field: &Range {
+            range: GI_UPDATE_RAYS_RANGE,
+            step: Step::Double,
+            unit: "",
+            get: |s| s.gi.update_rays,
+            set: |s, v| s.gi.update_rays = v,
+        },
+    },
+    Setting {
+        key: "gi_alpha",
+        section: Section::Gi,
+        about: "Weight of a new frame in the temporal blend (a fresh entry averages its first 1/alpha frames).",
+        field: &Range {
+            range: GI_ALPHA_RANGE,
+            step: Step::Double,
+            unit: "",
+            get: |s| s.gi.alpha,
+            set: |s, v| s.gi.alpha = v,
+        },
+    },
+    Setting {
+        key: "gi_filter",
+        section: Section::Gi,
+        about: "Average each entry with its same-orientation neighbours in a 3x3x3 block.",
+        field: &Choice { get: |s| s.gi.filter, set: |s, v| s.gi.filter = v },
+    },
+    Setting {
+        key: "gi_bounces",
+        section: Section::Gi,
+        about: "Read last frame's indirect light at ray hits (multiple bounces); off gives one bounce.",
+        field: &Choice { get: |s| s.gi.bounces, set: |s, v| s.gi.bounces = v },
+    },
+    Setting {
+        key: "gi_cache",
+        section: Section::Gi,
+        about: "Keep each entry's static hits until an edit can reach them; off retraces every ray every frame.",
+        field: &Choice { get: |s| s.gi.cache, set: |s, v| s.gi.cache = v },
+    },
+];
+
+/// The setting called `key`.
+pub fn setting(key: &str) -> Option<&'static Setting> {
+    SETTINGS.iter().find(|s| s.key == key)
+}
+
+impl Setting {
+    /// What `--set` accepts: `on|off`, `<1..64>`.
+    pub fn accepts(&self) -> String {
+        self.field.accepts()
+    }
+
+    /// The current value, spelled as `--set` takes it.
+    pub fn get(&self, settings: &RenderSettings) -> String {
+        self.field.get(settings)
+    }
+
+    /// Parses `value` into this setting; the error names the key and what is valid.
+    pub fn set(&self, settings: &mut RenderSettings, value: &str) -> Result<(), String> {
+        self.field.set(settings, value).map_err(|why| format!("setting {}: {why}", self.key))
+    }
+
+    /// The F4 panel's Left (-1) / Right (+1).
+    pub fn step(&self, settings: &mut RenderSettings, direction: i32) {
+        self.field.step(settings, direction)
+    }
+
+    /// The value as the panel shows it (with its unit).
+    pub fn show(&self, settings: &RenderSettings) -> String {
+        self.field.show(settings)
+    }
+
+    /// The value `RenderSettings::default()` holds.
+    pub fn default_value(&self) -> String {
+        self.field.get(&RenderSettings::default())
+    }
+}
+
+/// Every key with what it accepts, on one line: `lighting=sun|nee|restir, ..., exposure=<0.001..1000>, ...`.
+/// The error messages end with it.
+pub fn valid_pairs() -> String {
+    SETTINGS.iter().map(|s| format!("{}={}", s.key, s.accepts())).collect::<Vec<_>>().join(", ")
+}
+
+/// The settings section of `--help`: every key by section, with what it accepts, its default and what it does.
+pub fn help_text() -> String {
+    let mut text = String::from(
+        "Render settings, for --set KEY=VALUE (repeatable) or a --config FILE.ron map such as \
+         {\"lighting\": \"restir\", \"candidates\": 16}:\n",
+    );
+    for section in Section::ALL {
+        text += &format!("\n{}:\n", section.title());
+        for s in SETTINGS.iter().filter(|s| s.section == section) {
+            text += &format!("  {}={}  [default: {}]\n      {}\n", s.key, s.accepts(), s.default_value(), s.about);
+        }
+    }
+    text
+}

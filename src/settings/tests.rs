@@ -1,0 +1,158 @@
+//! The settings table against the messages, spellings and ranges the command line had before it.
+
+use super::*;
+
+/// What `--set` accepts, split into the values to try: every name, or both ends of a range.
+fn valid_values(setting: &Setting) -> Vec<String> {
+    let accepts = setting.accepts();
+    match accepts.strip_prefix('<').and_then(|r| r.strip_suffix('>')) {
+        Some(range) => range.split("..").map(String::from).collect(),
+        None => accepts.split('|').map(String::from).collect(),
+    }
+}
+
+#[test]
+fn the_messages_list_the_keys_and_values_as_before_the_table() {
+    assert_eq!(
+        valid_pairs(),
+        "lighting=sun|nee|restir, pick=power|uniform, accumulate=on|off, \
+         debug=none|albedo|normal|hit|depth|reservoir, sun=on|off, shadows=on|off, exposure=<0.001..1000>, \
+         candidates=<1..64>, taps=<0..16>, radius=<0..100>, temporal=on|off, spatial=on|off, \
+         sample=area|point, reuse=biased|unbiased, gi=on|off, gi_rays=<4..128>, gi_update=<1..64>, \
+         gi_alpha=<0.001..1>, gi_filter=on|off, gi_bounces=on|off, gi_cache=on|off"
+    );
+}
+
+#[test]
+fn every_value_a_key_advertises_round_trips() {
+    for setting in SETTINGS {
+        assert_eq!(SETTINGS.iter().filter(|s| s.key == setting.key).count(), 1, "{} twice", setting.key);
+        let values = valid_values(setting);
+        assert!(values.len() >= 2, "{}", setting.key);
+        for value in values {
+            let mut s = RenderSettings::default();
+            s.set(&format!("{}={value}", setting.key)).unwrap();
+            assert_eq!(setting.get(&s), value, "{}", setting.key);
+            // Setting what get reads back changes nothing.
+            let read = s.clone();
+            s.set(&format!("{}={}", setting.key, setting.get(&read))).unwrap();
+            assert_eq!(s, read, "{}", setting.key);
+        }
+        let mut s = RenderSettings::default();
+        s.set(&format!("{}={}", setting.key, setting.default_value())).unwrap();
+        assert_eq!(s, RenderSettings::default(), "{}", setting.key);
+    }
+}
+
+#[test]
+fn switches_take_the_usual_spellings() {
+    for (value, on) in [("on", true), ("true", true), ("1", true), ("off", false), ("false", false), ("0", false)] {
+        let s = RenderSettings::default().with_pairs(&[format!("temporal={value}")]).unwrap();
+        assert_eq!(s.restir.temporal, on, "{value}");
+    }
+}
+
+#[test]
+fn an_unknown_key_or_a_missing_value_lists_every_key() {
+    for pair in ["colour=blue", "colour"] {
+        let error = RenderSettings::default().set(pair).unwrap_err();
+        for setting in SETTINGS {
+            assert!(error.contains(&format!("{}={}", setting.key, setting.accepts())), "{error}");
+        }
+    }
+    assert!(RenderSettings::default().set("colour=blue").unwrap_err().starts_with("unknown setting 'colour'"));
+    assert!(RenderSettings::default().set("colour").unwrap_err().starts_with("setting 'colour' is not KEY=VALUE"));
+}
+
+#[test]
+fn bad_values_are_refused_with_what_is_valid() {
+    for setting in SETTINGS {
+        let accepts = setting.accepts();
+        let error = RenderSettings::default().set(&format!("{}=sideways", setting.key)).unwrap_err();
+        if let Some(range) = accepts.strip_prefix('<').and_then(|r| r.strip_suffix('>')) {
+            assert!(error.contains(&format!("(valid: {range})")), "{error}");
+            let (lo, hi) = range.split_once("..").unwrap();
+            let (lo, hi): (f64, f64) = (lo.parse().unwrap(), hi.parse().unwrap());
+            for outside in [lo - 1.0, hi + 1.0] {
+                let error = RenderSettings::default().set(&format!("{}={outside}", setting.key)).unwrap_err();
+                let expected = format!("setting {}: {outside} is out of range (valid: {range})", setting.key);
+                assert_eq!(error, expected);
+            }
+        } else {
+            assert_eq!(error, format!("setting {}: 'sideways' is not one of {accepts}", setting.key));
+        }
+    }
+    assert_eq!(
+        RenderSettings::default().set("candidates=lots").unwrap_err(),
+        "setting candidates: 'lots' is not a whole number (valid: 1..64)"
+    );
+    assert_eq!(
+        RenderSettings::default().set("radius=NaN").unwrap_err(),
+        "setting radius: NaN is out of range (valid: 0..100)"
+    );
+}
+
+#[test]
+fn panel_steps_stay_within_what_set_accepts() {
+    for setting in SETTINGS {
+        for direction in [1, -1] {
+            let mut s = RenderSettings::default();
+            for _ in 0..40 {
+                setting.step(&mut s, direction);
+                let value = setting.get(&s);
+                RenderSettings::default().set(&format!("{}={value}", setting.key)).unwrap();
+            }
+        }
+    }
+    // Choices cycle; numbers stop at the ends.
+    let lighting = setting("lighting").unwrap();
+    let mut s = RenderSettings::default();
+    let mut cycle = vec![];
+    for _ in 0..3 {
+        lighting.step(&mut s, 1);
+        cycle.push(lighting.get(&s));
+    }
+    assert_eq!(cycle, ["nee", "restir", "sun"]);
+    lighting.step(&mut s, -1);
+    assert_eq!(s.lighting, Lighting::Restir);
+    let mut s = RenderSettings::default();
+    (0..20).for_each(|_| setting("gi_rays").unwrap().step(&mut s, 1));
+    assert_eq!(s.gi.rays, GI_RAYS_RANGE.1);
+}
+
+#[test]
+fn help_text_gives_every_key_its_values_and_default() {
+    let help = help_text();
+    for setting in SETTINGS {
+        let line = format!("  {}={}  [default: {}]", setting.key, setting.accepts(), setting.default_value());
+        assert!(help.contains(&line), "{line}\n{help}");
+    }
+    assert!(help.contains("  candidates=<1..64>  [default: 32]") && help.contains("  lighting=sun|nee|restir"));
+}
+
+#[test]
+fn the_summary_shows_the_sections_that_apply() {
+    let s = RenderSettings::default();
+    assert_eq!(s.summary().lines().count(), 1);
+    assert!(s.summary().starts_with("lighting=sun pick=power"), "{}", s.summary());
+    let s = s.with_pairs(&["lighting=restir".to_string(), "gi=on".to_string(), "sample=point".to_string()]);
+    let summary = s.unwrap().summary();
+    assert_eq!(summary.lines().count(), 3, "{summary}");
+    assert!(summary.contains("candidates=32 taps=5 radius=30 temporal=on spatial=on sample=point reuse=biased"));
+    assert!(summary.contains("gi_rays=64 gi_update=8 gi_alpha=0.03 gi_filter=on"), "{summary}");
+}
+
+#[test]
+fn a_ron_settings_file_sets_what_set_sets_and_rejects_the_same() {
+    let text = r#"{"lighting": "restir", "candidates": 16, "temporal": false, "radius": 12.5, "sample": "point"}"#;
+    let s = RenderSettings::default().with_ron(text, "t.ron").unwrap();
+    assert_eq!(s.lighting, Lighting::Restir);
+    assert_eq!((s.restir.candidates, s.restir.temporal, s.restir.radius), (16, false, 12.5));
+    assert_eq!(s.restir.sample, LightSample::Point);
+    let bad = RenderSettings::default().with_ron(r#"{"candidates": 0}"#, "t.ron").unwrap_err();
+    assert!(bad.contains("t.ron: setting candidates: 0 is out of range (valid: 1..64)"), "{bad}");
+    let broken = RenderSettings::default().with_ron("{\"lighting\": ", "t.ron").unwrap_err();
+    assert!(broken.starts_with("t.ron:1:"), "{broken}");
+    let nested = RenderSettings::default().with_ron(r#"{"lighting": ["restir"]}"#, "t.ron").unwrap_err();
+    assert!(nested.contains("is not a string, number or bool"), "{nested}");
+}
