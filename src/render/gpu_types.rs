@@ -220,7 +220,7 @@ impl GpuCounter {
 pub const COUNTERS: usize = 16;
 pub const PER_FRAME_COUNTERS: usize = 8;
 const _: () = assert!(GpuCounter::GiBorrowed as usize + 1 == PER_FRAME_COUNTERS);
-const _: () = assert!(GpuCounter::GiResets as usize + 1 <= COUNTERS);
+const _: () = assert!((GpuCounter::GiResets as usize) < COUNTERS);
 
 /// `restir_flags` bits.
 pub const RESTIR_TEMPORAL: u32 = 1;
