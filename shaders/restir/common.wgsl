@@ -47,12 +47,20 @@ fn finite(x: f32) -> bool {
 // A reservoir read from memory is used only if its fields are sane and its light is still the one it sampled:
 // a freed or reused slot has another generation, so a removed light is never shaded.
 // A non-finite field is also counted (COUNT_RESERVOIR_RESETS, read back by the stress run).
+// A reservoir that holds no light keeps its M: "M candidates found nothing to light this pixel" is evidence the
+// next merge must weigh like any other. Dropping it (M = 0) made the confidence weights depend on the outcome,
+// so temporal reuse forgot its zeros and brightened scenes whose candidates are mostly occluded.
 fn validated(r: Reservoir) -> Reservoir {
     if !finite(r.w_sum) || !finite(r.m) || !finite(r.big_w) || !finite(r.target_value) {
         atomicAdd(&counters[COUNT_RESERVOIR_RESETS], 1u);
         return empty_reservoir();
     }
-    if r.slot == NO_LIGHT || r.slot >= arrayLength(&lights) || r.m < 0.0 || r.big_w < 0.0 || r.face > POINT_FACE {
+    if r.slot == NO_LIGHT && r.m >= 0.0 {
+        var none = empty_reservoir();
+        none.m = r.m;
+        return none;
+    }
+    if r.slot >= arrayLength(&lights) || r.m < 0.0 || r.big_w < 0.0 || r.face > POINT_FACE {
         return empty_reservoir();
     }
     let light = lights[r.slot];
