@@ -39,11 +39,52 @@ fn thesis_scenes_have_the_readme_counts() {
     assert_eq!((s.voxels, s.emitters), (544_416, 131_072), "{s}");
     let pool = LightPool::from_world(&cornell);
     assert_eq!(pool.counts(), (0, 256), "the ceiling light is 256 aligned emissive bricks");
-    // x 64..191 in the thesis' left-handed axes is 832..959 here (x -> 1023 - x).
+    // x 64..191 in the thesis' left-handed axes is 840..967 here (x -> 1031 - x: 1027 wide, rounded up to bricks).
     assert!(
-        pool.lights().all(|(_, l)| l.min.y == 248 && (832..960).contains(&l.min.x) && (64..192).contains(&l.min.z))
+        pool.lights().all(|(_, l)| l.min.y == 248 && (840..968).contains(&l.min.x) && (64..192).contains(&l.min.z))
     );
     assert!(cornell.view(Some("cornell1")).is_some());
+}
+
+/// A `.vx` file as the thesis writes it: header, packed positions, values (`src/world/import/vx.rs`).
+fn write_vx(path: &Path, size: [u32; 3], voxels: &[([u32; 3], u16)]) {
+    use std::io::Write;
+    let mut raw = Vec::new();
+    for word in [2, 1, size[0], size[1], size[2], voxels.len() as u32] {
+        raw.extend_from_slice(&word.to_le_bytes());
+    }
+    for ([x, y, z], _) in voxels {
+        raw.extend_from_slice(&(x | y << 10 | z << 20).to_le_bytes());
+    }
+    for (_, value) in voxels {
+        raw.extend_from_slice(&value.to_le_bytes());
+    }
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    gz.write_all(&raw).unwrap();
+    std::fs::write(path, gz.finish().unwrap()).unwrap();
+}
+
+/// The thesis repository also exports scenes of other sizes (260x132x292): they mirror about their own width
+/// rounded up to whole bricks, not about 1024.
+#[test]
+fn a_vx_export_of_another_size_mirrors_about_its_own_width() {
+    let dir = std::env::temp_dir().join(format!("glowbrick-vx-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("small.vx");
+    let white = 0x0fff; // r = g = b = 15, strength 0
+    let lamp = 0xf0f0; // green, strength 15
+    write_vx(&path, [260, 132, 292], &[([0, 0, 0], white), ([259, 131, 291], lamp), ([8, 1, 2], white)]);
+    let world = load_path(&path).unwrap();
+    // 260 rounds up to 264 (33 bricks): x -> 263 - x.
+    assert_eq!(world.grid.size().to_array(), [264, 132, 292]);
+    let solid = |x, y, z| world.grid.get(bevy::math::IVec3::new(x, y, z)) != 0;
+    assert!(solid(263, 0, 0) && solid(4, 131, 291) && solid(255, 1, 2));
+    assert_eq!(world.summary().voxels, 3);
+    assert_eq!(world.summary().emitters, 1);
+    // A position past the declared width is refused with the file's own coordinates.
+    write_vx(&path, [260, 132, 292], &[([260, 0, 0], white)]);
+    let err = load_path(&path).unwrap_err().to_string();
+    assert!(err.contains("position (260, 0, 0) outside the 260x132x292 scene"), "{err}");
 }
 
 #[test]

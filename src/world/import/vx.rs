@@ -7,12 +7,13 @@
 //! Colours follow the thesis: albedo = c / 15, emitted radiance = c / 15 x strength / pi.
 //!
 //! The thesis' renderer is left-handed (+x is to the right looking along +z, y up); ours is right-handed. The
-//! importer mirrors x about `MIRROR_X` (x -> 1023 - x, so aligned bricks stay aligned) and mirrors the thesis'
-//! camera views with it, so its letters read the right way round and its views see what the thesis shows.
+//! importer mirrors x about the scene's own width rounded up to whole bricks (`mirror_width`: x -> W - 1 - x, a
+//! multiple of 8 so aligned bricks stay aligned; the thesis' 1027-wide scenes give x -> 1031 - x) and mirrors the
+//! thesis' camera views with it, so its letters read the right way round and its views see what the thesis shows.
 
 use super::BrickBuilder;
 use crate::world::format::LoadError;
-use crate::world::grid::MAX_WORLD_EDGE;
+use crate::world::grid::{BRICK_SIZE, MAX_WORLD_EDGE};
 use crate::world::{CameraView, Material, Palette, VoxelWorld};
 use bevy::math::{IVec3, UVec3};
 use flate2::read::GzDecoder;
@@ -55,15 +56,18 @@ fn material_for(value: u16) -> Material {
     }
 }
 
-/// Voxel x becomes `MIRROR_X - 1 - x`; a point's x becomes `MIRROR_X - x` (a multiple of 8 keeps bricks aligned).
-pub const MIRROR_X: i32 = 1024;
+/// The width a scene `width` voxels wide is mirrored about (and the imported world's x size): rounded up to whole
+/// bricks. Voxel x becomes `mirror - 1 - x`; a point's x becomes `mirror - x`.
+pub fn mirror_width(width: u32) -> u32 {
+    width.div_ceil(BRICK_SIZE as u32) * BRICK_SIZE as u32
+}
 
 /// The thesis' camera views (README of `../shared/scenes`, vertical field of view 48.89 degrees), mirrored in x
-/// like the voxels.
-pub fn thesis_views(file_stem: &str) -> Vec<CameraView> {
+/// about `mirror` like the voxels.
+pub fn thesis_views(file_stem: &str, mirror: u32) -> Vec<CameraView> {
     let view = |name: &str, o: [f32; 3], d: [f32; 3]| CameraView {
         name: name.into(),
-        origin: [MIRROR_X as f32 - o[0], o[1], o[2]],
+        origin: [mirror as f32 - o[0], o[1], o[2]],
         direction: [-d[0], d[1], d[2]],
         fov_deg: 48.89,
     };
@@ -104,12 +108,13 @@ pub fn load_vx(path: &Path) -> Result<VoxelWorld, LoadError> {
     if n > MAX_ENTRIES {
         return Err(fail(format!("{n} entries, at most {MAX_ENTRIES} allowed")));
     }
-    if size.cmpgt(UVec3::splat(MAX_WORLD_EDGE)).any() {
+    let mirror = mirror_width(size.x);
+    if size.with_x(mirror).cmpgt(UVec3::splat(MAX_WORLD_EDGE)).any() {
         return Err(fail(format!("size {}x{}x{} exceeds {MAX_WORLD_EDGE} per axis", size.x, size.y, size.z)));
     }
-    let world_size = size;
+    let world_size = size.with_x(mirror);
     let mut world = VoxelWorld::new(world_size, Palette::default());
-    world.views = thesis_views(path.file_stem().and_then(|s| s.to_str()).unwrap_or(""));
+    world.views = thesis_views(path.file_stem().and_then(|s| s.to_str()).unwrap_or(""), mirror);
 
     let mut values = open(path).map_err(&fail)?;
     skip(&mut values, 24 + 4 * n as u64, "the position block").map_err(&fail)?;
@@ -132,18 +137,18 @@ pub fn load_vx(path: &Path) -> Result<VoxelWorld, LoadError> {
                 u32::from_le_bytes([pos_buf[4 * i], pos_buf[4 * i + 1], pos_buf[4 * i + 2], pos_buf[4 * i + 3]]);
             let value = u16::from_le_bytes([val_buf[2 * i], val_buf[2 * i + 1]]);
             // x and y take 10 bits each; z takes the upper 12 (the scenes are 1027 deep).
-            let x = MIRROR_X - 1 - (packed & 1023) as i32;
+            let x = mirror as i32 - 1 - (packed & 1023) as i32;
             let p = IVec3::new(x, ((packed >> 10) & 1023) as i32, (packed >> 20) as i32);
-            if !world.grid.contains(p) {
+            if (packed & 1023) >= size.x || !world.grid.contains(p) {
                 return Err(fail(format!(
-                    "entry {}: position ({}, {}, {}) outside the {}x{}x{} world",
+                    "entry {}: position ({}, {}, {}) outside the {}x{}x{} scene",
                     done as usize + i,
-                    p.x,
+                    packed & 1023,
                     p.y,
                     p.z,
-                    world_size.x,
-                    world_size.y,
-                    world_size.z
+                    size.x,
+                    size.y,
+                    size.z
                 )));
             }
             let id = if value == 0 {
