@@ -7,6 +7,7 @@
 #import glowbrick::traversal::{trace, trace_objects, trace_scene, face_normal, INF}
 #import glowbrick::lights::{scene, sky, direct_sample}
 #import glowbrick::random::{Rng, pcg}
+#import glowbrick::guards::finite3
 #import glowbrick::counters::counters
 #import glowbrick::constants::{LIGHTING_SUN, RAY_OFFSET, GI_BOUNCES, GI_CACHE, COUNT_GI_UPDATED, COUNT_GI_LIVE, COUNT_GI_EVICTED,
     COUNT_GI_BORROWED, COUNT_GI_RESETS}
@@ -82,10 +83,6 @@ fn object_hit_radiance(point: vec3<f32>, face: u32, material: u32, fallback: vec
 
 fn miss_radiance(dir: vec3<f32>) -> vec3<f32> {
     return select(vec3(0.0), sky(dir), scene.mode == LIGHTING_SUN);
-}
-
-fn finite3(v: vec3<f32>) -> bool {
-    return all(v == v) && all(abs(v) < vec3(3.0e38));
 }
 
 // Ages and re-shades the entry in `slot`. Static entries read their cached static hits and test only

@@ -4,6 +4,7 @@
 
 #import bevy_render::view::View
 #import glowbrick::traversal::face_normal
+#import glowbrick::guards::finite3
 #import glowbrick::constants::{GBUFFER_FACE_SHIFT, GBUFFER_MATERIAL_SHIFT, GBUFFER_MATERIAL_MASK, GBUFFER_OBJECT_SHIFT}
 
 // FrameParams in src/render/gpu_types.rs: one view's parameters this frame (the scene's lighting, the same for
@@ -106,7 +107,7 @@ fn surface_voxel(s: Surface) -> vec3<i32> {
 fn write_output(pixel: vec2<u32>, colour: vec4<f32>) {
     let index = pixel_index(pixel);
     // A non-finite value would poison the running sum until the next restart: write black instead.
-    let c = select(vec3(0.0), colour.rgb, all(colour.rgb == colour.rgb) && all(abs(colour.rgb) < vec3(3.0e38)));
+    let c = select(vec3(0.0), colour.rgb, finite3(colour.rgb));
     var sum = c;
     if frame.accumulated > 1u {
         sum += accumulation[index].rgb;

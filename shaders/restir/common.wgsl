@@ -9,6 +9,7 @@
 #import glowbrick::lights::{Light, lights, scene, pick_light, light_contains, light_size, face_exposed}
 #import glowbrick::random::{Rng, rng_next, pcg}
 #import glowbrick::counters::counters
+#import glowbrick::guards::finite
 #import glowbrick::constants::{RAY_OFFSET, PI, RESTIR_POINT, RESTIR_UNBIASED, COUNT_RESERVOIR_RESETS}
 #import glowbrick::frame::{frame, view, Surface}
 
@@ -38,10 +39,6 @@ const POINT_FACE: u32 = 6u;
 
 fn empty_reservoir() -> Reservoir {
     return Reservoir(NO_LIGHT, 0u, 0u, 0u, 0.0, 0.0, 0.0, 0.0);
-}
-
-fn finite(x: f32) -> bool {
-    return x == x && abs(x) <= 3.0e38;
 }
 
 // A reservoir read from memory is used only if its fields are sane and its light is still the one it sampled:

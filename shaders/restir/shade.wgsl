@@ -6,7 +6,8 @@
 #import glowbrick::world::materials
 #import glowbrick::frame::{frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output}
 #import glowbrick::constants::DEBUG_RESERVOIR
-#import glowbrick::restir::common::{reservoirs_final, validated, finite, shading, unshadowed, reservoir_visible, NO_LIGHT}
+#import glowbrick::guards::finite
+#import glowbrick::restir::common::{reservoirs_final, validated, shading, unshadowed, reservoir_visible, NO_LIGHT}
 #import glowbrick::lights::lights
 #import glowbrick::gi::cache::{gi_on, gi_incoming}
 

@@ -1,14 +1,15 @@
 //! The WGSL, embedded at compile time so the binary runs from any directory. `shaders/lib/` holds the libraries
-//! every pass imports (`glowbrick::world`, `::traversal`, `::random`, `::lights`, `::frame`, `::constants`,
-//! `::counters`); `shaders/restir/` and `shaders/gi/` one technique each.
+//! every pass imports (`glowbrick::world`, `::traversal`, `::random`, `::guards`, `::lights`, `::frame`,
+//! `::constants`, `::counters`); `shaders/restir/` and `shaders/gi/` one technique each.
 
 use bevy::prelude::*;
 use bevy::shader::Shader;
 
 /// Every shader file: its path under `shaders/` and its source. Libraries first (they only define imports).
-pub const SOURCES: [(&str, &str); 16] = [
+pub const SOURCES: [(&str, &str); 17] = [
     ("lib/constants.wgsl", include_str!("../../shaders/lib/constants.wgsl")),
     ("lib/random.wgsl", include_str!("../../shaders/lib/random.wgsl")),
+    ("lib/guards.wgsl", include_str!("../../shaders/lib/guards.wgsl")),
     ("lib/counters.wgsl", include_str!("../../shaders/lib/counters.wgsl")),
     ("lib/world.wgsl", include_str!("../../shaders/lib/world.wgsl")),
     ("lib/traversal.wgsl", include_str!("../../shaders/lib/traversal.wgsl")),
