@@ -39,16 +39,23 @@ pub fn write_image(image: &LinearImage, path: &Path) -> Result<(), String> {
             buffer.save(path)
         }
         Some("png") => {
-            let mut buffer = ImageBuffer::<Rgb<u8>, Vec<u8>>::new(image.width, image.height);
-            for (x, y, px) in buffer.enumerate_pixels_mut() {
-                let p = image.pixel(x, y);
-                *px = Rgb([0, 1, 2].map(|c| (linear_to_srgb(tonemap_aces(p[c])) * 255.0 + 0.5) as u8));
+            match ImageBuffer::<Rgb<u8>, Vec<u8>>::from_raw(image.width, image.height, display_rgb8(image)) {
+                Some(buffer) => buffer.save(path),
+                None => return Err(format!("{}: image size mismatch", path.display())),
             }
-            buffer.save(path)
         }
         _ => return Err(format!("{}: output must end in .png or .exr", path.display())),
     };
     result.map_err(|e| format!("{}: cannot write image: {e}", path.display()))
+}
+
+/// The image as a viewer sees it: tonemapped (ACES), sRGB-encoded, 8 bits per channel, RGB rows.
+pub fn display_rgb8(image: &LinearImage) -> Vec<u8> {
+    image
+        .pixels
+        .iter()
+        .flat_map(|p| [0, 1, 2].map(|c| (linear_to_srgb(tonemap_aces(p[c])) * 255.0 + 0.5) as u8))
+        .collect()
 }
 
 /// Writes a PNG of values already in [0, 1] (sRGB-encoded, no tonemapping): false-colour and debug images.

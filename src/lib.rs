@@ -14,6 +14,7 @@ pub mod game;
 pub mod headless;
 pub mod image_io;
 pub mod lights;
+pub mod progress;
 pub mod reference;
 pub mod render;
 pub mod settings;

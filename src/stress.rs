@@ -5,6 +5,7 @@
 //! edits) measures how the mean luminance of a view drifts over time against the CPU reference of that view.
 
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::progress::Progress;
 use crate::reference::sampling::Pcg;
 use crate::reference::{ReferenceOptions, render_reference};
 use crate::render::gpu_types::GpuCounter;
@@ -194,7 +195,9 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
     let mut camera = home.clone();
     let mut cycle = 0usize;
 
+    let progress = Progress::new("stress", config.frames as u64);
     for frame in 0..config.frames {
+        progress.advance(1);
         // Edits: every frame one or two, of every kind.
         for _ in 0..1 + (rng.next_u32() % 2) {
             let at = IVec3::new(
@@ -262,6 +265,7 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
         report.frames += 1;
     }
 
+    progress.finish();
     let counters = renderer.counters()?;
     report.reservoir_resets = counters[GpuCounter::ReservoirResets as usize];
     report.gi_resets = counters[GpuCounter::GiResets as usize];

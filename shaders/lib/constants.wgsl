@@ -33,6 +33,7 @@ const RESTIR_TEMPORAL: u32 = #{RESTIR_TEMPORAL}u;
 const RESTIR_SPATIAL: u32 = #{RESTIR_SPATIAL}u;
 const RESTIR_POINT: u32 = #{RESTIR_POINT}u;
 const RESTIR_UNBIASED: u32 = #{RESTIR_UNBIASED}u;
+const RESTIR_ONE_RAY: u32 = #{RESTIR_ONE_RAY}u;
 const MAX_TAPS: u32 = #{MAX_TAPS}u;
 
 // GiParams.flags bits.

@@ -12,6 +12,12 @@ struct Rng {
     state: u32,
 }
 
+// A uniform 32-bit number.
+fn rng_next_u32(rng: ptr<function, Rng>) -> u32 {
+    (*rng).state = pcg((*rng).state);
+    return (*rng).state;
+}
+
 // A uniform number in [0, 1) with 24 bits.
 fn rng_next(rng: ptr<function, Rng>) -> f32 {
     (*rng).state = pcg((*rng).state);

@@ -7,10 +7,11 @@
 #import glowbrick::world::materials
 #import glowbrick::traversal::{trace_scene, face_normal}
 #import glowbrick::lights::{Light, lights, scene, pick_light, light_contains, light_size, face_exposed}
-#import glowbrick::random::{Rng, rng_next, pcg}
+#import glowbrick::random::{Rng, rng_next, rng_next_u32, pcg}
 #import glowbrick::counters::counters
 #import glowbrick::guards::finite
-#import glowbrick::constants::{RAY_OFFSET, PI, RESTIR_POINT, RESTIR_UNBIASED, COUNT_RESERVOIR_RESETS}
+#import glowbrick::constants::{RAY_OFFSET, PI, RESTIR_POINT, RESTIR_UNBIASED, RESTIR_ONE_RAY,
+    COUNT_RESERVOIR_RESETS}
 #import glowbrick::frame::{frame, view, Surface}
 
 // 32 bytes. `face` is the light cube's face (0 +X, 1 -X, ... as the traversal numbers faces) or POINT_FACE,
@@ -98,7 +99,8 @@ fn shading(s: Surface) -> Shading {
 }
 
 // Unshadowed reflected radiance from the sample, per unit of the sample's measure: area (albedo/pi Le cos cos/d^2)
-// or, for the centre, per light (the cube's projected area towards the point stands in for A cos_l).
+// or, for the centre, per light (the projected area of the cube's exposed faces towards the point stands in for
+// A cos_l).
 fn unshadowed(x: Shading, light: Light, face: u32, uv: vec2<f32>) -> vec3<f32> {
     let q = light_point(light, face, uv);
     let to_light = q - x.point;
@@ -110,8 +112,16 @@ fn unshadowed(x: Shading, light: Light, face: u32, uv: vec2<f32>) -> vec3<f32> {
     let cos_surface = dot(x.normal, wi);
     var cos_area = 0.0;
     if face == POINT_FACE {
+        // The faces that face the point and touch air: a buried face emits nothing (the reference skips it too).
+        // On axis a the face towards the point is -a when the light lies at +a (face index 2a + 1).
+        var projected = 0.0;
+        for (var axis = 0u; axis < 3u; axis++) {
+            if face_exposed(light, axis * 2u + select(0u, 1u, wi[axis] > 0.0)) {
+                projected += abs(wi[axis]);
+            }
+        }
         let size = f32(light_size(light));
-        cos_area = (abs(wi.x) + abs(wi.y) + abs(wi.z)) * size * size;
+        cos_area = projected * size * size;
     } else {
         cos_area = -dot(face_normal(face), wi);
     }
@@ -183,7 +193,7 @@ struct Candidate {
 // that see the shading point in proportion to its exact solid angle and a uniform point on it; in point mode the centre.
 fn sample_candidate(x: Shading, rng: ptr<function, Rng>) -> Candidate {
     var c = Candidate(empty_reservoir(), 0.0, 0.0);
-    let picked = pick_light(scene.light_count, scene.power_pick == 1u, rng_next(rng), rng_next(rng));
+    let picked = pick_light(scene.light_count, scene.power_pick == 1u, rng_next_u32(rng), rng_next(rng));
     let u_face = rng_next(rng);
     let uv = vec2(rng_next(rng), rng_next(rng));
     let light = lights[picked.slot];
@@ -281,6 +291,13 @@ fn pair_weight(m_i: f32, p_i: f32, m_c_share: f32, p_c: f32, share: f32) -> f32 
 
 fn unbiased() -> bool {
     return (frame.restir_flags & RESTIR_UNBIASED) != 0u;
+}
+
+// Whether the MIS weight of a pixel's own sample tests that the other input sees it: in both unbiased variants.
+// That ray is what keeps the weights summing to 1 where visibility differs; the second ray of `unbiased` only
+// keeps occluded samples from being picked (noise, not bias).
+fn own_sample_rays() -> bool {
+    return (frame.restir_flags & (RESTIR_UNBIASED | RESTIR_ONE_RAY)) != 0u;
 }
 
 // Random numbers per pixel, pass and frame.

@@ -5,7 +5,7 @@
 #import glowbrick::constants::RESTIR_TEMPORAL
 #import glowbrick::random::{Rng, rng_next}
 #import glowbrick::restir::common::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
-    shading, sample_candidate, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, pixel_rng}
+    shading, sample_candidate, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, own_sample_rays, pixel_rng}
 
 // Temporal history is capped at this many times M_init (DESIGN.md), so old samples cannot dominate forever.
 const HISTORY_CAP: f32 = 20.0;
@@ -77,13 +77,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 var p_prev_at_current = target_of(prev_shading, current);
                 // This pixel's target at its own sample, computed above.
                 let p_current_at_current = current.target_value;
-                if unbiased() {
-                    if p_current_at_prev > 0.0 && !reservoir_visible(x, prev) {
-                        p_current_at_prev = 0.0;
-                    }
-                    if p_prev_at_current > 0.0 && !reservoir_visible(prev_shading, current) {
-                        p_prev_at_current = 0.0;
-                    }
+                if unbiased() && p_current_at_prev > 0.0 && !reservoir_visible(x, prev) {
+                    p_current_at_prev = 0.0;
+                }
+                // From the same point (a still camera) the current sample is visible or has W = 0: no ray.
+                let moved = any(prev_shading.point != x.point);
+                if own_sample_rays() && moved && p_prev_at_current > 0.0 && !reservoir_visible(prev_shading, current) {
+                    p_prev_at_current = 0.0;
                 }
                 let m_prev = pair_weight(prev.m, p_prev_at_prev, current.m, p_current_at_prev, 1.0);
                 let m_current = 1.0 - pair_weight(prev.m, p_prev_at_current, current.m, p_current_at_current, 1.0);

@@ -5,7 +5,7 @@
 #import glowbrick::constants::{RESTIR_SPATIAL, MAX_TAPS, PI}
 #import glowbrick::random::{Rng, rng_next}
 #import glowbrick::restir::common::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
-    shading, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, pixel_rng}
+    shading, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, own_sample_rays, pixel_rng}
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -71,7 +71,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         stream(&merged, tap, m_tap * p_own_at_tap * tap.big_w, tap.m, rng_next(&rng));
         // This pixel's sample, seen from the neighbour.
         var p_tap_at_own = target_of(neighbour, own);
-        if unbiased() && p_tap_at_own > 0.0 && !reservoir_visible(neighbour, own) {
+        if own_sample_rays() && p_tap_at_own > 0.0 && !reservoir_visible(neighbour, own) {
             p_tap_at_own = 0.0;
         }
         m_own -= pair_weight(tap.m, p_tap_at_own, m_share, p_own_at_own, share);

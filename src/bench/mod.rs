@@ -1,19 +1,25 @@
 //! Run time against error (`glowbrick bench`): every scene x setting is rendered headless with a fixed camera;
 //! the bench records the frame time and the primary pass's GPU time (timestamp queries, where the adapter has
-//! them) and the error of one frame against the CPU reference, cached under the target folder. It writes
-//! `results.csv`, `report.md` and `plot.png` (error against frame time, one panel per scene).
+//! them) and the error (MAE, MSE, relMSE, bias, FLIP) of one frame against the CPU reference, cached under the
+//! target folder, and the reference's own noise (a second reference with another seed). Then the convergence
+//! curves (`convergence.rs`): error against cumulative time as frames accumulate, per method. It writes
+//! `results.csv`, `report.md`, `plot.svg` (the curves, log-log, one panel per scene) and per scene an image strip
+//! `strip-SCENE.png` (reference | NEE | ReSTIR | ReSTIR's FLIP map, one frame each).
 //!
 //! Settings: the next-event-estimation baseline (one light sample per pixel, power or uniform picking) and Voxel
 //! ReSTIR with M_init in {1, 8, 16, 32}, point vs area samples, reuse off, unbiased vs biased, uniform candidates.
 //! The spatial radius scales with the image (the thesis' 30 px at 1600 wide). Last per scene, `nee-equal-time`
 //! accumulates NEE frames for the time one default ReSTIR frame takes: the equal-time comparison.
 
+pub mod convergence;
 pub mod gi;
 pub mod plot;
 pub mod thesis;
 
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::{LinearImage, read_image, write_image};
+use crate::progress::Progress;
+use crate::reference::flip::{Encoding, flip};
 use crate::reference::metrics::{Metrics, compare};
 use crate::reference::{ReferenceOptions, render_reference};
 use crate::render::primary::PRIMARY_PASS_NAME;
@@ -22,6 +28,7 @@ use crate::settings::RenderSettings;
 use crate::world::format::world_to_string;
 use crate::world::scene::load_scene;
 use crate::world::{CameraView, VoxelWorld};
+use convergence::{CurvePoint, METHODS, equal_time_table, measure_curve};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -43,12 +50,13 @@ pub const SETTINGS: &[BenchSetting] = &[
     BenchSetting { name: "restir-point", pairs: &["lighting=restir", "sample=point"] },
     BenchSetting { name: "restir-no-reuse", pairs: &["lighting=restir", "temporal=off", "spatial=off"] },
     BenchSetting { name: "restir-temporal-only", pairs: &["lighting=restir", "spatial=off"] },
+    BenchSetting { name: "restir-biased", pairs: &["lighting=restir", "reuse=biased"] },
     BenchSetting { name: "restir-unbiased", pairs: &["lighting=restir", "reuse=unbiased"] },
     BenchSetting { name: "restir-uniform", pairs: &["lighting=restir", "pick=uniform"] },
 ];
 
 /// The setting whose frame time sets the NEE frame budget of the equal-time row.
-const EQUAL_TIME_TO: &str = "restir";
+pub(crate) const EQUAL_TIME_TO: &str = "restir";
 
 /// Scenes of a full run and of `--quick`.
 pub const ALL_SCENES: &[&str] = &["cornell", "letters", "apartments", "mountain", "window-room"];
@@ -64,6 +72,8 @@ pub struct BenchConfig {
     /// Frames timed.
     pub timed_frames: u32,
     pub reference_spp: u32,
+    /// Frames of the longest convergence point (curves read 1, 2, 4, ... up to it).
+    pub curve_frames: u32,
     /// A camera for every scene instead of each scene's first view.
     pub camera: Option<CameraView>,
     /// Only these settings (by name); empty: all.
@@ -78,6 +88,7 @@ impl BenchConfig {
             warmup_frames: 16,
             timed_frames: 64,
             reference_spp: 2048,
+            curve_frames: 64,
             camera: None,
             only: Vec::new(),
         }
@@ -90,6 +101,7 @@ impl BenchConfig {
             warmup_frames: 4,
             timed_frames: 8,
             reference_spp: 256,
+            curve_frames: 16,
             camera: None,
             only: Vec::new(),
         }
@@ -101,11 +113,15 @@ impl BenchConfig {
 pub struct BenchRow {
     pub scene: String,
     pub setting: String,
+    /// Frames in the image (1, or the accumulated frames of a curve point or the equal-time row).
+    pub frames: u32,
     pub frame_ms: f64,
     pub gpu_ms: Option<f64>,
     /// GPU ms of each voxel pass that ran (primary, then the ReSTIR passes).
     pub passes: PassTimes,
     pub metrics: Metrics,
+    /// Mean LDR-FLIP against the reference.
+    pub flip: f64,
 }
 
 /// Where references are cached: `$GLOWBRICK_CACHE`, else `$CARGO_TARGET_DIR/glowbrick-reference`, else
@@ -130,6 +146,17 @@ pub fn cached_reference(world: &VoxelWorld, view: &CameraView, config: &BenchCon
     cached_path_reference(world, view, config, 0)
 }
 
+/// The reference's own noise: MAE between the cached reference and one with another seed (also cached).
+pub fn reference_noise(
+    world: &VoxelWorld,
+    view: &CameraView,
+    config: &BenchConfig,
+    reference: &LinearImage,
+) -> Result<f64, String> {
+    let other = cached_seeded_reference(world, view, config, 0, 2)?;
+    Ok(compare(&other, reference)?.mae)
+}
+
 /// The reference with `bounces` diffuse bounces (0: direct light), cached like `cached_reference`.
 pub fn cached_path_reference(
     world: &VoxelWorld,
@@ -137,14 +164,27 @@ pub fn cached_path_reference(
     config: &BenchConfig,
     bounces: u32,
 ) -> Result<LinearImage, String> {
+    cached_seeded_reference(world, view, config, bounces, 1)
+}
+
+fn cached_seeded_reference(
+    world: &VoxelWorld,
+    view: &CameraView,
+    config: &BenchConfig,
+    bounces: u32,
+    seed: u64,
+) -> Result<LinearImage, String> {
     let light = if bounces == 0 { "direct".to_string() } else { format!("{bounces}bounces") };
+    let defaults = ReferenceOptions::default();
+    // The estimator's version is part of the key: a cached image from another estimator is not reused.
     let key = format!(
-        "{}|{:?}|{}x{}|{}spp|{light}",
+        "{}|{:?}|{}x{}|{}spp|{light}|seed{seed}|ris{}",
         world_to_string(world),
         view,
         config.width,
         config.height,
-        config.reference_spp
+        config.reference_spp,
+        defaults.candidates
     );
     let path = cache_dir().join(format!("{:016x}.exr", fnv1a(key.as_bytes())));
     if let Ok(image) = read_image(&path)
@@ -157,16 +197,18 @@ pub fn cached_path_reference(
         height: config.height,
         spp: config.reference_spp,
         bounces,
-        ..Default::default()
+        seed,
+        ..defaults
     };
     let reference = render_reference(world, view, &options)?;
     std::fs::create_dir_all(cache_dir()).map_err(|e| format!("{}: {e}", cache_dir().display()))?;
     write_image(&reference.image, &path)?;
     eprintln!(
-        "bench: reference {} in {:.1} s ({} spp)",
+        "bench: reference {} in {:.1} s ({} spp, {:.2} Mrays/s)",
         path.display(),
         reference.elapsed.as_secs_f64(),
-        reference.spp
+        reference.spp,
+        reference.rays_per_second() / 1e6
     );
     Ok(reference.image)
 }
@@ -180,8 +222,7 @@ fn measure(
     view: &CameraView,
     setting: &BenchSetting,
     config: &BenchConfig,
-    reference: &LinearImage,
-) -> Result<(f64, PassTimes, Metrics), String> {
+) -> Result<(f64, PassTimes, LinearImage), String> {
     let mut pairs: Vec<String> = setting.pairs.iter().map(|p| p.to_string()).collect();
     // The thesis' 30 px radius at 1600 wide, scaled to this image.
     pairs.insert(0, format!("radius={}", (30.0 * config.width as f32 / 1600.0).round().max(2.0)));
@@ -195,8 +236,7 @@ fn measure(
     }
     let frame_ms = start.elapsed().as_secs_f64() * 1000.0 / config.timed_frames.max(1) as f64;
     let passes = pass_times(&renderer);
-    let image = renderer.render(1)?;
-    Ok((frame_ms, passes, compare(&image, reference)?))
+    Ok((frame_ms, passes, renderer.render(1)?))
 }
 
 /// GPU time of each voxel pass that ran (the primary pass, and the ReSTIR passes when they ran).
@@ -215,14 +255,14 @@ fn measure_equal_time(
     reference: &LinearImage,
     nee_frame_ms: f64,
     budget_ms: f64,
-) -> Result<(u32, Metrics), String> {
+) -> Result<(u32, Metrics, f64), String> {
     let frames = (budget_ms / nee_frame_ms.max(1e-3)).round().clamp(1.0, 4096.0) as u32;
     let pairs = ["lighting=nee", "pick=power", "accumulate=on"].map(String::from);
     let settings = RenderSettings::default().with_pairs(&pairs)?;
     let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
     let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;
     let image = renderer.render(frames)?;
-    Ok((frames, compare(&image, reference)?))
+    Ok((frames, compare(&image, reference)?, flip(&image, Encoding::Linear, reference, Encoding::Linear)?.mean))
 }
 
 /// Runs every scene x setting and writes the three outputs to `out`.
@@ -233,35 +273,82 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
     }
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let mut rows = Vec::new();
+    let mut curves: Vec<CurvePoint> = Vec::new();
+    let mut noise: Vec<(String, f64)> = Vec::new();
+    let chosen = SETTINGS.iter().filter(|s| config.only.is_empty() || config.only.iter().any(|o| o == s.name)).count();
+    let progress = Progress::new("bench", (scenes.len() * chosen) as u64);
     for name in scenes {
         let world = load_scene(name).map_err(|e| e.to_string())?;
         let view = config.camera.clone().or_else(|| world.view(None).cloned()).unwrap_or_else(|| world.overview());
         let reference = cached_reference(&world, &view, config)?;
+        noise.push((name.clone(), reference_noise(&world, &view, config, &reference)?));
         let first = rows.len();
+        let mut strip = vec![reference.clone()];
         for setting in SETTINGS.iter().filter(|s| config.only.is_empty() || config.only.iter().any(|o| o == s.name)) {
-            let (frame_ms, passes, metrics) = measure(&world, &view, setting, config, &reference)?;
-            eprintln!("bench: {name} {}: {frame_ms:.2} ms/frame, {metrics}", setting.name);
+            let (frame_ms, passes, image) = measure(&world, &view, setting, config)?;
+            let metrics = compare(&image, &reference)?;
+            let flip = flip(&image, Encoding::Linear, &reference, Encoding::Linear)?;
+            progress.println(&format!(
+                "bench: {name} {}: {frame_ms:.2} ms/frame, {metrics} flip={:.4}",
+                setting.name, flip.mean
+            ));
+            progress.advance(1);
+            if setting.name == "nee-power" {
+                strip.push(image);
+            } else if setting.name == EQUAL_TIME_TO {
+                strip.extend([image, flip.map]);
+            }
             let gpu_ms = (!passes.is_empty()).then(|| passes.iter().map(|(_, ms)| ms).sum());
             let setting = setting.name.to_string();
-            rows.push(BenchRow { scene: name.clone(), setting, frame_ms, gpu_ms, passes, metrics });
+            let flip = flip.mean;
+            rows.push(BenchRow { scene: name.clone(), setting, frames: 1, frame_ms, gpu_ms, passes, metrics, flip });
         }
-        let time_of = |setting: &str| rows[first..].iter().find(|r| r.setting == setting).map(|r| r.frame_ms);
+        if strip.len() == 4 {
+            plot::write_strip(&strip, &out.join(format!("strip-{name}.png")))?;
+        }
+        let times: Vec<(String, f64)> = rows[first..].iter().map(|r| (r.setting.clone(), r.frame_ms)).collect();
+        let time_of = |setting: &str| times.iter().find(|(s, _)| s == setting).map(|&(_, ms)| ms);
         if let (Some(nee_ms), Some(budget_ms)) = (time_of("nee-power"), time_of(EQUAL_TIME_TO)) {
-            let (frames, metrics) = measure_equal_time(&world, &view, config, &reference, nee_ms, budget_ms)?;
-            eprintln!("bench: {name} nee-equal-time ({frames} frames): {metrics}");
+            let (frames, metrics, flip) = measure_equal_time(&world, &view, config, &reference, nee_ms, budget_ms)?;
+            progress.println(&format!("bench: {name} nee-equal-time ({frames} frames): {metrics}"));
             rows.push(BenchRow {
                 scene: name.clone(),
                 setting: format!("nee-equal-time ({frames} frames)"),
+                frames,
                 frame_ms: nee_ms * frames as f64,
                 gpu_ms: None,
                 passes: Vec::new(),
                 metrics,
+                flip,
             });
         }
+        for method in METHODS {
+            let Some(frame_ms) = time_of(method.setting) else { continue };
+            let points = measure_curve(&world, &view, method, frame_ms, config, &reference, name)?;
+            progress.println(&format!(
+                "bench: {name} {} accumulated: relMSE {}",
+                method.name,
+                points.iter().map(|p| format!("{:.2e}@{}", p.metrics.relmse, p.frames)).collect::<Vec<_>>().join(" ")
+            ));
+            curves.extend(points);
+        }
+    }
+    progress.finish();
+    for p in &curves {
+        rows.push(BenchRow {
+            scene: p.scene.clone(),
+            setting: format!("{} accumulated", p.method),
+            frames: p.frames,
+            frame_ms: p.ms,
+            gpu_ms: None,
+            passes: Vec::new(),
+            metrics: p.metrics,
+            flip: p.flip,
+        });
     }
     write_csv(&rows, &out.join("results.csv"))?;
-    write_markdown(&rows, config, &out.join("report.md"))?;
-    plot::write_plot(&rows, &out.join("plot.png"))?;
+    write_markdown(&rows, &curves, &noise, config, &out.join("report.md"))?;
+    plot::write_plot(&rows, &curves, &out.join("plot.svg"))?;
     Ok(rows)
 }
 
@@ -270,40 +357,77 @@ fn gpu_text(ms: Option<f64>) -> String {
 }
 
 /// A row's cells, in the column order of both outputs.
-fn cells(r: &BenchRow) -> [String; 8] {
+fn cells(r: &BenchRow) -> [String; 10] {
     let m = r.metrics;
     [
         r.scene.clone(),
         r.setting.clone(),
+        r.frames.to_string(),
         format!("{:.3}", r.frame_ms),
         gpu_text(r.gpu_ms),
         format!("{:.6}", m.mae),
         format!("{:.6}", m.mse),
         format!("{:.6}", m.relmse),
         format!("{:+.6}", m.bias),
+        format!("{:.4}", r.flip),
     ]
 }
 
 fn write_csv(rows: &[BenchRow], path: &Path) -> Result<(), String> {
-    let mut text = String::from("scene,setting,frame_ms,gpu_ms,mae,mse,relmse,bias\n");
+    let mut text = String::from("scene,setting,frames,frame_ms,gpu_ms,mae,mse,relmse,bias,flip\n");
     for r in rows {
         text += &(cells(r).join(",") + "\n");
     }
     std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
 }
 
-fn write_markdown(rows: &[BenchRow], config: &BenchConfig, path: &Path) -> Result<(), String> {
+fn write_markdown(
+    rows: &[BenchRow],
+    curves: &[CurvePoint],
+    noise: &[(String, f64)],
+    config: &BenchConfig,
+    path: &Path,
+) -> Result<(), String> {
+    let noise_text: Vec<String> = noise.iter().map(|(scene, mae)| format!("{scene} {mae:.5}")).collect();
     let mut text = format!(
         "# Run time against error\n\n{}x{}, one frame (no accumulation; ReSTIR with the temporal history of the \
          frames before it) against a {}-spp direct-light CPU reference; frame time averaged over {} frames after {} \
          warm-up frames. `GPU ms` is the timestamp-query time of the voxel passes that ran (primary, plus the three \
          ReSTIR passes; n/a where the adapter has no timestamps). `nee-equal-time` accumulates NEE frames for the \
-         frame time of `restir` (its frame ms is the total).\n\n\
-         | scene | setting | frame ms | GPU ms | MAE | MSE | relMSE | bias |\n|---|---|---|---|---|---|---|---|\n",
-        config.width, config.height, config.reference_spp, config.timed_frames, config.warmup_frames
+         frame time of `restir` (its frame ms is the total). FLIP is the mean LDR-FLIP (0: identical).\n\n\
+         The reference's own noise (MAE between two references with different seeds): {}.\n\n\
+         | scene | setting | frames | frame ms | GPU ms | MAE | MSE | relMSE | bias | FLIP |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
+        config.width,
+        config.height,
+        config.reference_spp,
+        config.timed_frames,
+        config.warmup_frames,
+        noise_text.join(", ")
     );
-    for r in rows {
+    for r in rows.iter().filter(|r| !r.setting.ends_with(" accumulated")) {
         text += &format!("| {} |\n", cells(r).join(" | "));
+    }
+    text += &format!(
+        "\n## Convergence\n\nA static camera accumulating frames (`accumulate=on`): relMSE after 1, 2, 4, ... {} \
+         frames, at frames x the method's frame time from the table above. ![convergence](plot.svg)\n\n\
+         Equal time, read off the curves: each method's relMSE at the time NEE took for its last point, and the time \
+         it needs to reach NEE's last relMSE (log-log interpolation; \"beyond the curve\" where it does not get \
+         there within its points). A biased method levels off at its bias.\n\n{}\n\
+         | scene | method | frames | ms | MAE | relMSE | bias | FLIP |\n|---|---|---|---|---|---|---|---|\n",
+        config.curve_frames,
+        equal_time_table(curves)
+    );
+    for p in curves {
+        text += &format!(
+            "| {} | {} | {} | {:.1} | {:.6} | {:.6} | {:+.6} | {:.4} |\n",
+            p.scene, p.method, p.frames, p.ms, p.metrics.mae, p.metrics.relmse, p.metrics.bias, p.flip
+        );
+    }
+    text += "\n## Image strips\n\nOne frame each: reference | NEE | ReSTIR | ReSTIR's FLIP map (magma: black is no \
+             visible difference, yellow the most).\n\n";
+    for (scene, _) in noise {
+        text += &format!("![{scene}](strip-{scene}.png)\n\n");
     }
     text += "\n## GPU time per pass (ms)\n\n| scene | setting | passes |\n|---|---|---|\n";
     for r in rows.iter().filter(|r| !r.passes.is_empty()) {
@@ -311,6 +435,5 @@ fn write_markdown(rows: &[BenchRow], config: &BenchConfig, path: &Path) -> Resul
             r.passes.iter().map(|(name, ms)| format!("{} {ms:.2}", name.trim_start_matches("glowbrick_"))).collect();
         text += &format!("| {} | {} | {} |\n", r.scene, r.setting, passes.join(", "));
     }
-    text += "\n![error against frame time](plot.png)\n";
     std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
 }

@@ -1,99 +1,107 @@
-//! The bench plot: error (MAE) against frame time, one panel per scene, one colour per setting. Drawn directly
-//! into an image with the 5 x 7 font, so the report needs no plotting or font dependency.
+//! The bench's figures: the convergence curves (relMSE against cumulative time, log-log, one panel per scene,
+//! one line per method, the one-frame settings as crosses) as an SVG drawn with plotters, and the image strips.
 
-use super::{BenchRow, SETTINGS};
-use crate::world::font::glyph;
-use image::{Rgb, RgbImage};
+use super::BenchRow;
+use super::convergence::{CurvePoint, METHODS};
+use crate::image_io::{LinearImage, display_rgb8};
+use image::RgbImage;
+use plotters::prelude::*;
 use std::path::Path;
 
-const PANEL_W: u32 = 420;
-const PANEL_H: u32 = 300;
-const MARGIN: i32 = 56;
-const COLOURS: [[u8; 3]; 12] = [
-    [230, 90, 40],
-    [40, 120, 230],
-    [40, 170, 80],
-    [180, 60, 200],
-    [200, 170, 30],
-    [90, 90, 90],
-    [0, 180, 180],
-    [240, 120, 170],
-    [120, 70, 20],
-    [20, 40, 120],
-    [150, 200, 60],
-    [200, 30, 60],
-];
+const PANEL: (u32, u32) = (560, 400);
 
-fn put(img: &mut RgbImage, x: i32, y: i32, c: [u8; 3]) {
-    if x >= 0 && y >= 0 && (x as u32) < img.width() && (y as u32) < img.height() {
-        img.put_pixel(x as u32, y as u32, Rgb(c));
-    }
-}
-
-fn rect(img: &mut RgbImage, x0: i32, y0: i32, x1: i32, y1: i32, c: [u8; 3]) {
-    for y in y0..=y1 {
-        for x in x0..=x1 {
-            put(img, x, y, c);
-        }
-    }
-}
-
-/// Writes `text` with its top left at (x, y), `scale` pixels per font pixel.
-fn text(img: &mut RgbImage, x: i32, y: i32, scale: i32, s: &str, c: [u8; 3]) {
-    for (i, ch) in s.chars().enumerate() {
-        let rows = glyph(ch).unwrap_or([0b11111; 7]);
-        for (r, bits) in rows.iter().enumerate() {
-            for col in 0..5 {
-                if bits & (0b10000 >> col) != 0 {
-                    let (px, py) = (x + (i as i32 * 6 + col) * scale, y + r as i32 * scale);
-                    rect(img, px, py, px + scale - 1, py + scale - 1, c);
-                }
-            }
-        }
-    }
-}
-
-/// Draws one panel per scene and saves the PNG.
-pub fn write_plot(rows: &[BenchRow], path: &Path) -> Result<(), String> {
+/// Writes `plot.svg`: a panel per scene (two per row).
+pub fn write_plot(rows: &[BenchRow], curves: &[CurvePoint], path: &Path) -> Result<(), String> {
     let mut scenes: Vec<&str> = Vec::new();
     for r in rows {
         if !scenes.contains(&r.scene.as_str()) {
             scenes.push(&r.scene);
         }
     }
-    let columns = scenes.len().clamp(1, 2) as u32;
-    let panel_rows = (scenes.len() as u32).div_ceil(columns).max(1);
-    let legend_h = 20 + 16 * SETTINGS.len() as u32;
-    let mut img = RgbImage::from_pixel(PANEL_W * columns, PANEL_H * panel_rows + legend_h, Rgb([255, 255, 255]));
-    for (i, scene) in scenes.iter().enumerate() {
-        let ox = (i as u32 % columns * PANEL_W) as i32;
-        let oy = (i as u32 / columns * PANEL_H) as i32;
-        let points: Vec<&BenchRow> = rows.iter().filter(|r| r.scene == *scene).collect();
-        let max_x = points.iter().map(|r| r.frame_ms).fold(0.0, f64::max).max(1e-9) * 1.15;
-        let max_y = points.iter().map(|r| r.metrics.mae).fold(0.0, f64::max).max(1e-9) * 1.15;
-        let (x0, y0) = (ox + MARGIN, oy + PANEL_H as i32 - 40);
-        let (x1, y1) = (ox + PANEL_W as i32 - 16, oy + 30);
-        text(&mut img, ox + MARGIN, oy + 8, 2, scene, [0, 0, 0]);
-        rect(&mut img, x0, y1, x0, y0, [0, 0, 0]);
-        rect(&mut img, x0, y0, x1, y0, [0, 0, 0]);
-        text(&mut img, x0 - 4, y0 + 8, 1, "0", [0, 0, 0]);
-        text(&mut img, x1 - 60, y0 + 8, 1, &format!("{max_x:.2} MS"), [0, 0, 0]);
-        text(&mut img, (x0 + x1) / 2 - 30, y0 + 22, 1, "FRAME TIME", [0, 0, 0]);
-        text(&mut img, ox + 4, y1, 1, &format!("{max_y:.4}"), [0, 0, 0]);
-        text(&mut img, ox + 4, y1 + 12, 1, "MAE", [0, 0, 0]);
-        for r in points {
-            let colour =
-                SETTINGS.iter().position(|s| s.name == r.setting).map_or([0, 0, 0], |k| COLOURS[k % COLOURS.len()]);
-            let px = x0 + ((r.frame_ms / max_x) * (x1 - x0) as f64) as i32;
-            let py = y0 - ((r.metrics.mae / max_y) * (y0 - y1) as f64) as i32;
-            rect(&mut img, px - 4, py - 4, px + 4, py + 4, colour);
+    let columns = scenes.len().clamp(1, 2);
+    let panel_rows = scenes.len().div_ceil(columns).max(1);
+    let size = (PANEL.0 * columns as u32, PANEL.1 * panel_rows as u32);
+    let root = SVGBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let panels = root.split_evenly((panel_rows, columns));
+    for (panel, scene) in panels.iter().zip(&scenes) {
+        draw_panel(panel, scene, rows, curves).map_err(|e| format!("{}: cannot draw the plot: {e}", path.display()))?;
+    }
+    root.present().map_err(|e| format!("{}: cannot write the plot: {e}", path.display()))
+}
+
+fn draw_panel<DB: DrawingBackend>(
+    panel: &DrawingArea<DB, plotters::coord::Shift>,
+    scene: &str,
+    rows: &[BenchRow],
+    curves: &[CurvePoint],
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let singles: Vec<&BenchRow> =
+        rows.iter().filter(|r| r.scene == scene && r.frames == 1 && r.metrics.relmse > 0.0).collect();
+    let points: Vec<&CurvePoint> = curves.iter().filter(|p| p.scene == scene && p.metrics.relmse > 0.0).collect();
+    let xs = singles.iter().map(|r| r.frame_ms).chain(points.iter().map(|p| p.ms));
+    let ys = singles.iter().map(|r| r.metrics.relmse).chain(points.iter().map(|p| p.metrics.relmse));
+    let (x_lo, x_hi) = xs.fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
+    let (y_lo, y_hi) = ys.fold((f64::MAX, f64::MIN), |(lo, hi), y| (lo.min(y), hi.max(y)));
+    if x_lo > x_hi || y_lo > y_hi {
+        return Ok(());
+    }
+    let mut chart = ChartBuilder::on(panel)
+        .caption(scene, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d((x_lo * 0.7..x_hi * 1.4).log_scale(), (y_lo * 0.7..y_hi * 1.4).log_scale())?;
+    chart
+        .configure_mesh()
+        .x_desc("cumulative frame time (ms)")
+        .y_desc("relMSE")
+        .y_label_formatter(&|y| format!("{y:.0e}"))
+        .draw()?;
+    for (i, method) in METHODS.iter().enumerate() {
+        let colour = Palette99::pick(i).to_rgba();
+        let line: Vec<(f64, f64)> =
+            points.iter().filter(|p| p.method == method.name).map(|p| (p.ms, p.metrics.relmse)).collect();
+        if line.is_empty() {
+            continue;
+        }
+        chart
+            .draw_series(LineSeries::new(line.clone(), colour.stroke_width(2)))?
+            .label(method.name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+        chart.draw_series(line.into_iter().map(|p| Circle::new(p, 3, colour.filled())))?;
+    }
+    chart
+        .draw_series(singles.iter().map(|r| Cross::new((r.frame_ms, r.metrics.relmse), 4, BLACK.stroke_width(1))))?
+        .label("one frame, each setting")
+        .legend(|(x, y)| Cross::new((x + 10, y), 4, BLACK.stroke_width(1)));
+    chart.configure_series_labels().border_style(BLACK).background_style(WHITE.mix(0.85)).draw()?;
+    Ok(())
+}
+
+/// Writes images side by side as one PNG: linear images tonemapped as `write_image` does, except the last
+/// (a false-colour map, already display values).
+pub fn write_strip(images: &[LinearImage], path: &Path) -> Result<(), String> {
+    let (w, h) = (images[0].width, images[0].height);
+    let gap = 4;
+    let mut strip = RgbImage::from_pixel((w + gap) * images.len() as u32 - gap, h, image::Rgb([255, 255, 255]));
+    for (i, picture) in images.iter().enumerate() {
+        let bytes = if i + 1 == images.len() {
+            // The FLIP map holds linear values of its sRGB colours: encode them back.
+            picture
+                .pixels
+                .iter()
+                .flat_map(|p| {
+                    [0, 1, 2].map(|c| (crate::colour::linear_to_srgb(p[c].clamp(0.0, 1.0)) * 255.0 + 0.5) as u8)
+                })
+                .collect()
+        } else {
+            display_rgb8(picture)
+        };
+        for (k, rgb) in bytes.chunks_exact(3).enumerate() {
+            let (x, y) = (k as u32 % w, k as u32 / w);
+            strip.put_pixel(i as u32 * (w + gap) + x, y, image::Rgb([rgb[0], rgb[1], rgb[2]]));
         }
     }
-    let ly = (PANEL_H * panel_rows) as i32 + 8;
-    for (k, s) in SETTINGS.iter().enumerate() {
-        let y = ly + 16 * k as i32;
-        rect(&mut img, 16, y, 26, y + 10, COLOURS[k % COLOURS.len()]);
-        text(&mut img, 34, y + 2, 1, s.name, [0, 0, 0]);
-    }
-    img.save(path).map_err(|e| format!("{}: cannot write plot: {e}", path.display()))
+    strip.save(path).map_err(|e| format!("{}: cannot write image strip: {e}", path.display()))
 }

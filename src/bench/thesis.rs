@@ -112,6 +112,7 @@ pub fn run_thesis_bench(scale: f32, reference_spp: u32, out: &Path) -> Result<St
         warmup_frames: 0,
         timed_frames: 0,
         reference_spp,
+        curve_frames: 0,
         camera: None,
         only: Vec::new(),
     };

@@ -1,10 +1,12 @@
-//! `glowbrick compare`: the error of one image against a reference, optionally as a false-colour image.
+//! `glowbrick compare`: the error of one image against a reference (MAE, MSE, relMSE, bias and FLIP), optionally
+//! as a false-colour image of the absolute error or the FLIP map.
 
 use super::check_output;
 use crate::image_io::{read_image, write_png_plain};
+use crate::reference::flip::{Encoding, flip};
 use crate::reference::metrics;
-use clap::Args;
-use std::path::PathBuf;
+use clap::{Args, ValueEnum};
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct CompareArgs {
@@ -13,19 +15,41 @@ pub struct CompareArgs {
     /// Also write a false-colour error image (PNG).
     #[arg(long)]
     diff: Option<PathBuf>,
+    /// What `--diff` shows: the absolute error (white at 4x the MAE) or the FLIP map (magma).
+    #[arg(long, value_enum, default_value_t = DiffKind::Absolute)]
+    diff_kind: DiffKind,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum DiffKind {
+    Absolute,
+    Flip,
+}
+
+/// A PNG holds display values; anything else (EXR) linear radiance.
+fn encoding_of(path: &Path) -> Encoding {
+    let png = path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if png { Encoding::Display } else { Encoding::Linear }
 }
 
 impl CompareArgs {
     pub fn run(self) -> Result<(), String> {
+        if let Some(path) = &self.diff {
+            check_output(path, &["png"])?;
+        }
         let a = read_image(&self.image)?;
         let b = read_image(&self.reference)?;
         let m = metrics::compare(&a, &b)?;
+        let flip = flip(&a, encoding_of(&self.image), &b, encoding_of(&self.reference))?;
         if let Some(path) = self.diff {
-            check_output(&path, &["png"])?;
-            // White at four times the mean absolute error: the worst pixels stand out.
-            write_png_plain(&metrics::error_image(&a, &b, (4.0 * m.mae).max(1e-6) as f32), &path)?;
+            let picture = match self.diff_kind {
+                // White at four times the mean absolute error: the worst pixels stand out.
+                DiffKind::Absolute => metrics::error_image(&a, &b, (4.0 * m.mae).max(1e-6) as f32),
+                DiffKind::Flip => flip.map,
+            };
+            write_png_plain(&picture, &path)?;
         }
-        println!("{m}");
+        println!("{m} flip={:.6}", flip.mean);
         Ok(())
     }
 }

@@ -22,6 +22,9 @@ pub struct ReferenceArgs {
     seconds: Option<f64>,
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Lights resampled per shadow ray (1: plain next-event estimation by power).
+    #[arg(long, default_value_t = 16)]
+    candidates: u32,
     /// Output image (.exr keeps linear values).
     #[arg(long)]
     out: PathBuf,
@@ -40,19 +43,23 @@ impl ReferenceArgs {
             spp: self.spp,
             bounces: self.bounces,
             seed: self.seed,
+            candidates: self.candidates,
             time_budget: self.seconds.map(std::time::Duration::from_secs_f64),
+            show_progress: true,
         };
         let result = render_reference(&world, &view, &options)?;
         write_image(&result.image, &self.out)?;
         println!(
-            "wrote {} ({}x{}, view '{}', {} spp, {} bounces, {:.1} s)",
+            "wrote {} ({}x{}, view '{}', {} spp, {} bounces, {} candidates, {:.1} s, {:.2} Mrays/s)",
             self.out.display(),
             self.shot.width,
             self.shot.height,
             view.name,
             result.spp,
             self.bounces,
-            result.elapsed.as_secs_f64()
+            self.candidates,
+            result.elapsed.as_secs_f64(),
+            result.rays_per_second() / 1e6
         );
         Ok(())
     }

@@ -1,19 +1,26 @@
 //! The CPU ground truth: the same world, traversal and light pool as the GPU, integrated with many samples.
 //!
 //! - Primary rays go through pixel centres, exactly as `shaders/primary.wgsl` casts them, so reference and GPU
-//!   images agree on geometry pixel for pixel and errors measure lighting only.
-//! - Direct light: next-event estimation over the light pool (power alias table), a uniform point on a cube
-//!   face that sees the shading point, one shadow ray: visible when the first hit lies in the light's cube.
+//!   images agree on geometry pixel for pixel and errors measure lighting only. The camera hit is traced once per
+//!   pixel, not once per sample.
+//! - Direct light: resampled importance sampling (Talbot 2005) over `candidates` lights drawn by power (alias
+//!   table), each at a uniform point on a cube face that sees the shading point, with the unshadowed contribution
+//!   as the target; one shadow ray for the chosen one (visible when the first hit lies in the light's cube).
+//!   Unbiased because the target is non-zero wherever the shadowed contribution is; on 10^3-10^6 lights it spends
+//!   the shadow ray on a light that is near and facing, not on one picked by power alone.
 //! - Indirect light (`bounces` > 0): cosine-sampled diffuse bounces with next-event estimation at every vertex;
 //!   emission is counted only at the camera hit and through next-event estimation, never twice.
 //! - Lighting is emitters only (the thesis' convention: no sky); a primary miss is black.
 //! - Deterministic: each (pixel, sample) has its own random stream, whatever the thread schedule (rayon rows).
 
+pub mod flip;
 pub mod metrics;
 pub mod sampling;
 
+use crate::colour::luminance;
 use crate::image_io::LinearImage;
-use crate::lights::{AliasTable, LightPool};
+use crate::lights::{AliasTable, Light, LightPool};
+use crate::progress::Progress;
 use crate::world::traversal::RAY_OFFSET;
 use crate::world::{CameraView, Ray, VoxelWorld, trace};
 use crate::world::{camera_ray, view_transform, world_from_clip};
@@ -32,13 +39,26 @@ pub struct ReferenceOptions {
     /// Diffuse bounces after the camera hit (0 = direct light only).
     pub bounces: u32,
     pub seed: u64,
+    /// Lights resampled per shadow ray (1 = plain next-event estimation by power).
+    pub candidates: u32,
     /// Stop early (after a whole batch of samples) when this much time has passed.
     pub time_budget: Option<Duration>,
+    /// Show a progress bar (or periodic lines) on stderr.
+    pub show_progress: bool,
 }
 
 impl Default for ReferenceOptions {
     fn default() -> Self {
-        ReferenceOptions { width: 320, height: 180, spp: 256, bounces: 0, seed: 1, time_budget: None }
+        ReferenceOptions {
+            width: 320,
+            height: 180,
+            spp: 256,
+            bounces: 0,
+            seed: 1,
+            candidates: 16,
+            time_budget: None,
+            show_progress: false,
+        }
     }
 }
 
@@ -48,6 +68,33 @@ pub struct Reference {
     pub image: LinearImage,
     pub spp: u32,
     pub elapsed: Duration,
+    /// Rays traced (camera, shadow and bounce rays), for the throughput the bench reports.
+    pub rays: u64,
+}
+
+impl Reference {
+    /// Rays traced per second of wall time.
+    pub fn rays_per_second(&self) -> f64 {
+        self.rays as f64 / self.elapsed.as_secs_f64().max(1e-9)
+    }
+}
+
+/// What the camera ray hit: traced once per pixel and shared by all of its samples.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceHit {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub albedo: [f32; 3],
+    pub emission: Vec3,
+}
+
+/// A light candidate for resampling: where on which light, and its unshadowed contribution (without albedo / pi).
+struct Candidate<'l> {
+    light: &'l Light,
+    point: Vec3,
+    distance: f32,
+    unshadowed: Vec3,
+    target: f32,
 }
 
 /// What the integrator needs besides the world: the lights and their sampling table.
@@ -58,55 +105,107 @@ pub struct Scene<'a> {
 }
 
 impl Scene<'_> {
-    /// One next-event-estimation sample of the radiance reflected towards the viewer at `p` (face normal `n`,
-    /// diffuse `albedo`): Le * (albedo / pi) * cos * cos_l / d^2 / pdf, or zero when occluded.
-    pub fn direct_sample(&self, p: Vec3, n: Vec3, albedo: [f32; 3], rng: &mut Pcg) -> Vec3 {
-        let Some((slot, pick_pdf)) = self.alias.sample(rng.next_f32(), rng.next_f32()) else { return Vec3::ZERO };
-        let Some((Some(light), _)) = self.pool.slot(slot) else { return Vec3::ZERO };
-        let Some(point) = sample_light_point(light, p, rng.next_f32(), rng.next_f32(), rng.next_f32()) else {
+    /// One estimate of the direct light reflected towards the viewer at `p` (face normal `n`, diffuse `albedo`),
+    /// by resampling `candidates` power-drawn lights and tracing one shadow ray. `rays` counts the shadow ray.
+    pub fn direct_sample(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        albedo: [f32; 3],
+        candidates: u32,
+        rng: &mut Pcg,
+        rays: &mut u64,
+    ) -> Vec3 {
+        let candidates = candidates.max(1);
+        let mut chosen: Option<Candidate> = None;
+        let mut weight_sum = 0.0f32;
+        for _ in 0..candidates {
+            // Every draw takes the same numbers whatever happens, so streams stay aligned across settings.
+            let (r_column, u_pick, u_face, u, v) =
+                (rng.next_u32(), rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let u_choose = rng.next_f32();
+            let Some((candidate, pdf)) = self.candidate(p, n, r_column, u_pick, u_face, u, v) else { continue };
+            let weight = candidate.target / pdf;
+            if !(weight.is_finite() && weight > 0.0) {
+                continue;
+            }
+            weight_sum += weight;
+            if u_choose * weight_sum < weight {
+                chosen = Some(candidate);
+            }
+        }
+        let Some(chosen) = chosen else { return Vec3::ZERO };
+        *rays += 1;
+        let origin = p + n * RAY_OFFSET;
+        let hit = trace(&self.world.grid, &Ray::new(origin, chosen.point - origin), chosen.distance + 1.0);
+        if !hit.is_some_and(|h| light_contains(chosen.light, h.voxel)) {
             return Vec3::ZERO;
-        };
+        }
+        // f / p_hat x (sum of weights / M): the RIS estimator's unbiased contribution weight.
+        let contribution_weight = weight_sum / (candidates as f32 * chosen.target);
+        Vec3::from(albedo) * chosen.unshadowed * (contribution_weight / std::f32::consts::PI)
+    }
+
+    /// One power-drawn light at a uniform point of a face that sees `p`, with its pdf (per unit area) and its
+    /// unshadowed contribution; `None` when it cannot light `p`.
+    fn candidate(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        r_column: u32,
+        u_pick: f32,
+        u_face: f32,
+        u: f32,
+        v: f32,
+    ) -> Option<(Candidate<'_>, f32)> {
+        let (slot, pick_pdf) = self.alias.sample(r_column, u_pick)?;
+        let (Some(light), _) = self.pool.slot(slot)? else { return None };
+        let point = sample_light_point(light, p, u_face, u, v)?;
         let to_light = point.position - p;
         let d2 = to_light.length_squared();
         if d2 <= 1e-12 {
-            return Vec3::ZERO;
+            return None;
         }
-        let d = d2.sqrt();
-        let wi = to_light / d;
-        let cos_surface = n.dot(wi);
-        let cos_light = -point.normal.dot(wi);
+        let distance = d2.sqrt();
+        let wi = to_light / distance;
+        let (cos_surface, cos_light) = (n.dot(wi), -point.normal.dot(wi));
         if cos_surface <= 0.0 || cos_light <= 0.0 {
-            return Vec3::ZERO;
+            return None;
         }
-        let origin = p + n * RAY_OFFSET;
-        let hit = trace(&self.world.grid, &Ray::new(origin, point.position - origin), d + 1.0);
-        if !hit.is_some_and(|h| light_contains(light, h.voxel)) {
-            return Vec3::ZERO;
-        }
-        let pdf = pick_pdf * point.pdf_area;
-        let geometry = cos_surface * cos_light / d2 / pdf.max(1e-30);
-        Vec3::from(albedo) * Vec3::from(light.radiance) * (geometry / std::f32::consts::PI)
+        let unshadowed = Vec3::from(light.radiance) * (cos_surface * cos_light / d2);
+        let target = luminance(unshadowed.to_array());
+        let candidate = Candidate { light, point: point.position, distance, unshadowed, target };
+        Some((candidate, pick_pdf * point.pdf_area))
     }
 
-    /// One path sample of the radiance arriving along `ray`.
-    pub fn path_sample(&self, ray: Ray, bounces: u32, rng: &mut Pcg) -> Vec3 {
-        let Some(hit) = trace(&self.world.grid, &ray, f32::INFINITY) else { return Vec3::ZERO };
-        let Some(material) = self.world.palette.get(hit.material) else { return Vec3::ZERO };
-        let mut radiance = Vec3::from(material.radiance());
+    /// What the ray hits, or `None` for a miss (black: no sky in the reference).
+    pub fn surface(&self, ray: &Ray) -> Option<SurfaceHit> {
+        let hit = trace(&self.world.grid, ray, f32::INFINITY)?;
+        let material = self.world.palette.get(hit.material)?;
+        Some(SurfaceHit {
+            position: ray.at(hit.distance),
+            normal: hit.face.normal().as_vec3(),
+            albedo: material.albedo,
+            emission: Vec3::from(material.radiance()),
+        })
+    }
+
+    /// One path sample of the radiance leaving the camera hit `first` towards the camera.
+    pub fn path_sample(&self, first: &SurfaceHit, options: &ReferenceOptions, rng: &mut Pcg, rays: &mut u64) -> Vec3 {
+        let mut radiance = first.emission;
         let mut throughput = Vec3::ONE;
-        let (mut p, mut n, mut albedo) = (ray.at(hit.distance), hit.face.normal().as_vec3(), material.albedo);
-        for bounce in 0..=bounces {
-            radiance += throughput * self.direct_sample(p, n, albedo, rng);
-            if bounce == bounces {
+        let (mut p, mut n, mut albedo) = (first.position, first.normal, first.albedo);
+        for bounce in 0..=options.bounces {
+            radiance += throughput * self.direct_sample(p, n, albedo, options.candidates, rng, rays);
+            if bounce == options.bounces {
                 break;
             }
             // Cosine sampling cancels cos / pi against the pdf: the throughput picks up the albedo.
             throughput *= Vec3::from(albedo);
             let dir = cosine_direction(n, rng.next_f32(), rng.next_f32());
-            let next = Ray::new(p + n * RAY_OFFSET, dir);
-            let Some(h) = trace(&self.world.grid, &next, f32::INFINITY) else { break };
-            let Some(m) = self.world.palette.get(h.material) else { break };
-            (p, n, albedo) = (next.at(h.distance), h.face.normal().as_vec3(), m.albedo);
+            *rays += 1;
+            let Some(next) = self.surface(&Ray::new(p + n * RAY_OFFSET, dir)) else { break };
+            (p, n, albedo) = (next.position, next.normal, next.albedo);
         }
         radiance
     }
@@ -125,6 +224,9 @@ pub fn render_reference(
     if options.spp == 0 || options.bounces > 64 {
         return Err(format!("spp {} must be at least 1 and bounces {} at most 64", options.spp, options.bounces));
     }
+    if !(1..=4096).contains(&options.candidates) {
+        return Err(format!("candidates {} must be within 1..=4096", options.candidates));
+    }
     // A zero field of view or a zero direction would give a silently black image.
     if let Some(problem) = view.problem() {
         return Err(problem);
@@ -135,26 +237,44 @@ pub fn render_reference(
     let scene = Scene { world, pool: &pool, alias: &alias };
     let transform = view_transform(view);
     let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
+    // Camera hits once per pixel: every sample of a pixel shades the same point.
+    let hits: Vec<Option<SurfaceHit>> = (0..w * h)
+        .into_par_iter()
+        .map(|i| scene.surface(&camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h)))
+        .collect();
+    let mut rays = (w * h) as u64;
     let mut sum = vec![Vec3::ZERO; (w * h) as usize];
     let mut done = 0u32;
+    // Rows x samples; a time budget ends it early (the bar then stops short).
+    let total = options.spp as u64 * h as u64;
+    let progress = if options.show_progress { Progress::new("reference", total) } else { Progress::hidden(total) };
     // Batches of samples, so a time budget can stop between them.
     while done < options.spp {
         let batch = (options.spp - done).min(16.max(done / 4));
-        sum.par_chunks_mut(w as usize).enumerate().for_each(|(y, row)| {
-            for (x, acc) in row.iter_mut().enumerate() {
-                let pixel = y as u64 * w as u64 + x as u64;
-                let ray = camera_ray(m, transform.translation, UVec2::new(x as u32, y as u32), w, h);
-                for s in done..done + batch {
-                    let mut rng = Pcg::new(options.seed, pixel * 0x1_0000_0000 + s as u64);
-                    *acc += scene.path_sample(ray, options.bounces, &mut rng);
+        rays += sum
+            .par_chunks_mut(w as usize)
+            .zip(hits.par_chunks(w as usize))
+            .enumerate()
+            .map(|(y, (row, row_hits))| {
+                let mut row_rays = 0u64;
+                for (x, (acc, hit)) in row.iter_mut().zip(row_hits).enumerate() {
+                    let Some(hit) = hit else { continue };
+                    let pixel = y as u64 * w as u64 + x as u64;
+                    for s in done..done + batch {
+                        let mut rng = Pcg::new(options.seed, pixel * 0x1_0000_0000 + s as u64);
+                        *acc += scene.path_sample(hit, options, &mut rng, &mut row_rays);
+                    }
                 }
-            }
-        });
+                progress.advance(batch as u64);
+                row_rays
+            })
+            .sum::<u64>();
         done += batch;
         if options.time_budget.is_some_and(|budget| start.elapsed() >= budget) {
             break;
         }
     }
+    progress.finish();
     let pixels = sum.iter().map(|s| (*s / done as f32).extend(1.0).to_array()).collect();
-    Ok(Reference { image: LinearImage { width: w, height: h, pixels }, spp: done, elapsed: start.elapsed() })
+    Ok(Reference { image: LinearImage { width: w, height: h, pixels }, spp: done, elapsed: start.elapsed(), rays })
 }

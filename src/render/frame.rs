@@ -12,8 +12,8 @@
 
 use super::gi::{self, GiCache};
 use super::gpu_types::{
-    ACCUMULATION_TEXEL_BYTES, FrameParams, GBUFFER_TEXEL_BYTES, RESERVOIR_BYTES, RESTIR_POINT, RESTIR_SPATIAL,
-    RESTIR_TEMPORAL, RESTIR_UNBIASED, shader_defs,
+    ACCUMULATION_TEXEL_BYTES, FrameParams, GBUFFER_TEXEL_BYTES, RESERVOIR_BYTES, RESTIR_ONE_RAY, RESTIR_POINT,
+    RESTIR_SPATIAL, RESTIR_TEMPORAL, RESTIR_UNBIASED, shader_defs,
 };
 use super::scene::lights::{GpuLights, LightsLayout};
 use super::scene::objects::GpuObjects;
@@ -82,7 +82,8 @@ pub fn frame_params(settings: &RenderSettings, highlight: &Highlight, frame: u32
         restir_flags: flag(restir.temporal, RESTIR_TEMPORAL)
             | flag(restir.spatial, RESTIR_SPATIAL)
             | flag(restir.sample == LightSample::Point, RESTIR_POINT)
-            | flag(restir.reuse == Reuse::Unbiased, RESTIR_UNBIASED),
+            | flag(restir.reuse == Reuse::Unbiased, RESTIR_UNBIASED)
+            | flag(restir.reuse == Reuse::OneRay, RESTIR_ONE_RAY),
     }
 }
 
@@ -467,7 +468,9 @@ mod tests {
         };
         let default = settings(&[]);
         let params = frame_params(&default, &Highlight::default(), 0);
-        assert_eq!((scene_lighting(&default, 3).power_pick, params.restir_flags), (1, 1 | 2));
+        // Default: temporal, spatial, one ray per neighbour.
+        assert_eq!((scene_lighting(&default, 3).power_pick, params.restir_flags), (1, 1 | 2 | 16));
+        assert_eq!(frame_params(&settings(&["reuse=biased"]), &Highlight::default(), 0).restir_flags, 1 | 2);
         let changed = settings(&["pick=uniform", "sample=point", "reuse=unbiased", "temporal=off"]);
         let params = frame_params(&changed, &Highlight::default(), 0);
         assert_eq!((scene_lighting(&changed, 3).power_pick, params.restir_flags), (0, 2 | 4 | 8));

@@ -227,6 +227,7 @@ pub const RESTIR_TEMPORAL: u32 = 1;
 pub const RESTIR_SPATIAL: u32 = 2;
 pub const RESTIR_POINT: u32 = 4;
 pub const RESTIR_UNBIASED: u32 = 8;
+pub const RESTIR_ONE_RAY: u32 = 16;
 
 /// `GiParams::flags` bits.
 pub const GI_FILTER: u32 = 1;
@@ -283,6 +284,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("RESTIR_SPATIAL", U32(RESTIR_SPATIAL)),
         ("RESTIR_POINT", U32(RESTIR_POINT)),
         ("RESTIR_UNBIASED", U32(RESTIR_UNBIASED)),
+        ("RESTIR_ONE_RAY", U32(RESTIR_ONE_RAY)),
         ("MAX_TAPS", U32(MAX_TAPS)),
         ("GI_FILTER", U32(GI_FILTER)),
         ("GI_BOUNCES", U32(GI_BOUNCES)),

@@ -121,18 +121,25 @@ impl Named for LightSample {
     const NAMES: &'static [(&'static str, LightSample)] = &[("area", LightSample::Area), ("point", LightSample::Point)];
 }
 
-/// How ReSTIR normalises reused reservoirs.
+/// How ReSTIR weighs reused reservoirs (pairwise MIS, `shaders/restir/common.wgsl`): which visibility rays the
+/// MIS weights pay for.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Reuse {
-    /// The thesis' 1/M.
-    #[default]
+    /// No rays: a neighbour's weight for this pixel's sample ignores whether the neighbour sees it (darker near
+    /// shadow edges: -6% to -12% on the thesis' views). The thesis' protocol (`assets/settings/thesis.ron`).
     Biased,
-    /// 1/Z, with a visibility ray per neighbour.
+    /// One ray per neighbour: whether the neighbour sees this pixel's sample. Unbiased for a static view, and
+    /// about 3% dearer than `Biased` on the thesis' letters (docs/bench/restir.md).
+    #[default]
+    OneRay,
+    /// Two rays per neighbour: also whether this pixel sees the neighbour's sample, so an occluded one is never
+    /// picked (less noise than `OneRay`).
     Unbiased,
 }
 
 impl Named for Reuse {
-    const NAMES: &'static [(&'static str, Reuse)] = &[("biased", Reuse::Biased), ("unbiased", Reuse::Unbiased)];
+    const NAMES: &'static [(&'static str, Reuse)] =
+        &[("biased", Reuse::Biased), ("one-ray", Reuse::OneRay), ("unbiased", Reuse::Unbiased)];
 }
 
 /// Voxel ReSTIR's knobs (seed 000's defaults).
@@ -159,7 +166,7 @@ impl Default for RestirSettings {
             temporal: true,
             spatial: true,
             sample: LightSample::Area,
-            reuse: Reuse::Biased,
+            reuse: Reuse::OneRay,
         }
     }
 }

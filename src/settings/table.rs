@@ -289,7 +289,8 @@ pub static SETTINGS: &[Setting] = &[
     Setting {
         key: "reuse",
         section: Section::Restir,
-        about: "Normalisation of reuse: the thesis' biased 1/M, or 1/Z with a visibility ray per neighbour.",
+        about: "Visibility in the reuse weights: none (biased, darker at shadow edges), one ray per neighbour \
+                (unbiased for a still view) or two (unbiased, less noise).",
         field: &Choice { get: |s| s.restir.reuse, set: |s, v| s.restir.reuse = v },
     },
     Setting {

@@ -66,7 +66,7 @@ fn bad_settings_and_arguments_fail_cleanly() {
         ("radius=-1", "radius: -1 is out of range (valid: 0..100)"),
         ("radius=NaN", "radius: NaN is out of range (valid: 0..100)"),
         ("sample=sphere", "sample: 'sphere' is not one of area|point"),
-        ("reuse=maybe", "reuse: 'maybe' is not one of biased|unbiased"),
+        ("reuse=maybe", "reuse: 'maybe' is not one of biased|one-ray|unbiased"),
         ("lighting=path", "lighting: 'path' is not one of sun|nee|restir"),
     ] {
         let out = glowbrick(&["render", "--scene", "test-room", "--set", pair, "--out", "/tmp/x.png"]);
@@ -101,8 +101,28 @@ fn reference_and_compare_work_together() {
     let diff = dir.join("diff.png");
     let out = glowbrick(&["compare", exr.to_str().unwrap(), exr.to_str().unwrap(), "--diff", diff.to_str().unwrap()]);
     assert!(out.status.success(), "{}", text(&out.stderr));
-    assert_eq!(text(&out.stdout).trim(), "mae=0.000000 mse=0.000000 relmse=0.000000 bias=+0.000000");
+    assert_eq!(text(&out.stdout).trim(), "mae=0.000000 mse=0.000000 relmse=0.000000 bias=+0.000000 flip=0.000000");
     assert!(diff.is_file());
+    // The same reference as a PNG (display values, compared as they are): FLIP 0 against itself and against the
+    // EXR (tonemapped as the PNG was written); `--diff-kind flip` writes the FLIP map.
+    let png = dir.join("ref.png");
+    let args = ["reference", "--scene", "test-room", "--width", "16", "--height", "9", "--spp", "4", "--out"];
+    assert!(glowbrick(&[&args[..], &[png.to_str().unwrap()]].concat()).status.success());
+    for (a, b) in [(&png, &png), (&png, &exr)] {
+        let flip_map = dir.join("flip.png");
+        let out = glowbrick(&[
+            "compare",
+            a.to_str().unwrap(),
+            b.to_str().unwrap(),
+            "--diff",
+            flip_map.to_str().unwrap(),
+            "--diff-kind",
+            "flip",
+        ]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        assert!(text(&out.stdout).trim().ends_with(" flip=0.000000"), "{}", text(&out.stdout));
+        assert!(flip_map.is_file());
+    }
     // A corrupt or missing input is one clear error, not a number.
     let corrupt = dir.join("corrupt.exr");
     std::fs::write(&corrupt, b"not an image").unwrap();
@@ -128,6 +148,18 @@ fn reference_and_compare_work_together() {
     ]);
     let out = glowbrick(&["compare", exr.to_str().unwrap(), other.to_str().unwrap()]);
     assert!(text(&out.stderr).contains("differ in size: 16x9 against 8x9"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn flip_matches_nvidias_reference_implementation_on_a_shipped_pair() {
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/flip");
+    let (test, reference) = (data.join("test.png"), data.join("reference.png"));
+    let out = glowbrick(&["compare", test.to_str().unwrap(), reference.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    let flip: f64 = stdout.trim().rsplit("flip=").next().unwrap().parse().unwrap();
+    // flip-evaluator 1.7 (NVIDIA's Python package of the same C++ code) gives 0.1932898759841919 (README there).
+    assert!((flip - 0.193_289_876).abs() < 1e-5, "{stdout}");
 }
 
 /// An output folder that cannot be created: a bench sweep that got past the parser stops at once.

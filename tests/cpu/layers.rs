@@ -4,8 +4,9 @@
 use std::path::{Path, PathBuf};
 
 /// Each top-level module of `src/` and its layer, bottom (0) to top.
-const LAYERS: [(&str, u32); 16] = [
+const LAYERS: [(&str, u32); 17] = [
     ("colour", 0),
+    ("progress", 0),
     ("image_io", 0),
     ("world", 1),
     ("lights", 2),
@@ -24,7 +25,7 @@ const LAYERS: [(&str, u32); 16] = [
 ];
 
 /// Layers that must not depend on the GPU.
-const CPU_ONLY: [&str; 6] = ["colour", "image_io", "world", "lights", "dynamic", "reference"];
+const CPU_ONLY: [&str; 7] = ["colour", "progress", "image_io", "world", "lights", "dynamic", "reference"];
 const RENDER_CRATES: [&str; 4] = ["bevy::render", "bevy::core_pipeline", "bevy::shader", "bevy::camera"];
 
 fn layer(module: &str) -> Option<u32> {

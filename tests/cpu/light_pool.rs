@@ -114,12 +114,15 @@ fn aligned_emissive_brick_is_one_light_until_broken() {
 /// Deterministic uniform numbers in [0, 1) (SplitMix64).
 struct Rng(u64);
 impl Rng {
-    fn next(&mut self) -> f32 {
+    fn next_u32(&mut self) -> u32 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+        ((z ^ (z >> 31)) >> 32) as u32
+    }
+    fn next(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 / (1u64 << 24) as f32
     }
 }
 
@@ -142,7 +145,7 @@ fn check_alias(powers: &[f32]) {
     let mut counts = vec![0u64; powers.len()];
     let mut rng = Rng(powers.len() as u64);
     for _ in 0..draws {
-        let (slot, pdf) = table.sample(rng.next(), rng.next()).unwrap();
+        let (slot, pdf) = table.sample(rng.next_u32(), rng.next()).unwrap();
         let index = ((slot - 1) / 3) as usize;
         assert!((pdf as f64 - powers[index] as f64 / total).abs() <= 1e-6 * (pdf as f64).max(1e-30) + 1e-12);
         counts[index] += 1;
@@ -188,8 +191,8 @@ fn alias_table_falls_back_to_uniform() {
     assert!(table.uniform);
     let p = table.column_probabilities();
     assert!(p.iter().all(|&x| (x - 1.0 / 3.0).abs() < 1e-6), "{p:?}");
-    assert_eq!(table.sample(0.5, 0.99).map(|s| s.1), Some(1.0 / 3.0));
-    assert!(AliasTable::build(&[]).sample(0.5, 0.5).is_none());
+    assert_eq!(table.sample(1 << 31, 0.99).map(|s| s.1), Some(1.0 / 3.0));
+    assert!(AliasTable::build(&[]).sample(1 << 31, 0.5).is_none());
 }
 
 #[test]
@@ -237,4 +240,30 @@ fn light_upload_sends_changed_slots_only() {
     app.world_mut().write_message(EditRequest::player(Edit::Place { at: IVec3::new(14, 14, 1), material: STONE }));
     app.update();
     assert!(app.world().resource::<LightUpload>().is_empty());
+}
+
+#[test]
+fn every_column_gets_its_share_of_codes_at_a_million_lights_and_past_two_to_the_24() {
+    use glowbrick::lights::alias::column_of;
+    for n in [3u32, 1_000_003, (1 << 24) + 5, u32::MAX] {
+        // Column c owns the codes r with floor(r n / 2^32) = c: from ceil(c 2^32 / n). Every column's count is
+        // floor or ceil of 2^32 / n (a 24-bit float u gave 16 or 17 codes per column at 10^6, -4.4% / +1.6%).
+        let first = |c: u64| (c << 32).div_ceil(n as u64);
+        let (lo, hi) = ((1u64 << 32) / n as u64, (1u64 << 32).div_ceil(n as u64));
+        let columns: Vec<u64> = if n < 4096 {
+            (0..n as u64).collect()
+        } else {
+            (0..n as u64).step_by(9973).chain([n as u64 - 1]).collect()
+        };
+        for c in columns {
+            let count = first(c + 1) - first(c);
+            assert!(count == lo || count == hi, "n {n}, column {c}: {count} codes");
+            assert_eq!(column_of(first(c) as u32, n), c as u32, "n {n}: first code of column {c}");
+            if c > 0 {
+                assert_eq!(column_of((first(c) - 1) as u32, n), c as u32 - 1, "n {n}: code before column {c}");
+            }
+        }
+        assert_eq!(column_of(u32::MAX, n), n - 1, "the last column is reachable");
+        assert_eq!(column_of(0, n), 0);
+    }
 }

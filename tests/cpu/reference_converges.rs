@@ -35,25 +35,34 @@ fn one_emissive_brick_matches_the_analytic_form_factor() {
     // face sees the point, 39 voxels up. Four corner rectangles of 4 x 4.
     let p = Vec3::new(28.0, 1.0, 28.0);
     let samples = 400_000;
-    let mut rng = Pcg::new(7, 0);
-    let mut sum = Vec3::ZERO;
-    for _ in 0..samples {
-        sum += scene.direct_sample(p, Vec3::Y, [albedo; 3], &mut rng);
-    }
-    let estimate = sum / samples as f32;
     let form_factor = 4.0 * corner_form_factor(4.0, 4.0, 39.0);
-    for (c, le) in [4.0, 2.0, 1.0].into_iter().enumerate() {
-        // Lo = albedo / pi * E, E = pi * Le * F.
-        let exact = albedo as f64 * le * form_factor;
-        let err = (estimate[c] as f64 - exact).abs() / exact;
-        assert!(err < 0.01, "channel {c}: {} vs analytic {exact} ({:.3}% off)", estimate[c], err * 100.0);
+    // Plain next-event estimation (1 candidate) and resampling over 8: both unbiased.
+    for candidates in [1, 8] {
+        let mut rng = Pcg::new(7, 0);
+        let (mut sum, mut rays) = (Vec3::ZERO, 0u64);
+        for _ in 0..samples {
+            sum += scene.direct_sample(p, Vec3::Y, [albedo; 3], candidates, &mut rng, &mut rays);
+        }
+        assert_eq!(rays, samples, "one shadow ray per sample");
+        let estimate = sum / samples as f32;
+        for (c, le) in [4.0, 2.0, 1.0].into_iter().enumerate() {
+            // Lo = albedo / pi * E, E = pi * Le * F.
+            let exact = albedo as f64 * le * form_factor;
+            let err = (estimate[c] as f64 - exact).abs() / exact;
+            assert!(
+                err < 0.01,
+                "{candidates} candidates, channel {c}: {} vs analytic {exact} ({:.3}% off)",
+                estimate[c],
+                err * 100.0
+            );
+        }
     }
 }
 
 fn cornell_reference(spp: u32, seed: u64) -> LinearImage {
     let world = load_scene("cornell").unwrap();
     let view = world.view(Some("front")).unwrap().clone();
-    let options = ReferenceOptions { width: 32, height: 18, spp, bounces: 0, seed, time_budget: None };
+    let options = ReferenceOptions { width: 32, height: 18, spp, bounces: 0, seed, ..Default::default() };
     let result = render_reference(&world, &view, &options).unwrap();
     assert_eq!(result.spp, spp);
     result.image
@@ -73,6 +82,31 @@ fn error_falls_like_one_over_spp() {
     let bias = compare(&cornell_reference(1024, 2), &truth).unwrap().bias;
     let mean = compare(&truth, &LinearImage { pixels: vec![[0.0; 4]; 32 * 18], ..truth.clone() }).unwrap().bias;
     assert!(bias.abs() < 0.01 * mean, "bias {bias} of mean luminance {mean}");
+}
+
+fn lights_1k_reference(spp: u32, candidates: u32, seed: u64) -> LinearImage {
+    let world = load_scene("lights-1k").unwrap();
+    let view = world.view(None).unwrap().clone();
+    let options = ReferenceOptions { width: 24, height: 16, spp, bounces: 0, seed, candidates, ..Default::default() };
+    render_reference(&world, &view, &options).unwrap().image
+}
+
+#[test]
+fn resampling_many_lights_cuts_the_noise_and_keeps_the_mean() {
+    // 10^3 lights: one power-drawn light per shadow ray mostly picks a far one; 16 resampled candidates pick a
+    // near, facing one for the same single shadow ray.
+    let truth = lights_1k_reference(2048, 16, 99);
+    let plain = compare(&lights_1k_reference(64, 1, 1), &truth).unwrap();
+    let resampled = compare(&lights_1k_reference(64, 16, 2), &truth).unwrap();
+    let black = LinearImage { pixels: vec![[0.0; 4]; 24 * 16], ..truth.clone() };
+    let mean = compare(&truth, &black).unwrap().bias;
+    assert!(mean > 0.0);
+    // Measured 6.3x lower; 3x fails resampling that does not resample (1x).
+    assert!(resampled.mse * 3.0 < plain.mse, "MSE plain {:.3e}, resampled {:.3e}", plain.mse, resampled.mse);
+    // Both unbiased: means within a few percent of the truth at 64 spp.
+    for (name, m) in [("plain", plain), ("resampled", resampled)] {
+        assert!(m.bias.abs() < 0.05 * mean, "{name}: bias {} of mean {mean}", m.bias);
+    }
 }
 
 #[test]

@@ -37,7 +37,7 @@ fn check_with(name: &str, world: VoxelWorld, view: &CameraView, bound: f64, extr
     assert_eq!(bad, 0, "{name}: non-finite pixels");
     // A million lights make the CPU estimate noisy too (512 spp: 1.5% from a 4096-spp one): more samples there.
     let spp = if name.contains("10^6") { 2048 } else { 512 };
-    let options = ReferenceOptions { width: W, height: H, spp, bounces: 0, seed: 3, time_budget: None };
+    let options = ReferenceOptions { width: W, height: H, spp, bounces: 0, seed: 3, ..Default::default() };
     let cpu = render_reference(&world, view, &options).unwrap().image;
     assert_eq!(cpu.non_finite_pixels(), 0, "{name}: non-finite CPU pixels");
     let (g, c) = (gpu.mean_luminance(), cpu.mean_luminance());

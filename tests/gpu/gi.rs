@@ -44,7 +44,7 @@ fn converged(renderer: &mut HeadlessRenderer, warm: u32, frames: u32) -> LinearI
 }
 
 fn reference(world: &VoxelWorld, view: &CameraView, bounces: u32, spp: u32) -> LinearImage {
-    let options = ReferenceOptions { width: W, height: H, spp, bounces, seed: 17, time_budget: None };
+    let options = ReferenceOptions { width: W, height: H, spp, bounces, seed: 17, ..Default::default() };
     render_reference(world, view, &options).unwrap().image
 }
 

@@ -25,9 +25,13 @@ const W: u32 = 96;
 const H: u32 = 64;
 
 fn cpu(world: &VoxelWorld, view: &CameraView, spp: u32, seed: u64) -> LinearImage {
-    render_reference(world, view, &ReferenceOptions { width: W, height: H, spp, bounces: 0, seed, time_budget: None })
-        .unwrap()
-        .image
+    render_reference(
+        world,
+        view,
+        &ReferenceOptions { width: W, height: H, spp, bounces: 0, seed, ..Default::default() },
+    )
+    .unwrap()
+    .image
 }
 
 fn check_scene(name: &str, view_name: &str) {

@@ -12,6 +12,7 @@
 //! thesis' camera views with it, so its letters read the right way round and its views see what the thesis shows.
 
 use super::BrickBuilder;
+use crate::progress::Progress;
 use crate::world::format::LoadError;
 use crate::world::grid::{BRICK_SIZE, MAX_WORLD_EDGE};
 use crate::world::{CameraView, Material, Palette, VoxelWorld};
@@ -124,6 +125,8 @@ pub fn load_vx(path: &Path) -> Result<VoxelWorld, LoadError> {
     let mut builder = BrickBuilder::new();
     let (mut pos_buf, mut val_buf) = (vec![0u8; 4 << 16], vec![0u8; 2 << 16]);
     let mut done = 0u32;
+    // The thesis' scenes hold tens of millions of entries (seconds): show how far the import is.
+    let progress = (n >= 1 << 22).then(|| Progress::new("import", n as u64));
     while done < n {
         let count = (n - done).min(1 << 16) as usize;
         positions
@@ -166,6 +169,12 @@ pub fn load_vx(path: &Path) -> Result<VoxelWorld, LoadError> {
             builder.set(p, id);
         }
         done += count as u32;
+        if let Some(progress) = &progress {
+            progress.advance(count as u64);
+        }
+    }
+    if let Some(progress) = progress {
+        progress.finish();
     }
     builder.finish(&mut world);
     Ok(world)

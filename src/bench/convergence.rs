@@ -1,0 +1,132 @@
+//! Convergence: the error of a static camera's accumulated image after 1, 2, 4, ... N frames, per method, each
+//! point at its cumulative frame time (frames x the method's measured frame time). The equal-time ratios are read
+//! off these curves: each method's error at the time NEE took for its last point, and the time each method needs
+//! to reach NEE's last error (log-log interpolation between the two points around it).
+
+use super::{BenchConfig, EQUAL_TIME_TO};
+use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::image_io::LinearImage;
+use crate::reference::flip::{Encoding, flip};
+use crate::reference::metrics::{Metrics, compare};
+use crate::settings::RenderSettings;
+use crate::world::{CameraView, VoxelWorld};
+
+/// A method drawn as a curve: its bench setting (whose frame time it uses) and its render pairs.
+pub struct Method {
+    pub name: &'static str,
+    pub setting: &'static str,
+    pub pairs: &'static [&'static str],
+}
+
+/// NEE, then Voxel ReSTIR with each reuse weighting (the default, `one-ray`, first). (The GI cache is not drawn: these are direct-light curves
+/// against a direct-light reference; `bench --gi` measures it against a path-traced one.)
+pub const METHODS: &[Method] = &[
+    Method { name: "nee", setting: "nee-power", pairs: &["lighting=nee", "pick=power"] },
+    Method { name: "restir", setting: EQUAL_TIME_TO, pairs: &["lighting=restir"] },
+    Method { name: "restir-biased", setting: "restir-biased", pairs: &["lighting=restir", "reuse=biased"] },
+    Method { name: "restir-unbiased", setting: "restir-unbiased", pairs: &["lighting=restir", "reuse=unbiased"] },
+];
+
+/// One point of a curve.
+#[derive(Clone, Debug)]
+pub struct CurvePoint {
+    pub scene: String,
+    pub method: &'static str,
+    /// Frames accumulated in the image.
+    pub frames: u32,
+    /// Cumulative time: frames x the method's frame time.
+    pub ms: f64,
+    pub metrics: Metrics,
+    pub flip: f64,
+}
+
+/// The points of one method on one scene: accumulation reset at frame 1, images read at powers of two.
+pub fn measure_curve(
+    world: &VoxelWorld,
+    view: &CameraView,
+    method: &Method,
+    frame_ms: f64,
+    config: &BenchConfig,
+    reference: &LinearImage,
+    scene: &str,
+) -> Result<Vec<CurvePoint>, String> {
+    let mut pairs: Vec<String> = method.pairs.iter().map(|p| p.to_string()).collect();
+    pairs.push("accumulate=on".into());
+    pairs.insert(0, format!("radius={}", (30.0 * config.width as f32 / 1600.0).round().max(2.0)));
+    let settings = RenderSettings::default().with_pairs(&pairs)?;
+    let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
+    let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;
+    let mut points = Vec::new();
+    let mut goal = 1u32;
+    while goal <= config.curve_frames.max(1) {
+        let before = renderer.frames_rendered();
+        let image = renderer.render(goal.saturating_sub(before).max(1))?;
+        // The readback lands a frame or two after the goal: the image holds every frame rendered so far.
+        let frames = renderer.frames_rendered().max(1);
+        let metrics = compare(&image, reference)?;
+        let flip = flip(&image, Encoding::Linear, reference, Encoding::Linear)?.mean;
+        points.push(CurvePoint {
+            scene: scene.to_string(),
+            method: method.name,
+            frames,
+            ms: frames as f64 * frame_ms,
+            metrics,
+            flip,
+        });
+        goal = (frames + 1).next_power_of_two().max(goal * 2);
+    }
+    Ok(points)
+}
+
+/// relMSE of a curve at time `ms`, interpolated log-log; `None` outside the curve.
+pub fn error_at(curve: &[&CurvePoint], ms: f64) -> Option<f64> {
+    curve.windows(2).find(|w| w[0].ms <= ms && ms <= w[1].ms).map(|w| {
+        let t = (ms.ln() - w[0].ms.ln()) / (w[1].ms.ln() - w[0].ms.ln()).max(1e-12);
+        (w[0].metrics.relmse.ln() * (1.0 - t) + w[1].metrics.relmse.ln() * t).exp()
+    })
+}
+
+/// Time a curve takes to reach relMSE `target`, interpolated log-log; `None` if it never does within the curve.
+pub fn time_to(curve: &[&CurvePoint], target: f64) -> Option<f64> {
+    if let Some(first) = curve.first().filter(|p| p.metrics.relmse <= target) {
+        return Some(first.ms);
+    }
+    curve.windows(2).find(|w| w[0].metrics.relmse > target && w[1].metrics.relmse <= target).map(|w| {
+        let (e0, e1) = (w[0].metrics.relmse.ln(), w[1].metrics.relmse.ln());
+        let t = (target.ln() - e0) / (e1 - e0).min(-1e-12);
+        (w[0].ms.ln() * (1.0 - t) + w[1].ms.ln() * t).exp()
+    })
+}
+
+/// The report's equal-time table: per scene and method, relMSE at NEE's last time and the time to NEE's last
+/// error, with the ratios to NEE.
+pub fn equal_time_table(points: &[CurvePoint]) -> String {
+    let mut text = String::from(
+        "| scene | method | relMSE at NEE's time | NEE / method | ms to NEE's relMSE | NEE ms / method ms |\n\
+         |---|---|---|---|---|---|\n",
+    );
+    let mut scenes: Vec<&str> = points.iter().map(|p| p.scene.as_str()).collect();
+    scenes.dedup();
+    for scene in scenes {
+        let curve = |method: &str| -> Vec<&CurvePoint> {
+            points.iter().filter(|p| p.scene == scene && p.method == method).collect()
+        };
+        let nee = curve(METHODS[0].name);
+        let Some(last) = nee.last() else { continue };
+        for method in METHODS {
+            let c = curve(method.name);
+            let at = error_at(&c, last.ms);
+            let to = time_to(&c, last.metrics.relmse);
+            let fmt = |v: Option<f64>, digits: usize| v.map_or("beyond the curve".into(), |v| format!("{v:.digits$}"));
+            text += &format!(
+                "| {scene} | {} | {} | {} | {} | {} |\n",
+                method.name,
+                fmt(at, 5),
+                fmt(at.map(|e| last.metrics.relmse / e), 1),
+                fmt(to, 1),
+                fmt(to.map(|t| last.ms / t), 1),
+            );
+        }
+    }
+    text
+}
