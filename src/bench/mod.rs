@@ -409,8 +409,9 @@ fn write_markdown(
         text += &format!("| {} |\n", cells(r).join(" | "));
     }
     text += &format!(
-        "\n## Convergence\n\nA static camera accumulating frames (`accumulate=on`): relMSE after 1, 2, 4, ... {} \
-         frames, at frames x the method's frame time from the table above. ![convergence](plot.svg)\n\n\
+        "\n## Convergence\n\nA static camera accumulating frames (`accumulate=on`): the error read at about 1, 2, 4, \
+         ... {} frames (the readback lands a frame or two after the goal; `frames` is the real count), at frames x \
+         the method's frame time from the table above. ![convergence](plot.svg)\n\n\
          Equal time, read off the curves: each method's relMSE at the time NEE took for its last point, and the time \
          it needs to reach NEE's last relMSE (log-log interpolation; \"beyond the curve\" where it does not get \
          there within its points). A biased method levels off at its bias.\n\n{}\n\

@@ -75,7 +75,13 @@ fn draw_panel<DB: DrawingBackend>(
         .draw_series(singles.iter().map(|r| Cross::new((r.frame_ms, r.metrics.relmse), 4, BLACK.stroke_width(1))))?
         .label("one frame, each setting")
         .legend(|(x, y)| Cross::new((x + 10, y), 4, BLACK.stroke_width(1)));
-    chart.configure_series_labels().border_style(BLACK).background_style(WHITE.mix(0.85)).draw()?;
+    // Lower left: the curves fall towards the lower right.
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerLeft)
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.9))
+        .draw()?;
     Ok(())
 }
 

@@ -48,7 +48,7 @@ pub struct BenchArgs {
 
 /// What a bench run measures, with only the options that mode reads.
 enum BenchMode {
-    /// Scenes x bench settings (the default): results.csv, report.md, plot.png.
+    /// Scenes x bench settings (the default): results.csv, report.md, plot.svg, image strips.
     Settings { scenes: Vec<String>, quick: bool, only: Vec<String>, camera: Option<CameraView> },
     /// The thesis protocol: thesis.md.
     Thesis { scale: f32, spp: u32 },
@@ -96,6 +96,6 @@ fn run_settings(
     config.camera = camera;
     config.only = only;
     let rows = on_gpu(|| run_bench(&scenes, &config, out))?;
-    println!("wrote {} rows to {}/results.csv, report.md, plot.png", rows.len(), out.display());
+    println!("wrote {} rows to {}/results.csv, report.md, plot.svg, strip-*.png", rows.len(), out.display());
     Ok(())
 }

@@ -35,7 +35,7 @@ enum Command {
     Reference(reference::ReferenceArgs),
     /// Compare two images: prints mae, mse, relmse and bias of A against the reference B.
     Compare(compare::CompareArgs),
-    /// Measure run time against error for scenes x settings; writes results.csv, report.md and plot.png.
+    /// Measure run time against error for scenes x settings; writes results.csv, report.md, plot.svg (convergence curves) and image strips.
     Bench(bench::BenchArgs),
     /// Soak the renderer: random edits, lights and camera jumps every frame, extreme settings; report non-finite
     /// values, reservoir ranges and drift (exit code 1 when any check fails).
