@@ -71,15 +71,29 @@ const DISTANCE_SCALE: f32 = 256.0;
 @group(3) @binding(5) var<storage, read_write> gi_rays: array<u32>;
 // Edit log: pairs (min voxel xyz, epoch), (max voxel xyz exclusive, 0) of edited bricks.
 @group(3) @binding(6) var<storage, read> gi_edits: array<vec4<i32>>;
+// Per entry: the direct light its face reflects, averaged over the face and over frames (rgb), and the samples
+// blended so far (w; 0 = no value yet). Written by refresh.wgsl, read by update.wgsl at ray hits (direct.wgsl).
+@group(3) @binding(7) var<storage, read_write> gi_direct: array<vec4<f32>>;
 
 fn key_hash(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
     return pcg(pcg(pcg(pcg(u32(voxel.x)) ^ u32(voxel.y)) ^ u32(voxel.z)) ^ (face | (object << 3u)));
 }
 
-// A second, independent hash stored as the key (never 0, which marks an empty slot).
+// Key words besides checksums: an empty slot (ends a probe chain), a freed one (a tombstone: chains go on
+// through it, and an insert may reuse it) and one being inserted (its payload is not written yet).
+const EMPTY_KEY: u32 = 0u;
+const FREED_KEY: u32 = 0xFFFFFFFFu;
+const BUSY_KEY: u32 = 0xFFFFFFFEu;
+
+// A second, independent hash stored as the key (never one of the three words above).
 fn key_checksum(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
     let h = pcg(u32(voxel.x) * 0x9E3779B9u ^ pcg(u32(voxel.y) * 0x85EBCA6Bu ^ pcg(u32(voxel.z) ^ (face << 24u) ^ (object << 27u))));
-    return max(h, 1u);
+    return clamp(h, 1u, BUSY_KEY - 1u);
+}
+
+// Whether a slot holds a published entry.
+fn is_live_key(key: u32) -> bool {
+    return key != EMPTY_KEY && key != FREED_KEY && key != BUSY_KEY;
 }
 
 // The table an entry belongs to: static entries in [0, static), dynamic ones after them.
@@ -98,7 +112,8 @@ fn probe_slot(voxel: vec3<i32>, face: u32, object: u32, i: u32) -> u32 {
     return table_base(object) + ((key_hash(voxel, face, object) + i) & (table_size(object) - 1u));
 }
 
-// The slot of an entry, or NOT_FOUND.
+// The slot of an entry, or NOT_FOUND. Freed and busy slots do not end the chain: an entry inserted past a slot
+// that was freed since must stay reachable.
 fn gi_find(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
     let checksum = key_checksum(voxel, face, object);
     for (var i = 0u; i < MAX_PROBES; i++) {
@@ -107,38 +122,50 @@ fn gi_find(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
         if key == checksum {
             return slot;
         }
-        if key == 0u {
+        if key == EMPTY_KEY {
             break;
         }
     }
     return NOT_FOUND;
 }
 
-// Finds or inserts an entry and marks it used this frame (and seen, when the camera sees it). NOT_FOUND when
-// its probe window is full.
+// Claims `slot` (empty or freed, as `expected`) for a new entry: marks it busy, writes the payload, then
+// publishes the key, so a reader never pairs the key with the previous occupant's payload. Returns the key word
+// the slot holds afterwards: `checksum` when this thread (or another, for the same entry) got it.
+fn claim(slot: u32, expected: u32, checksum: u32, voxel: vec3<i32>, face: u32, object: u32, seen: bool) -> u32 {
+    for (var attempt = 0u; attempt < 4u; attempt++) {
+        let result = atomicCompareExchangeWeak(&gi_keys[slot], expected, BUSY_KEY);
+        if result.exchanged {
+            gi_entries[slot].voxel = voxel;
+            gi_entries[slot].face = face;
+            gi_entries[slot].object = object;
+            gi_entries[slot].traced_epoch = NEVER_TRACED;
+            gi_entries[slot].samples = 0u;
+            gi_entries[slot].last_used = gi.frame;
+            gi_entries[slot].last_seen = select(0u, gi.frame, seen);
+            gi_direct[slot] = vec4(0.0);
+            atomicStore(&gi_keys[slot], checksum);
+            atomicAdd(&counters[COUNT_GI_INSERTED], 1u);
+            return checksum;
+        }
+        if result.old_value != expected {
+            return result.old_value;
+        }
+        // A weak exchange may fail spuriously: try again.
+    }
+    return BUSY_KEY;
+}
+
+// Finds or inserts an entry and marks it used this frame (and seen, when the camera sees it). A new entry takes
+// the chain's first freed slot once the chain is known not to hold it (the table does not fill with tombstones),
+// else the empty slot that ends the chain. NOT_FOUND when the probe window is full (counted) or when another
+// thread took the slot first (the entry has no value this frame either way; the next frame inserts it).
 fn gi_touch(voxel: vec3<i32>, face: u32, object: u32, seen: bool) -> u32 {
     let checksum = key_checksum(voxel, face, object);
+    var freed = NOT_FOUND;
     for (var i = 0u; i < MAX_PROBES; i++) {
         let slot = probe_slot(voxel, face, object, i);
-        var key = atomicLoad(&gi_keys[slot]);
-        if key == 0u {
-            // Weak exchange may fail spuriously; retry the same slot a few times before moving on.
-            for (var attempt = 0u; attempt < 4u && key == 0u; attempt++) {
-                let result = atomicCompareExchangeWeak(&gi_keys[slot], 0u, checksum);
-                if result.exchanged {
-                    gi_entries[slot].voxel = voxel;
-                    gi_entries[slot].face = face;
-                    gi_entries[slot].object = object;
-                    gi_entries[slot].traced_epoch = NEVER_TRACED;
-                    gi_entries[slot].samples = 0u;
-                    gi_entries[slot].last_used = gi.frame;
-                    gi_entries[slot].last_seen = select(0u, gi.frame, seen);
-                    atomicAdd(&counters[COUNT_GI_INSERTED], 1u);
-                    return slot;
-                }
-                key = result.old_value;
-            }
-        }
+        let key = atomicLoad(&gi_keys[slot]);
         if key == checksum {
             // Every toucher writes the same values: a benign race, and skipped when already set.
             if gi_entries[slot].last_used != gi.frame {
@@ -149,6 +176,20 @@ fn gi_touch(voxel: vec3<i32>, face: u32, object: u32, seen: bool) -> u32 {
             }
             return slot;
         }
+        if key == FREED_KEY && freed == NOT_FOUND {
+            freed = slot;
+        }
+        if key == EMPTY_KEY {
+            let reuse = freed != NOT_FOUND;
+            let chosen = select(slot, freed, reuse);
+            if claim(chosen, select(EMPTY_KEY, FREED_KEY, reuse), checksum, voxel, face, object, seen) == checksum {
+                return chosen;
+            }
+            return NOT_FOUND;
+        }
+    }
+    if freed != NOT_FOUND && claim(freed, FREED_KEY, checksum, voxel, face, object, seen) == checksum {
+        return freed;
     }
     atomicAdd(&counters[COUNT_GI_FULL], 1u);
     return NOT_FOUND;

@@ -2,11 +2,28 @@
 // the same face orientation in the 3x3x3 block around its voxel (filter on), or the entry's own value (off).
 // Same orientation keeps the two sides of a one-voxel wall apart: the far side faces the other way.
 
-#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_find, used_within, NOT_FOUND, UPDATE_AGE}
+#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_find, used_within, is_live_key,
+    table_base, table_size, NOT_FOUND, UPDATE_AGE, EMPTY_KEY, FREED_KEY}
 #import glowbrick::constants::GI_FILTER
 
-fn filter_entry(slot: u32) {
-    if atomicLoad(&gi_keys[slot]) == 0u {
+// A freed slot followed by an empty one ends every chain through it anyway: make it empty, so misses stop
+// early again. Safe here: no pass inserts while the filter runs, and a lookup that sees either word ends at the
+// next slot at the latest. A run of freed slots clears from its end, one slot a frame.
+fn clear_tombstone(slot: u32, object: u32) {
+    let base = table_base(object);
+    let next = base + ((slot - base + 1u) & (table_size(object) - 1u));
+    if atomicLoad(&gi_keys[next]) == EMPTY_KEY {
+        atomicStore(&gi_keys[slot], EMPTY_KEY);
+    }
+}
+
+fn filter_entry(slot: u32, object: u32) {
+    let key = atomicLoad(&gi_keys[slot]);
+    if key == FREED_KEY {
+        clear_tombstone(slot, object);
+        return;
+    }
+    if !is_live_key(key) {
         return;
     }
     let e = gi_entries[slot];
@@ -34,7 +51,7 @@ fn filter_entry(slot: u32) {
 @compute @workgroup_size(64, 1, 1)
 fn filter_static(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x < gi.static_capacity {
-        filter_entry(id.x);
+        filter_entry(id.x, 0u);
     }
 }
 
@@ -42,6 +59,7 @@ fn filter_static(@builtin(global_invocation_id) id: vec3<u32>) {
 @compute @workgroup_size(64, 1, 1)
 fn filter_dynamic(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x < gi.dynamic_capacity {
-        filter_entry(gi.static_capacity + id.x);
+        // Any non-zero object selects the dynamic table.
+        filter_entry(gi.static_capacity + id.x, 1u);
     }
 }

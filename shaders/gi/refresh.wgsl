@@ -4,8 +4,10 @@
 
 #import glowbrick::world::world_info
 #import glowbrick::traversal::{trace, box_entry, INF}
-#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_rays, gi_edits, GiEntry, used_within, ray_direction,
-    ray_origin, slot_seed, encode_hit, hit_face, hit_distance, NEVER_TRACED, MISS_FACE, UPDATE_AGE}
+#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_rays, gi_edits, gi_direct, GiEntry, used_within,
+    ray_direction, ray_origin, slot_seed, encode_hit, hit_face, hit_distance, is_live_key, NEVER_TRACED, MISS_FACE,
+    UPDATE_AGE}
+#import glowbrick::gi::direct::update_direct
 #import glowbrick::counters::counters
 #import glowbrick::constants::{GI_CACHE, COUNT_GI_RETRACED, COUNT_GI_RAYS_TRACED}
 
@@ -90,18 +92,22 @@ fn refresh(slot: u32, e: GiEntry, origin: vec3<f32>) -> u32 {
     return traced;
 }
 
+// Per due static entry: its cached hits brought up to date (with the static cache on), then its own direct
+// light, one shadow ray (direct.wgsl), which the update pass reads wherever a cache ray hits this face.
 @compute @workgroup_size(64, 1, 1)
 fn refresh_static(@builtin(global_invocation_id) id: vec3<u32>) {
     let slot = id.x;
-    if slot >= gi.static_capacity || (gi.flags & GI_CACHE) == 0u || atomicLoad(&gi_keys[slot]) == 0u {
+    if slot >= gi.static_capacity || !is_live_key(atomicLoad(&gi_keys[slot])) {
         return;
     }
     let e = gi_entries[slot];
     if !used_within(e.last_used, UPDATE_AGE) {
         return;
     }
-    if refresh(slot, e, ray_origin(e.voxel, e.face, vec3(0.0))) > 0u {
-        // What it blended so far saw the old world: start over.
+    if (gi.flags & GI_CACHE) != 0u && refresh(slot, e, ray_origin(e.voxel, e.face, vec3(0.0))) > 0u {
+        // What it blended so far saw the old world: start over, its direct light too (an edit reached it).
         gi_entries[slot].samples = 0u;
+        gi_direct[slot] = vec4(0.0);
     }
+    update_direct(slot, e);
 }

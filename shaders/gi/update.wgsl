@@ -1,32 +1,21 @@
 // GI cache update, one thread per table slot: age out unused entries, then re-shade `update_rays` of an entry's K
 // directions from its cached static hits (brought up to date by refresh.wgsl) or, for a moving object's
-// entry, from rays traced now; light at a hit is its direct light plus its face's cached indirect light from
+// entry, from rays traced now; light at a hit is the hit face's direct light (its entry's estimate, kept once a
+// frame by refresh.wgsl; traced here only when the face has none yet) plus its face's cached indirect light from
 // last frame (and emission where the shading passes do not already count it); blend.
 
 #import glowbrick::world::{materials, voxel_at, objects, object_index, object_count}
 #import glowbrick::traversal::{trace, trace_objects, trace_scene, face_normal, INF}
-#import glowbrick::lights::{scene, sky, direct_sample}
+#import glowbrick::lights::{scene, sky}
 #import glowbrick::random::{Rng, pcg}
 #import glowbrick::guards::finite3
 #import glowbrick::counters::counters
 #import glowbrick::constants::{LIGHTING_SUN, RAY_OFFSET, GI_BOUNCES, GI_CACHE, COUNT_GI_UPDATED, COUNT_GI_LIVE, COUNT_GI_EVICTED,
-    COUNT_GI_BORROWED, COUNT_GI_RESETS}
-#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_edits, GiEntry,
-    gi_touch, gi_find, used_within, slot_seed, ray_direction, ray_origin, encode_hit, hit_face, hit_distance, NEVER_TRACED, NOT_FOUND,
-    MISS_FACE, UPDATE_AGE, MAX_AGE}
-
-// Direct light reflected by a surface at `point` (normal n): the sun with a shadow ray in sun-and-sky mode, else
-// one next-event-estimation sample of the light pool.
-fn direct_at(point: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
-    if scene.mode != LIGHTING_SUN {
-        return direct_sample(point, n, albedo, scene.light_count, scene.power_pick == 1u, rng);
-    }
-    let cos_sun = dot(n, scene.sun.xyz);
-    if scene.sun.w > 0.0 && cos_sun > 0.0 && (scene.shadows == 0u || !trace_scene(point + n * RAY_OFFSET, scene.sun.xyz, INF).found) {
-        return albedo * scene.sun_radiance.rgb * cos_sun;
-    }
-    return vec3(0.0);
-}
+    COUNT_GI_BORROWED, COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
+#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_edits, gi_direct, GiEntry,
+    gi_touch, gi_find, used_within, slot_seed, ray_direction, ray_origin, encode_hit, hit_face, hit_distance, is_live_key,
+    NEVER_TRACED, NOT_FOUND, MISS_FACE, UPDATE_AGE, MAX_AGE, FREED_KEY}
+#import glowbrick::gi::direct::direct_at
 
 // Light arriving along a ray that hit (voxel, face) at `point`: the hit face's direct light, with bounces on its
 // cached indirect light (last frame's filtered value: stable while this pass writes), and in sun-and-sky mode
@@ -41,18 +30,27 @@ fn hit_radiance(point: vec3<f32>, face: u32, seen: bool, fallback: vec3<f32>, rn
         return vec3(0.0);
     }
     let m = materials[id];
-    var radiance = direct_at(point, n, m.albedo.rgb, rng);
+    let bounces = (gi.flags & GI_BOUNCES) != 0u;
+    // Entries the camera sees bring the entries their rays hit into the cache (with bounces on); others only look
+    // up. The hit face's entry holds its direct light (face average, refresh.wgsl).
+    var slot = NOT_FOUND;
+    if seen && bounces {
+        slot = gi_touch(voxel, face, 0u, false);
+    } else {
+        slot = gi_find(voxel, face, 0u);
+    }
+    var radiance = vec3(0.0);
+    if slot != NOT_FOUND && gi_direct[slot].w > 0.0 {
+        radiance = gi_direct[slot].rgb;
+    } else {
+        // No estimate yet (new, or not in the cache): this ray's own sample, unbiased, counted.
+        atomicAdd(&counters[COUNT_GI_DIRECT_TRACED], 1u);
+        radiance = direct_at(point, n, m.albedo.rgb, rng);
+    }
     if scene.mode == LIGHTING_SUN {
         radiance += m.radiance.rgb;
     }
-    if (gi.flags & GI_BOUNCES) != 0u {
-        // Entries the camera sees bring the entries their rays hit into the cache; those only look up.
-        var slot = NOT_FOUND;
-        if seen {
-            slot = gi_touch(voxel, face, 0u, false);
-        } else {
-            slot = gi_find(voxel, face, 0u);
-        }
+    if bounces {
         // A hit face without a value yet (or no room for it in a full table) borrows the shooting entry's own
         // indirect light: nearby surfaces of a room see similar indirect light, and leaving it out would
         // darken every later bounce.
@@ -89,7 +87,7 @@ fn miss_radiance(dir: vec3<f32>) -> vec3<f32> {
 // the moving objects per frame; a moving object's entries trace everything every frame (nothing of theirs stays
 // put).
 fn update_entry(slot: u32) {
-    if atomicLoad(&gi_keys[slot]) == 0u {
+    if !is_live_key(atomicLoad(&gi_keys[slot])) {
         return;
     }
     let e = gi_entries[slot];
@@ -101,7 +99,8 @@ fn update_entry(slot: u32) {
     }
     let gone = dynamic && index == object_count();
     if !used_within(e.last_used, MAX_AGE) || gone {
-        atomicStore(&gi_keys[slot], 0u);
+        // A tombstone, not an empty slot: entries inserted further along the chain stay reachable.
+        atomicStore(&gi_keys[slot], FREED_KEY);
         gi_entries[slot].samples = 0u;
         atomicAdd(&counters[COUNT_GI_EVICTED], 1u);
         return;

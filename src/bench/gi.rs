@@ -222,9 +222,9 @@ fn markdown(rows: &[GiRow], edits: &[EditCost], config: &BenchConfig) -> String 
         );
     }
     text += &format!(
-        "\n## Memory\n\nPer entry: {ENTRY_BYTES} bytes (key, payload, blended and filtered radiance) plus {RAY_BYTES} \
+        "\n## Memory\n\nPer entry: {ENTRY_BYTES} bytes (key, payload, blended and filtered radiance, direct light) plus {RAY_BYTES} \
          bytes per cached ray: {} bytes at K = 16, {} at K = 64, {} at K = 128. The tables hold {} static and {} \
-         dynamic entries: {:.1} MiB at K = 64; GI off keeps a 104-byte placeholder.\n",
+         dynamic entries: {:.1} MiB at K = 64; GI off keeps a 120-byte placeholder.\n",
         ENTRY_BYTES + 16 * RAY_BYTES,
         ENTRY_BYTES + 64 * RAY_BYTES,
         ENTRY_BYTES + 128 * RAY_BYTES,

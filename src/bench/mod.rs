@@ -59,7 +59,7 @@ pub const SETTINGS: &[BenchSetting] = &[
 pub(crate) const EQUAL_TIME_TO: &str = "restir";
 
 /// Scenes of a full run and of `--quick`.
-pub const ALL_SCENES: &[&str] = &["cornell", "letters", "apartments", "mountain", "window-room"];
+pub const ALL_SCENES: &[&str] = &["cornell", "letters", "apartments", "mountain", "window-room", "lights-100k"];
 pub const QUICK_SCENES: &[&str] = &["cornell", "letters"];
 
 /// How big and how long.
@@ -357,7 +357,7 @@ fn gpu_text(ms: Option<f64>) -> String {
 }
 
 /// A row's cells, in the column order of both outputs.
-fn cells(r: &BenchRow) -> [String; 10] {
+fn cells(r: &BenchRow) -> [String; 11] {
     let m = r.metrics;
     [
         r.scene.clone(),
@@ -370,11 +370,12 @@ fn cells(r: &BenchRow) -> [String; 10] {
         format!("{:.6}", m.relmse),
         format!("{:+.6}", m.bias),
         format!("{:.4}", r.flip),
+        m.fireflies.to_string(),
     ]
 }
 
 fn write_csv(rows: &[BenchRow], path: &Path) -> Result<(), String> {
-    let mut text = String::from("scene,setting,frames,frame_ms,gpu_ms,mae,mse,relmse,bias,flip\n");
+    let mut text = String::from("scene,setting,frames,frame_ms,gpu_ms,mae,mse,relmse,bias,flip,fireflies\n");
     for r in rows {
         text += &(cells(r).join(",") + "\n");
     }
@@ -394,10 +395,11 @@ fn write_markdown(
          frames before it) against a {}-spp direct-light CPU reference; frame time averaged over {} frames after {} \
          warm-up frames. `GPU ms` is the timestamp-query time of the voxel passes that ran (primary, plus the three \
          ReSTIR passes; n/a where the adapter has no timestamps). `nee-equal-time` accumulates NEE frames for the \
-         frame time of `restir` (its frame ms is the total). FLIP is the mean LDR-FLIP (0: identical).\n\n\
+         frame time of `restir` (its frame ms is the total). FLIP is the mean LDR-FLIP (0: identical). Fireflies: \
+         pixels above 100x the reference's luminance plus 1 (after the warm-up and timed frames of a still camera).\n\n\
          The reference's own noise (MAE between two references with different seeds): {}.\n\n\
-         | scene | setting | frames | frame ms | GPU ms | MAE | MSE | relMSE | bias | FLIP |\n\
-         |---|---|---|---|---|---|---|---|---|---|\n",
+         | scene | setting | frames | frame ms | GPU ms | MAE | MSE | relMSE | bias | FLIP | fireflies |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
         config.width,
         config.height,
         config.reference_spp,

@@ -4,6 +4,7 @@
 //! - MAE = sum over pixels of (|dr| + |dg| + |db|) / (pixels * 3)  (seed 000 eq. 3-4)
 //! - relMSE = mean over pixels and channels of d^2 / (reference^2 + 0.01) (the 0.01 keeps black pixels finite)
 //! - bias = mean luminance of the image minus that of the reference (negative: darker, as biased ReSTIR is)
+//! - fireflies = pixels whose luminance is above 100x the reference's plus 1 (issue 15's count)
 
 use crate::colour::luminance;
 use crate::image_io::LinearImage;
@@ -15,6 +16,7 @@ pub struct Metrics {
     pub mse: f64,
     pub relmse: f64,
     pub bias: f64,
+    pub fireflies: u64,
 }
 
 impl std::fmt::Display for Metrics {
@@ -43,6 +45,7 @@ pub fn compare(image: &LinearImage, reference: &LinearImage) -> Result<Metrics, 
         }
     }
     let (mut abs, mut sq, mut rel, mut lum_a, mut lum_b) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut fireflies = 0u64;
     for (a, b) in image.pixels.iter().zip(&reference.pixels) {
         for c in 0..3 {
             let d = (a[c] - b[c]) as f64;
@@ -50,11 +53,19 @@ pub fn compare(image: &LinearImage, reference: &LinearImage) -> Result<Metrics, 
             sq += d * d;
             rel += d * d / ((b[c] as f64).powi(2) + RELMSE_EPSILON);
         }
-        lum_a += luminance([a[0], a[1], a[2]]) as f64;
-        lum_b += luminance([b[0], b[1], b[2]]) as f64;
+        let (la, lb) = (luminance([a[0], a[1], a[2]]) as f64, luminance([b[0], b[1], b[2]]) as f64);
+        fireflies += (la > 100.0 * lb + 1.0) as u64;
+        lum_a += la;
+        lum_b += lb;
     }
     let n = image.pixels.len() as f64;
-    Ok(Metrics { mae: abs / (3.0 * n), mse: sq / (3.0 * n), relmse: rel / (3.0 * n), bias: (lum_a - lum_b) / n })
+    Ok(Metrics {
+        mae: abs / (3.0 * n),
+        mse: sq / (3.0 * n),
+        relmse: rel / (3.0 * n),
+        bias: (lum_a - lum_b) / n,
+        fireflies,
+    })
 }
 
 /// A false-colour image of the per-pixel absolute error (mean over channels), black to red to yellow to white,

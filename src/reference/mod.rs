@@ -121,10 +121,10 @@ impl Scene<'_> {
         let mut weight_sum = 0.0f32;
         for _ in 0..candidates {
             // Every draw takes the same numbers whatever happens, so streams stay aligned across settings.
-            let (r_column, u_pick, u_face, u, v) =
-                (rng.next_u32(), rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let r_column = rng.next_u32();
+            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32()];
             let u_choose = rng.next_f32();
-            let Some((candidate, pdf)) = self.candidate(p, n, r_column, u_pick, u_face, u, v) else { continue };
+            let Some((candidate, pdf)) = self.candidate(p, n, r_column, u) else { continue };
             let weight = candidate.target / pdf;
             if !(weight.is_finite() && weight > 0.0) {
                 continue;
@@ -147,20 +147,12 @@ impl Scene<'_> {
     }
 
     /// One power-drawn light at a uniform point of a face that sees `p`, with its pdf (per unit area) and its
-    /// unshadowed contribution; `None` when it cannot light `p`.
-    fn candidate(
-        &self,
-        p: Vec3,
-        n: Vec3,
-        r_column: u32,
-        u_pick: f32,
-        u_face: f32,
-        u: f32,
-        v: f32,
-    ) -> Option<(Candidate<'_>, f32)> {
-        let (slot, pick_pdf) = self.alias.sample(r_column, u_pick)?;
+    /// unshadowed contribution; `None` when it cannot light `p`. `u`: the pick within the alias column, the face,
+    /// and the point on it.
+    fn candidate(&self, p: Vec3, n: Vec3, r_column: u32, u: [f32; 4]) -> Option<(Candidate<'_>, f32)> {
+        let (slot, pick_pdf) = self.alias.sample(r_column, u[0])?;
         let (Some(light), _) = self.pool.slot(slot)? else { return None };
-        let point = sample_light_point(light, p, u_face, u, v)?;
+        let point = sample_light_point(light, p, u[1], u[2], u[3])?;
         let to_light = point.position - p;
         let d2 = to_light.length_squared();
         if d2 <= 1e-12 {

@@ -2,8 +2,9 @@
 //!
 //! Entries are (surface voxel, face) pairs in a fixed-capacity GPU hash table (`shaders/gi/cache.wgsl`). The primary
 //! pass inserts the entries of the faces it sees; `shaders/gi/refresh.wgsl` keeps K static ray hits per entry, traced once
-//! and traced again only for rays that cross a brick edited since (the edit log below); `update.wgsl`
-//! re-shades a few of them per frame (and traces moving objects' entries outright); `filter.wgsl` averages
+//! and traced again only for rays that cross a brick edited since (the edit log below), and the entry's own direct
+//! light (one shadow ray a frame, `direct.wgsl`); `update.wgsl` re-shades a few of them per frame (a ray reads the
+//! direct light of the face it hits from that face's entry) (and traces moving objects' entries outright); `filter.wgsl` averages
 //! same-orientation neighbours; the shading passes interpolate (one frame of latency). With GI off the buffers
 //! shrink to a placeholder and no GI pass is dispatched; without moving objects their passes are not either.
 //! The passes run once per frame after every camera (`frame::world_frame`), in the order listed there.
@@ -28,8 +29,8 @@ use std::num::NonZeroU64;
 /// Entries in the static world's table and in the dynamic objects' table (powers of two).
 pub const STATIC_CAPACITY: u32 = 1 << 16;
 pub const DYNAMIC_CAPACITY: u32 = 1 << 12;
-/// GPU bytes per entry besides its rays: key, payload, blended and filtered radiance.
-pub const ENTRY_BYTES: u64 = GI_KEY_BYTES + size_of::<GiEntry>() as u64 + 2 * GI_RADIANCE_BYTES;
+/// GPU bytes per entry besides its rays: key, payload, blended and filtered radiance, direct light.
+pub const ENTRY_BYTES: u64 = GI_KEY_BYTES + size_of::<GiEntry>() as u64 + 3 * GI_RADIANCE_BYTES;
 /// Bytes per cached ray (face and distance packed in a u32).
 pub const RAY_BYTES: u64 = GI_RAY_BYTES;
 /// Edited bricks remembered for invalidation; older edits force a retrace of everything traced before them.
@@ -95,6 +96,7 @@ pub fn gi_bind_group_layout() -> BindGroupLayoutDescriptor {
                 storage_buffer_sized(false, None),
                 storage_buffer_sized(false, None),
                 storage_buffer_read_only_sized(false, None),
+                storage_buffer_sized(false, None),
             ),
         ),
     )
@@ -112,13 +114,13 @@ impl Shape {
         if settings.enabled {
             Shape { entries: STATIC_CAPACITY + DYNAMIC_CAPACITY, rays: settings.rays }
         } else {
-            // Bindings need a non-empty buffer; one entry and one ray cost 104 bytes.
+            // Bindings need a non-empty buffer; one entry and one ray cost 120 bytes.
             Shape { entries: 1, rays: 1 }
         }
     }
 }
 
-/// GPU bytes the cache holds for `settings` (0 with GI off, besides a 104-byte placeholder).
+/// GPU bytes the cache holds for `settings` (0 with GI off, besides a 120-byte placeholder).
 pub fn cache_bytes(settings: &GiSettings) -> u64 {
     let shape = Shape::of(settings);
     shape.entries as u64 * (ENTRY_BYTES + shape.rays as u64 * RAY_BYTES)
@@ -130,6 +132,7 @@ struct Tables {
     irradiance: Buffer,
     filtered: Buffer,
     rays: Buffer,
+    direct: Buffer,
 }
 
 impl Tables {
@@ -149,6 +152,7 @@ impl Tables {
             irradiance: storage("glowbrick_gi_irradiance", n * GI_RADIANCE_BYTES),
             filtered: storage("glowbrick_gi_filtered", n * GI_RADIANCE_BYTES),
             rays: storage("glowbrick_gi_rays", n * shape.rays as u64 * RAY_BYTES),
+            direct: storage("glowbrick_gi_direct", n * GI_RADIANCE_BYTES),
         }
     }
 }
@@ -291,6 +295,7 @@ pub fn prepare_gi(
             t.filtered.as_entire_binding(),
             t.rays.as_entire_binding(),
             cache.edits.as_entire_binding(),
+            t.direct.as_entire_binding(),
         )),
     ));
 }

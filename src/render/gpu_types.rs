@@ -195,14 +195,16 @@ pub enum GpuCounter {
     GiRaysTraced = 6,
     /// GI ray hits whose face had no cached value and borrowed the shooting entry's indirect light.
     GiBorrowed = 7,
+    /// GI ray hits whose face had no direct-light estimate yet and traced their own shadow ray.
+    GiDirectTraced = 8,
     /// Since the start: ReSTIR reservoirs read with a non-finite field (reset to empty).
-    ReservoirResets = 8,
+    ReservoirResets = 9,
     /// Since the start: GI estimates that came out non-finite (replaced by zero).
-    GiResets = 9,
+    GiResets = 10,
 }
 
 impl GpuCounter {
-    pub const ALL: [(GpuCounter, &'static str); 10] = [
+    pub const ALL: [(GpuCounter, &'static str); 11] = [
         (GpuCounter::GiUpdated, "COUNT_GI_UPDATED"),
         (GpuCounter::GiRetraced, "COUNT_GI_RETRACED"),
         (GpuCounter::GiLive, "COUNT_GI_LIVE"),
@@ -211,6 +213,7 @@ impl GpuCounter {
         (GpuCounter::GiInserted, "COUNT_GI_INSERTED"),
         (GpuCounter::GiRaysTraced, "COUNT_GI_RAYS_TRACED"),
         (GpuCounter::GiBorrowed, "COUNT_GI_BORROWED"),
+        (GpuCounter::GiDirectTraced, "COUNT_GI_DIRECT_TRACED"),
         (GpuCounter::ReservoirResets, "COUNT_RESERVOIR_RESETS"),
         (GpuCounter::GiResets, "COUNT_GI_RESETS"),
     ];
@@ -218,8 +221,8 @@ impl GpuCounter {
 
 /// Words in the counters buffer, and how many of the first ones restart every frame.
 pub const COUNTERS: usize = 16;
-pub const PER_FRAME_COUNTERS: usize = 8;
-const _: () = assert!(GpuCounter::GiBorrowed as usize + 1 == PER_FRAME_COUNTERS);
+pub const PER_FRAME_COUNTERS: usize = 9;
+const _: () = assert!(GpuCounter::GiDirectTraced as usize + 1 == PER_FRAME_COUNTERS);
 const _: () = assert!((GpuCounter::GiResets as usize) < COUNTERS);
 
 /// `restir_flags` bits.

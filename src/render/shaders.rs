@@ -6,7 +6,7 @@ use bevy::prelude::*;
 use bevy::shader::Shader;
 
 /// Every shader file: its path under `shaders/` and its source. Libraries first (they only define imports).
-pub const SOURCES: [(&str, &str); 17] = [
+pub const SOURCES: [(&str, &str); 18] = [
     ("lib/constants.wgsl", include_str!("../../shaders/lib/constants.wgsl")),
     ("lib/random.wgsl", include_str!("../../shaders/lib/random.wgsl")),
     ("lib/guards.wgsl", include_str!("../../shaders/lib/guards.wgsl")),
@@ -16,6 +16,7 @@ pub const SOURCES: [(&str, &str); 17] = [
     ("lib/lights.wgsl", include_str!("../../shaders/lib/lights.wgsl")),
     ("lib/frame.wgsl", include_str!("../../shaders/lib/frame.wgsl")),
     ("gi/cache.wgsl", include_str!("../../shaders/gi/cache.wgsl")),
+    ("gi/direct.wgsl", include_str!("../../shaders/gi/direct.wgsl")),
     ("restir/common.wgsl", include_str!("../../shaders/restir/common.wgsl")),
     ("primary.wgsl", include_str!("../../shaders/primary.wgsl")),
     ("restir/initial.wgsl", include_str!("../../shaders/restir/initial.wgsl")),

@@ -135,7 +135,11 @@ fn metrics_have_known_values_and_refuse_bad_input() {
     // |diffs| = 0.5, 0, 1, 2, 1, 0 -> sum 4.5; squares 0.25, 0, 1, 4, 1, 0 -> 6.25.
     assert!((m.mae - 4.5 / 6.0).abs() < 1e-9 && (m.mse - 6.25 / 6.0).abs() < 1e-9, "{m}");
     let same = compare(&c, &c).unwrap();
-    assert_eq!((same.mae, same.mse, same.relmse, same.bias), (0.0, 0.0, 0.0, 0.0));
+    assert_eq!((same.mae, same.mse, same.relmse, same.bias, same.fireflies), (0.0, 0.0, 0.0, 0.0, 0));
+    // A firefly: above 100x the reference plus 1 (luminance 150 against 1; 101 against 1 is not one).
+    let spiky = image(vec![[150.0; 4], [101.0, 101.0, 101.0, 1.0], [0.5; 4]], 3);
+    let flat = image(vec![[1.0; 4], [1.0; 4], [0.0; 4]], 3);
+    assert_eq!(compare(&spiky, &flat).unwrap().fireflies, 1);
     assert!(compare(&a, &image(vec![[0.0; 4]; 4], 2)).unwrap_err().contains("differ in size"));
     let nan = image(vec![[f32::NAN, 0.0, 0.0, 1.0], [0.0; 4]], 2);
     assert!(compare(&nan, &b).unwrap_err().contains("non-finite pixel at (0, 0)"));

@@ -14,7 +14,7 @@ pub fn quick_bench_writes_csv_markdown_and_plot() {
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
-    assert_eq!(lines[0], "scene,setting,frames,frame_ms,gpu_ms,mae,mse,relmse,bias,flip");
+    assert_eq!(lines[0], "scene,setting,frames,frame_ms,gpu_ms,mae,mse,relmse,bias,flip,fireflies");
     let field = |line: &str, i: usize| -> f64 { line.split(',').nth(i).unwrap().parse().unwrap() };
     let single = |scene: &str, setting: &str| -> &str {
         lines.iter().find(|l| l.starts_with(&format!("{scene},{setting},1,"))).unwrap()

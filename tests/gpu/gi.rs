@@ -175,7 +175,7 @@ pub fn with_gi_off_no_gi_pass_runs() {
     }
     assert_eq!(
         glowbrick::render::gi::cache_bytes(&common::settings(&["gi=off"]).gi),
-        104,
+        120,
         "GI off holds a placeholder only"
     );
 }
@@ -262,4 +262,41 @@ pub fn two_cameras_update_the_cache_once_per_frame() {
     assert!(updated(&single) > 100.0, "{single:?}");
     let ratio = updated(&double) / updated(&single);
     assert!((0.9..1.1).contains(&ratio), "two cameras updated {ratio:.2}x the entries of one: {double:?}");
+}
+
+/// Freeing an entry must not cut the probe chains through its slot: entries inserted past it stay reachable.
+/// The camera looks into the window room, then at the room's outer wall from outside for longer than an entry
+/// lives unused (240 frames), so the room's entries are freed while the wall's, many inserted past them on
+/// shared chains, stay in use. Once
+/// the view is steady nothing should be inserted; an eviction that emptied its slot (the old table) made every
+/// entry past it unreachable, and the next frame inserted it again.
+pub fn freeing_entries_keeps_the_rest_of_their_probe_chains_reachable() {
+    let world = load_scene("window-room").unwrap();
+    let there = world.view(Some("inside")).unwrap().clone();
+    let back = CameraView {
+        name: "outside".into(),
+        origin: [74.0, 16.0, 20.0],
+        direction: [-1.0, -0.1, 0.2],
+        ..there.clone()
+    };
+    let mut r = common::renderer_with(&world, &there, 48, 32, &["lighting=nee", "gi=on"]);
+    r.render(16).unwrap();
+    r.set_view(&back);
+    let (mut evicted, mut inserted_after_eviction, mut live) = (0u64, 0u64, 0u32);
+    for frame in 0..300 {
+        if frame < 200 {
+            r.step();
+            continue;
+        }
+        let c = r.counters().unwrap();
+        if evicted > 0 {
+            inserted_after_eviction += c[GpuCounter::GiInserted as usize] as u64;
+        }
+        evicted += c[GpuCounter::GiEvicted as usize] as u64;
+        live = c[GpuCounter::GiLive as usize];
+    }
+    eprintln!("freed {evicted}, live {live}, inserted after the first eviction {inserted_after_eviction}");
+    assert!(evicted > 100, "the first view's entries were not freed: {evicted}");
+    assert!(live > 1000, "the second view keeps its entries: {live}");
+    assert_eq!(inserted_after_eviction, 0, "entries past a freed slot were lost and inserted again");
 }

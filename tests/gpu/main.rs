@@ -53,6 +53,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             the_gi_cache_converges_to_the_path_traced_reference_in_the_cornell_box,
             the_gi_cache_converges_to_the_path_traced_reference_in_the_window_room,
             two_cameras_update_the_cache_once_per_frame,
+            freeing_entries_keeps_the_rest_of_their_probe_chains_reachable,
             with_gi_off_no_gi_pass_runs,
         ],
         nee_converges: [

@@ -1,0 +1,54 @@
+// Direct light for the GI cache: what a surface reflects of the sun (sun-and-sky mode) or of the light pool
+// (one next-event-estimation sample), and each entry's own estimate of it, kept once per entry per frame with one
+// shadow ray (refresh.wgsl) so a cache ray that hits the entry's face reads it instead of tracing its own.
+#define_import_path glowbrick::gi::direct
+
+#import glowbrick::world::{materials, voxel_at}
+#import glowbrick::traversal::{trace_scene, face_normal, INF}
+#import glowbrick::lights::{scene, direct_sample}
+#import glowbrick::random::{Rng, rng_next, pcg}
+#import glowbrick::guards::finite3
+#import glowbrick::constants::{LIGHTING_SUN, RAY_OFFSET}
+#import glowbrick::gi::cache::{gi, gi_direct, tangent_axes, slot_seed, GiEntry}
+
+// The blend of an entry's direct estimate: young entries average evenly, then an exponential blend over about
+// 10 frames (faster than the indirect light's alpha: direct light is the bounce's source, so its lag adds up).
+const DIRECT_ALPHA: f32 = 0.1;
+
+// Direct light reflected by a surface at `point` (normal n): the sun with a shadow ray in sun-and-sky mode, else
+// one next-event-estimation sample of the light pool.
+fn direct_at(point: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+    if scene.mode != LIGHTING_SUN {
+        return direct_sample(point, n, albedo, scene.light_count, scene.power_pick == 1u, rng);
+    }
+    let cos_sun = dot(n, scene.sun.xyz);
+    if scene.sun.w > 0.0 && cos_sun > 0.0 && (scene.shadows == 0u || !trace_scene(point + n * RAY_OFFSET, scene.sun.xyz, INF).found) {
+        return albedo * scene.sun_radiance.rgb * cos_sun;
+    }
+    return vec3(0.0);
+}
+
+// Blends one direct-light sample at a uniform point of the entry's face into its estimate: over frames the
+// estimate becomes the face's average direct light, which is what a ray hitting anywhere on the face reads.
+fn update_direct(slot: u32, e: GiEntry) {
+    let id = voxel_at(e.voxel);
+    if id == 0u {
+        gi_direct[slot] = vec4(0.0);
+        return;
+    }
+    var rng = Rng(pcg(slot_seed(slot) ^ pcg(gi.frame ^ 0x2545F491u)));
+    let n = face_normal(e.face);
+    let t = tangent_axes(e.face);
+    // Inside the face by a hair: a point exactly on a neighbour's plane could start its shadow ray in that voxel.
+    var point = vec3<f32>(e.voxel) + vec3(0.5) + n * 0.5;
+    point[t.x] += (rng_next(&rng) - 0.5) * 0.98;
+    point[t.y] += (rng_next(&rng) - 0.5) * 0.98;
+    var estimate = direct_at(point, n, materials[id].albedo.rgb, &rng);
+    if !finite3(estimate) {
+        estimate = vec3(0.0);
+    }
+    let old = gi_direct[slot];
+    let weight = max(DIRECT_ALPHA, 1.0 / (old.w + 1.0));
+    let blended = select(mix(old.rgb, estimate, weight), estimate, old.w == 0.0);
+    gi_direct[slot] = vec4(blended, min(old.w + 1.0, 1.0e6));
+}
