@@ -40,19 +40,25 @@ pub struct CurvePoint {
     pub flip: f64,
 }
 
-/// The points of one method on one scene: accumulation reset at frame 1, images read at powers of two.
+/// What a curve renders: its name in the plot and its `--set` pairs (accumulation is added).
+pub struct CurveSpec<'a> {
+    pub name: &'static str,
+    pub pairs: &'a [String],
+    /// The method's frame time (from the bench's one-frame rows): a point's time is frames x this.
+    pub frame_ms: f64,
+}
+
+/// The points of one method on one scene: accumulation from the first frame, images read at about powers of two.
 pub fn measure_curve(
     world: &VoxelWorld,
     view: &CameraView,
-    method: &Method,
-    frame_ms: f64,
+    spec: &CurveSpec,
     config: &BenchConfig,
     reference: &LinearImage,
     scene: &str,
 ) -> Result<Vec<CurvePoint>, String> {
-    let mut pairs: Vec<String> = method.pairs.iter().map(|p| p.to_string()).collect();
+    let mut pairs = spec.pairs.to_vec();
     pairs.push("accumulate=on".into());
-    pairs.insert(0, format!("radius={}", (30.0 * config.width as f32 / 1600.0).round().max(2.0)));
     let settings = RenderSettings::default().with_pairs(&pairs)?;
     let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
     let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;
@@ -67,9 +73,9 @@ pub fn measure_curve(
         let flip = flip(&image, Encoding::Linear, reference, Encoding::Linear)?.mean;
         points.push(CurvePoint {
             scene: scene.to_string(),
-            method: method.name,
+            method: spec.name,
             frames,
-            ms: frames as f64 * frame_ms,
+            ms: frames as f64 * spec.frame_ms,
             metrics,
             flip,
         });
@@ -98,11 +104,12 @@ pub fn time_to(curve: &[&CurvePoint], target: f64) -> Option<f64> {
     })
 }
 
-/// The report's equal-time table: per scene and method, relMSE at NEE's last time and the time to NEE's last
-/// error, with the ratios to NEE.
+/// The report's equal-time table: per scene and method, relMSE at the baseline's last time and the time to the
+/// baseline's last error, with the ratios to it. The baseline is each scene's first curve (NEE).
 pub fn equal_time_table(points: &[CurvePoint]) -> String {
     let mut text = String::from(
-        "| scene | method | relMSE at NEE's time | NEE / method | ms to NEE's relMSE | NEE ms / method ms |\n\
+        "| scene | method | relMSE at the baseline's time | baseline / method | ms to the baseline's relMSE | \
+         baseline ms / method ms |\n\
          |---|---|---|---|---|---|\n",
     );
     let mut scenes: Vec<&str> = points.iter().map(|p| p.scene.as_str()).collect();
@@ -111,16 +118,19 @@ pub fn equal_time_table(points: &[CurvePoint]) -> String {
         let curve = |method: &str| -> Vec<&CurvePoint> {
             points.iter().filter(|p| p.scene == scene && p.method == method).collect()
         };
-        let nee = curve(METHODS[0].name);
+        let Some(first) = points.iter().find(|p| p.scene == scene) else { continue };
+        let nee = curve(first.method);
         let Some(last) = nee.last() else { continue };
-        for method in METHODS {
-            let c = curve(method.name);
+        let mut methods: Vec<&str> = points.iter().filter(|p| p.scene == scene).map(|p| p.method).collect();
+        methods.dedup();
+        for method in methods {
+            let c = curve(method);
             let at = error_at(&c, last.ms);
             let to = time_to(&c, last.metrics.relmse);
             let fmt = |v: Option<f64>, digits: usize| v.map_or("beyond the curve".into(), |v| format!("{v:.digits$}"));
             text += &format!(
                 "| {scene} | {} | {} | {} | {} | {} |\n",
-                method.name,
+                method,
                 fmt(at, 5),
                 fmt(at.map(|e| last.metrics.relmse / e), 1),
                 fmt(to, 1),

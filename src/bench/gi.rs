@@ -2,9 +2,11 @@
 //! the static visibility cache (without it every update traces its rays against the static world again), without
 //! the filter and with one bounce; the cost of an edit against the entries it reaches; memory per entry. Direct
 //! light is NEE in every row, so the rows differ only in the indirect light. Error against an 8-bounce CPU path
-//! tracer; GPU ms from timestamp queries.
+//! tracer; GPU ms from timestamp queries. Then convergence curves with and without the cache (`gi-plot.svg`):
+//! the error against that reference as a still camera accumulates frames from a cold cache.
 
-use super::{BenchConfig, cached_path_reference};
+use super::convergence::{CurvePoint, CurveSpec, equal_time_table, measure_curve};
+use super::{BenchConfig, cached_path_reference, plot};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::reference::metrics::{Metrics, compare};
 use crate::render::gi::{ENTRY_BYTES, GI_PASS_NAMES, RAY_BYTES, cache_bytes};
@@ -32,6 +34,9 @@ const ROWS: &[(&str, &[&str])] = &[
 
 /// Scenes (and views) of the GI bench: the window room lit through its window, the cornell box.
 const SCENES: &[(&str, &str)] = &[("window-room", "inside"), ("cornell", "front")];
+
+/// The curves: (name, row whose frame time they use); their pairs are the row's.
+const CURVES: &[(&str, &str)] = &[("nee, direct only", "direct only"), ("nee + GI cache (K=64)", "K=64")];
 
 /// Frames for the cache to settle (alpha 0.1: about ten frames per bounce), frames timed, frames averaged.
 const SETTLE_FRAMES: u32 = 100;
@@ -144,6 +149,7 @@ fn ms(v: Option<f64>) -> String {
 /// Runs the GI bench at the config's size, writes `gi.md` into `out` and returns its text.
 pub fn run_gi_bench(config: &BenchConfig, out: &Path) -> Result<String, String> {
     let mut rows = Vec::new();
+    let mut curves: Vec<CurvePoint> = Vec::new();
     let mut edit_costs = Vec::new();
     for &(scene, view_name) in SCENES {
         let world = load_scene(scene).map_err(|e| e.to_string())?;
@@ -154,12 +160,42 @@ pub fn run_gi_bench(config: &BenchConfig, out: &Path) -> Result<String, String> 
             eprintln!("gi bench: {scene} {}: {} ({:.0} ms/frame)", row.0, measured.metrics, measured.frame_ms);
             rows.push(measured);
         }
+        for &(name, row) in CURVES {
+            let (Some(&(_, row_pairs)), Some(measured)) = (
+                ROWS.iter().find(|(n, _)| *n == row),
+                rows.iter().find(|r: &&GiRow| r.scene == scene && r.name == row),
+            ) else {
+                continue;
+            };
+            let pairs: Vec<String> =
+                ["lighting=nee", "gi_alpha=0.1"].iter().chain(row_pairs).map(|p| p.to_string()).collect();
+            let spec = CurveSpec { name, pairs: &pairs, frame_ms: measured.frame_ms };
+            let points = measure_curve(&world, &view, &spec, config, &reference, scene)?;
+            eprintln!("gi bench: {scene} {name} accumulated: {} points", points.len());
+            curves.extend(points);
+        }
         if scene == "window-room" {
             edit_costs = measure_edits(&world, &view, config)?;
         }
     }
-    let text = markdown(&rows, &edit_costs, config);
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    plot::write_plot(&[], &curves, &out.join("gi-plot.svg"))?;
+    let mut text = markdown(&rows, &edit_costs, config);
+    text += &format!(
+        "\n## Convergence with and without the cache\n\nA still camera accumulating frames from a cold cache \
+         (`accumulate=on`), error against the {REFERENCE_BOUNCES}-bounce reference after about 1, 2, 4, ... {} \
+         frames, at frames x the row's frame time. Without the cache the error levels off at the missing indirect \
+         light; with it, it keeps falling once the cache has settled. ![convergence](gi-plot.svg)\n\n{}\n\
+         | scene | curve | frames | ms | MAE | relMSE | bias |\n|---|---|---|---|---|---|---|\n",
+        config.curve_frames,
+        equal_time_table(&curves)
+    );
+    for p in &curves {
+        text += &format!(
+            "| {} | {} | {} | {:.1} | {:.5} | {:.5} | {:+.5} |\n",
+            p.scene, p.method, p.frames, p.ms, p.metrics.mae, p.metrics.relmse, p.metrics.bias
+        );
+    }
     let path = out.join("gi.md");
     std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(text)

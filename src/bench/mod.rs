@@ -28,7 +28,7 @@ use crate::settings::RenderSettings;
 use crate::world::format::world_to_string;
 use crate::world::scene::load_scene;
 use crate::world::{CameraView, VoxelWorld};
-use convergence::{CurvePoint, METHODS, equal_time_table, measure_curve};
+use convergence::{CurvePoint, CurveSpec, METHODS, equal_time_table, measure_curve};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -213,6 +213,11 @@ fn cached_seeded_reference(
     Ok(reference.image)
 }
 
+/// The thesis' 30 px spatial radius at 1600 wide, scaled to the bench's image.
+fn radius_pair(config: &BenchConfig) -> String {
+    format!("radius={}", (30.0 * config.width as f32 / 1600.0).round().max(2.0))
+}
+
 /// GPU ms per pass that ran, by pass name.
 pub type PassTimes = Vec<(&'static str, f64)>;
 
@@ -224,8 +229,7 @@ fn measure(
     config: &BenchConfig,
 ) -> Result<(f64, PassTimes, LinearImage), String> {
     let mut pairs: Vec<String> = setting.pairs.iter().map(|p| p.to_string()).collect();
-    // The thesis' 30 px radius at 1600 wide, scaled to this image.
-    pairs.insert(0, format!("radius={}", (30.0 * config.width as f32 / 1600.0).round().max(2.0)));
+    pairs.insert(0, radius_pair(config));
     let settings = RenderSettings::default().with_pairs(&pairs)?;
     let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
     let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;
@@ -324,7 +328,10 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
         }
         for method in METHODS {
             let Some(frame_ms) = time_of(method.setting) else { continue };
-            let points = measure_curve(&world, &view, method, frame_ms, config, &reference, name)?;
+            let pairs: Vec<String> =
+                std::iter::once(radius_pair(config)).chain(method.pairs.iter().map(|p| p.to_string())).collect();
+            let spec = CurveSpec { name: method.name, pairs: &pairs, frame_ms };
+            let points = measure_curve(&world, &view, &spec, config, &reference, name)?;
             progress.println(&format!(
                 "bench: {name} {} accumulated: relMSE {}",
                 method.name,

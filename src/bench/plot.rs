@@ -2,7 +2,7 @@
 //! one line per method, the one-frame settings as crosses) as an SVG drawn with plotters, and the image strips.
 
 use super::BenchRow;
-use super::convergence::{CurvePoint, METHODS};
+use super::convergence::CurvePoint;
 use crate::image_io::{LinearImage, display_rgb8};
 use image::RgbImage;
 use plotters::prelude::*;
@@ -13,9 +13,9 @@ const PANEL: (u32, u32) = (560, 400);
 /// Writes `plot.svg`: a panel per scene (two per row).
 pub fn write_plot(rows: &[BenchRow], curves: &[CurvePoint], path: &Path) -> Result<(), String> {
     let mut scenes: Vec<&str> = Vec::new();
-    for r in rows {
-        if !scenes.contains(&r.scene.as_str()) {
-            scenes.push(&r.scene);
+    for scene in rows.iter().map(|r| r.scene.as_str()).chain(curves.iter().map(|p| p.scene.as_str())) {
+        if !scenes.contains(&scene) {
+            scenes.push(scene);
         }
     }
     let columns = scenes.len().clamp(1, 2);
@@ -58,23 +58,31 @@ fn draw_panel<DB: DrawingBackend>(
         .y_desc("relMSE")
         .y_label_formatter(&|y| format!("{y:.0e}"))
         .draw()?;
-    for (i, method) in METHODS.iter().enumerate() {
+    let mut methods: Vec<&str> = Vec::new();
+    for p in &points {
+        if !methods.contains(&p.method) {
+            methods.push(p.method);
+        }
+    }
+    for (i, method) in methods.into_iter().enumerate() {
         let colour = Palette99::pick(i).to_rgba();
         let line: Vec<(f64, f64)> =
-            points.iter().filter(|p| p.method == method.name).map(|p| (p.ms, p.metrics.relmse)).collect();
+            points.iter().filter(|p| p.method == method).map(|p| (p.ms, p.metrics.relmse)).collect();
         if line.is_empty() {
             continue;
         }
         chart
             .draw_series(LineSeries::new(line.clone(), colour.stroke_width(2)))?
-            .label(method.name)
+            .label(method)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
         chart.draw_series(line.into_iter().map(|p| Circle::new(p, 3, colour.filled())))?;
     }
-    chart
-        .draw_series(singles.iter().map(|r| Cross::new((r.frame_ms, r.metrics.relmse), 4, BLACK.stroke_width(1))))?
-        .label("one frame, each setting")
-        .legend(|(x, y)| Cross::new((x + 10, y), 4, BLACK.stroke_width(1)));
+    if !singles.is_empty() {
+        chart
+            .draw_series(singles.iter().map(|r| Cross::new((r.frame_ms, r.metrics.relmse), 4, BLACK.stroke_width(1))))?
+            .label("one frame, each setting")
+            .legend(|(x, y)| Cross::new((x + 10, y), 4, BLACK.stroke_width(1)));
+    }
     // Lower left: the curves fall towards the lower right.
     chart
         .configure_series_labels()

@@ -65,7 +65,13 @@ impl BenchArgs {
                 on_gpu(|| run_thesis_bench(scale, spp, &out)).map(|text| println!("{text}"))
             }
             BenchMode::Gi { spp } => {
-                let config = BenchConfig { width: 128, height: 72, reference_spp: spp, ..BenchConfig::full() };
+                let config = BenchConfig {
+                    width: 128,
+                    height: 72,
+                    reference_spp: spp,
+                    curve_frames: 128,
+                    ..BenchConfig::full()
+                };
                 on_gpu(|| run_gi_bench(&config, &out)).map(|text| println!("{text}"))
             }
         }
