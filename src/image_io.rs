@@ -58,13 +58,19 @@ pub fn display_rgb8(image: &LinearImage) -> Vec<u8> {
         .collect()
 }
 
+/// Values already in [0, 1] (false colour, debug views; no tonemapping), sRGB-encoded, 8 bits, RGB rows.
+pub fn plain_rgb8(image: &LinearImage) -> Vec<u8> {
+    image
+        .pixels
+        .iter()
+        .flat_map(|p| [0, 1, 2].map(|c| (linear_to_srgb(p[c].clamp(0.0, 1.0)) * 255.0 + 0.5) as u8))
+        .collect()
+}
+
 /// Writes a PNG of values already in [0, 1] (sRGB-encoded, no tonemapping): false-colour and debug images.
 pub fn write_png_plain(image: &LinearImage, path: &Path) -> Result<(), String> {
-    let mut buffer = ImageBuffer::<Rgb<u8>, Vec<u8>>::new(image.width, image.height);
-    for (x, y, px) in buffer.enumerate_pixels_mut() {
-        let p = image.pixel(x, y);
-        *px = Rgb([0, 1, 2].map(|c| (linear_to_srgb(p[c].clamp(0.0, 1.0)) * 255.0 + 0.5) as u8));
-    }
+    let buffer = ImageBuffer::<Rgb<u8>, Vec<u8>>::from_raw(image.width, image.height, plain_rgb8(image))
+        .ok_or_else(|| format!("{}: image size mismatch", path.display()))?;
     buffer.save(path).map_err(|e| format!("{}: cannot write image: {e}", path.display()))
 }
 

@@ -105,6 +105,14 @@ fn table_size(object: u32) -> u32 {
     return select(gi.static_capacity, gi.dynamic_capacity, object != 0u);
 }
 
+// The slot after `slot` in its probe order, within the table it lies in (found from the slot itself).
+fn next_slot(slot: u32) -> u32 {
+    let dynamic = slot >= gi.static_capacity;
+    let base = select(0u, gi.static_capacity, dynamic);
+    let size = select(gi.static_capacity, gi.dynamic_capacity, dynamic);
+    return base + ((slot - base + 1u) & (size - 1u));
+}
+
 const NOT_FOUND: u32 = 0xFFFFFFFFu;
 
 fn probe_slot(voxel: vec3<i32>, face: u32, object: u32, i: u32) -> u32 {

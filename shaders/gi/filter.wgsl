@@ -3,24 +3,22 @@
 // Same orientation keeps the two sides of a one-voxel wall apart: the far side faces the other way.
 
 #import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_find, used_within, is_live_key,
-    table_base, table_size, NOT_FOUND, UPDATE_AGE, EMPTY_KEY, FREED_KEY}
+    next_slot, NOT_FOUND, UPDATE_AGE, EMPTY_KEY, FREED_KEY}
 #import glowbrick::constants::GI_FILTER
 
 // A freed slot followed by an empty one ends every chain through it anyway: make it empty, so misses stop
 // early again. Safe here: no pass inserts while the filter runs, and a lookup that sees either word ends at the
 // next slot at the latest. A run of freed slots clears from its end, one slot a frame.
-fn clear_tombstone(slot: u32, object: u32) {
-    let base = table_base(object);
-    let next = base + ((slot - base + 1u) & (table_size(object) - 1u));
-    if atomicLoad(&gi_keys[next]) == EMPTY_KEY {
+fn clear_tombstone(slot: u32) {
+    if atomicLoad(&gi_keys[next_slot(slot)]) == EMPTY_KEY {
         atomicStore(&gi_keys[slot], EMPTY_KEY);
     }
 }
 
-fn filter_entry(slot: u32, object: u32) {
+fn filter_entry(slot: u32) {
     let key = atomicLoad(&gi_keys[slot]);
     if key == FREED_KEY {
-        clear_tombstone(slot, object);
+        clear_tombstone(slot);
         return;
     }
     if !is_live_key(key) {
@@ -51,7 +49,7 @@ fn filter_entry(slot: u32, object: u32) {
 @compute @workgroup_size(64, 1, 1)
 fn filter_static(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x < gi.static_capacity {
-        filter_entry(id.x, 0u);
+        filter_entry(id.x);
     }
 }
 
@@ -59,7 +57,6 @@ fn filter_static(@builtin(global_invocation_id) id: vec3<u32>) {
 @compute @workgroup_size(64, 1, 1)
 fn filter_dynamic(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x < gi.dynamic_capacity {
-        // Any non-zero object selects the dynamic table.
-        filter_entry(gi.static_capacity + id.x, 1u);
+        filter_entry(gi.static_capacity + id.x);
     }
 }

@@ -3,7 +3,7 @@
 
 use super::BenchRow;
 use super::convergence::CurvePoint;
-use crate::image_io::{LinearImage, display_rgb8};
+use crate::image_io::{LinearImage, display_rgb8, plain_rgb8};
 use image::RgbImage;
 use plotters::prelude::*;
 use std::path::Path;
@@ -100,18 +100,8 @@ pub fn write_strip(images: &[LinearImage], path: &Path) -> Result<(), String> {
     let gap = 4;
     let mut strip = RgbImage::from_pixel((w + gap) * images.len() as u32 - gap, h, image::Rgb([255, 255, 255]));
     for (i, picture) in images.iter().enumerate() {
-        let bytes = if i + 1 == images.len() {
-            // The FLIP map holds linear values of its sRGB colours: encode them back.
-            picture
-                .pixels
-                .iter()
-                .flat_map(|p| {
-                    [0, 1, 2].map(|c| (crate::colour::linear_to_srgb(p[c].clamp(0.0, 1.0)) * 255.0 + 0.5) as u8)
-                })
-                .collect()
-        } else {
-            display_rgb8(picture)
-        };
+        // The FLIP map holds linear values of its sRGB colours: encode them back as they are.
+        let bytes = if i + 1 == images.len() { plain_rgb8(picture) } else { display_rgb8(picture) };
         for (k, rgb) in bytes.chunks_exact(3).enumerate() {
             let (x, y) = (k as u32 % w, k as u32 / w);
             strip.put_pixel(i as u32 * (w + gap) + x, y, image::Rgb([rgb[0], rgb[1], rgb[2]]));
