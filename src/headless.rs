@@ -203,9 +203,7 @@ impl HeadlessRenderer {
 
     /// Renders `frames` more frames and returns the last one's linear HDR image.
     pub fn render(&mut self, frames: u32) -> Result<LinearImage, String> {
-        if frames == 0 || frames > 100_000 {
-            return Err(format!("frames = {frames} must be within 1..=100000"));
-        }
+        check_frames(frames)?;
         let goal = self.frames_rendered() + frames;
         let start = Instant::now();
         let mut readback: Option<Entity> = None;
@@ -248,7 +246,16 @@ impl HeadlessRenderer {
 
 /// Renders `world` from `view` without a window and returns the linear HDR image (before tonemapping).
 pub fn render_headless(world: VoxelWorld, view: &CameraView, options: &HeadlessOptions) -> Result<LinearImage, String> {
+    check_frames(options.frames)?; // before the GPU starts
     HeadlessRenderer::new(world, view, options)?.render(options.frames)
+}
+
+/// Frames one `render` call may run.
+fn check_frames(frames: u32) -> Result<(), String> {
+    match frames {
+        1..=100_000 => Ok(()),
+        _ => Err(format!("frames = {frames} must be within 1..=100000")),
+    }
 }
 
 /// Strips any 256-byte row padding of a texture readback and decodes little-endian f32 RGBA.

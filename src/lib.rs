@@ -5,6 +5,7 @@
 //! `reference` (CPU only) -> `render`, `settings`, `core_plugin` -> `game` (the playable app), `headless`
 //! (rendering without a window) -> `bench`, `stress` -> `cli`.
 
+pub mod alloc_watch;
 pub mod bench;
 pub mod cli;
 pub mod colour;

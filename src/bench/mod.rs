@@ -275,6 +275,10 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
         let names: Vec<&str> = SETTINGS.iter().map(|s| s.name).collect();
         return Err(format!("unknown bench setting '{unknown}' (valid: {})", names.join(", ")));
     }
+    // Every scene is checked before anything is written (a typo in the last name must not cost a long run).
+    for name in scenes {
+        load_scene(name).map_err(|e| e.to_string())?;
+    }
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let mut rows = Vec::new();
     let mut curves: Vec<CurvePoint> = Vec::new();

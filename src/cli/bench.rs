@@ -59,6 +59,9 @@ enum BenchMode {
 impl BenchArgs {
     pub fn run(self) -> Result<(), String> {
         let out = self.out.clone();
+        if out.exists() && !out.is_dir() {
+            return Err(format!("{}: --out names a folder for the report, and this is a file", out.display()));
+        }
         match self.mode() {
             BenchMode::Settings { scenes, quick, only, camera } => run_settings(scenes, quick, only, camera, &out),
             BenchMode::Thesis { scale, spp } => {

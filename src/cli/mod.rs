@@ -71,12 +71,20 @@ fn on_gpu<T>(work: impl FnOnce() -> Result<T, String>) -> Result<T, String> {
     })
 }
 
-/// Refuses an output path whose extension is not one of `allowed`, before any work is done.
+/// Refuses, before any work is done, an output path whose extension is not one of `allowed`, that is a
+/// folder, or whose folder does not exist (so a long render never ends in an error, or half a file).
 fn check_output(path: &Path, allowed: &[&str]) -> Result<(), String> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
-    if allowed.contains(&ext.as_str()) {
-        return Ok(());
+    if !allowed.contains(&ext.as_str()) {
+        let list: Vec<String> = allowed.iter().map(|e| format!(".{e}")).collect();
+        return Err(format!("{}: output must end in {}", path.display(), list.join(" or ")));
     }
-    let list: Vec<String> = allowed.iter().map(|e| format!(".{e}")).collect();
-    Err(format!("{}: output must end in {}", path.display(), list.join(" or ")))
+    if path.is_dir() {
+        return Err(format!("{}: is a folder, not a file to write", path.display()));
+    }
+    let folder = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if !folder.is_dir() {
+        return Err(format!("{}: the folder {} does not exist", path.display(), folder.display()));
+    }
+    Ok(())
 }

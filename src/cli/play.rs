@@ -46,9 +46,26 @@ impl PlayArgs {
         });
         let model = self.model.as_deref().map(load_model).transpose()?;
         let world = source.load().map_err(|e| e.to_string())?;
+        can_open_a_window()?;
         crate::game::run_game(world, settings, save, model);
         Ok(())
     }
+}
+
+/// The game needs an X11 display and a GPU adapter (software Vulkan will do); without either, say so and what
+/// to do, instead of the window system's or the renderer's panic.
+fn can_open_a_window() -> Result<(), String> {
+    if cfg!(all(unix, not(target_os = "macos"))) && std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
+        return Err("no display: DISPLAY is not set, and the game's window needs X11 (a desktop session, XWayland or \
+                    `ssh -X`); `glowbrick render` works without one"
+            .into());
+    }
+    crate::render::adapter::probe_adapter().map(|_| ()).map_err(|why| {
+        format!(
+            "no GPU adapter ({why}): install a Vulkan driver (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers` \
+             gives software Vulkan)"
+        )
+    })
 }
 
 /// The `--model` file as a model V can place.

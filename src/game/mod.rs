@@ -11,6 +11,7 @@ pub mod player;
 pub mod save_load;
 pub mod settings_panel;
 pub mod undo;
+pub mod window_fit;
 
 use crate::render::camera::voxel_camera_bundle;
 use crate::settings::RenderSettings;
@@ -47,7 +48,12 @@ pub fn run_game(
         app.insert_resource(model);
     }
     app.add_plugins(DefaultPlugins.set(WindowPlugin {
-        primary_window: Some(Window { title: "glowbrick".into(), resolution: (1280u32, 720u32).into(), ..default() }),
+        primary_window: Some(Window {
+            title: "glowbrick".into(),
+            resolution: (window_fit::PREFERRED_SIZE.x as u32, window_fit::PREFERRED_SIZE.y as u32).into(),
+            resizable: true,
+            ..default()
+        }),
         ..default()
     }))
     .insert_resource(world)
@@ -65,7 +71,16 @@ pub fn run_game(
     .add_systems(Startup, move |mut commands: Commands| {
         commands.spawn((voxel_camera_bundle(&view), Tonemapping::AcesFitted, player::Player::looking(&view)));
     })
-    .add_systems(Update, (undo::history_keys, save_load::save_load_keys, models::model_key, toggle_debug_view))
+    .add_systems(
+        Update,
+        (
+            undo::history_keys,
+            save_load::save_load_keys,
+            models::model_key,
+            toggle_debug_view,
+            window_fit::fit_window_to_screen,
+        ),
+    )
     .run()
 }
 

@@ -11,6 +11,7 @@
 //!
 //! Bevy's tonemapping runs after the voxel passes.
 
+pub mod adapter;
 pub mod camera;
 pub mod frame;
 pub mod gi;

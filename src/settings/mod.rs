@@ -253,8 +253,13 @@ impl Default for RenderSettings {
 }
 
 impl RenderSettings {
-    /// Applies one `KEY=VALUE` pair; unknown keys or values give an error listing the valid ones.
+    /// Applies one `KEY=VALUE` pair; unknown keys or values give an error listing the valid ones, in one line
+    /// even when the pair quotes a newline (found by the fuzzer: a settings file's string spanning lines).
     pub fn set(&mut self, pair: &str) -> Result<(), String> {
+        self.set_pair(pair).map_err(|e| crate::world::format::one_line(&e))
+    }
+
+    fn set_pair(&mut self, pair: &str) -> Result<(), String> {
         let Some((key, value)) = pair.split_once('=') else {
             return Err(format!("setting '{pair}' is not KEY=VALUE (valid: {})", valid_pairs()));
         };

@@ -156,3 +156,14 @@ fn a_ron_settings_file_sets_what_set_sets_and_rejects_the_same() {
     let nested = RenderSettings::default().with_ron(r#"{"lighting": ["restir"]}"#, "t.ron").unwrap_err();
     assert!(nested.contains("is not a string, number or bool"), "{nested}");
 }
+
+/// Found by the fuzzer (`stress --fuzz`, settings input 378 of seed 1): a settings file whose key or value
+/// string spans lines printed an error of several lines.
+#[test]
+fn an_error_quoting_a_newline_from_a_settings_file_stays_one_line() {
+    let file = "{\"temporal\nspatial\": \"on\", \"accumulate\": \"of\nf\"}";
+    let error = RenderSettings::default().with_ron(file, "t.ron").unwrap_err();
+    assert!(!error.contains('\n') && error.contains("\\n"), "{error}");
+    let error = RenderSettings::default().set("accumulate=o\nn").unwrap_err();
+    assert!(!error.contains('\n'), "{error}");
+}

@@ -82,7 +82,7 @@ impl std::fmt::Display for LoadError {
 }
 
 /// `text` with its control characters escaped (`\n`), so an error quoting hostile input stays one line.
-fn one_line(text: &str) -> String {
+pub fn one_line(text: &str) -> String {
     let mut line = String::with_capacity(text.len());
     for c in text.chars() {
         if c.is_control() {
@@ -252,7 +252,15 @@ pub fn read_limited(path: &Path, limit: u64) -> Result<String, LoadError> {
         return Err(fail(format!("file is {} bytes, larger than the {limit}-byte limit", meta.len())));
     }
     let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read: {e}")))?;
-    String::from_utf8(bytes).map_err(|e| fail(format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to())))
+    text_from_bytes(bytes, &location)
+}
+
+/// The bytes of a text file as text, or why they are not.
+pub fn text_from_bytes(bytes: Vec<u8>, location: &str) -> Result<String, LoadError> {
+    String::from_utf8(bytes).map_err(|e| LoadError {
+        location: location.to_string(),
+        message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+    })
 }
 
 /// Loads a RON world file.
@@ -291,8 +299,41 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     })();
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
+    } else {
+        remove_stale_temporaries(path);
     }
     result
+}
+
+/// Removes the temporaries a killed save of `path` (or of its `.bak`) left behind: `<name>.tmp<pid>` and
+/// `<name>.bak.tmp<pid>` of a process that is no longer running, or older than an hour where the platform
+/// cannot tell. Returns how many it removed. A save still running elsewhere keeps its temporary.
+pub fn remove_stale_temporaries(path: &Path) -> usize {
+    let Some(name) = path.file_name().and_then(|n| n.to_str()) else { return 0 };
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let Ok(entries) = std::fs::read_dir(dir) else { return 0 };
+    let pid_of = |file_name: &str| {
+        let rest = file_name.strip_prefix(name)?.strip_prefix('.')?;
+        let rest = rest.strip_prefix("bak.").unwrap_or(rest);
+        rest.strip_prefix("tmp")?.parse::<u32>().ok()
+    };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let Some(pid) = entry.file_name().to_str().and_then(pid_of) else { continue };
+        if pid == std::process::id() || !temporary_is_stale(pid, &entry) {
+            continue;
+        }
+        removed += std::fs::remove_file(entry.path()).is_ok() as usize;
+    }
+    removed
+}
+
+fn temporary_is_stale(pid: u32, entry: &std::fs::DirEntry) -> bool {
+    if Path::new("/proc/self").exists() {
+        return !Path::new(&format!("/proc/{pid}")).exists();
+    }
+    let age = entry.metadata().and_then(|m| m.modified()).ok().and_then(|t| t.elapsed().ok());
+    age.is_some_and(|a| a > std::time::Duration::from_secs(3600))
 }
 
 #[cfg(test)]

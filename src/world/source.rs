@@ -42,6 +42,8 @@ pub fn load_path(path: &std::path::Path) -> Result<VoxelWorld, LoadError> {
             });
         }
     }
+    // A save killed mid-write left its temporary beside the file: the next load clears it.
+    super::format::remove_stale_temporaries(path);
     let text = read_limited(path, MAX_FILE_BYTES)?;
     if text.contains(super::format::FORMAT_TAG) {
         parse_world(&text, &location)

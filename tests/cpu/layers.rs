@@ -4,7 +4,8 @@
 use std::path::{Path, PathBuf};
 
 /// Each top-level module of `src/` and its layer, bottom (0) to top.
-const LAYERS: [(&str, u32); 17] = [
+const LAYERS: [(&str, u32); 18] = [
+    ("alloc_watch", 0),
     ("colour", 0),
     ("progress", 0),
     ("image_io", 0),
@@ -25,7 +26,8 @@ const LAYERS: [(&str, u32); 17] = [
 ];
 
 /// Layers that must not depend on the GPU.
-const CPU_ONLY: [&str; 7] = ["colour", "progress", "image_io", "world", "lights", "dynamic", "reference"];
+const CPU_ONLY: [&str; 8] =
+    ["alloc_watch", "colour", "progress", "image_io", "world", "lights", "dynamic", "reference"];
 const RENDER_CRATES: [&str; 4] = ["bevy::render", "bevy::core_pipeline", "bevy::shader", "bevy::camera"];
 
 fn layer(module: &str) -> Option<u32> {

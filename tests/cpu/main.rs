@@ -13,3 +13,7 @@ mod traversal_matches_brute_force;
 mod world_edits;
 mod world_files;
 mod world_upload;
+
+/// The counting allocator of the `glowbrick` binary, so the fuzz tests can bound what an input allocates.
+#[global_allocator]
+static ALLOCATOR: glowbrick::alloc_watch::WatchingAllocator = glowbrick::alloc_watch::WatchingAllocator;

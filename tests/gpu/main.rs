@@ -74,35 +74,12 @@ fn tests() -> Vec<(&'static str, fn())> {
     ]
 }
 
-/// The adapter's name, or why there is none. Asked of Bevy as `RenderPlugin` asks (same settings, read from the
-/// same environment variables), with the panic Bevy raises when it finds none caught and kept quiet.
-fn probe_adapter() -> Result<String, String> {
-    use bevy::render::renderer::initialize_renderer;
-    use bevy::render::settings::WgpuSettings;
-    let settings = WgpuSettings::default();
-    let Some(backends) = settings.backends else { return Err("no wgpu backend enabled".into()) };
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
-    let found = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        bevy::tasks::block_on(initialize_renderer(backends, None, &settings))
-    }));
-    std::panic::set_hook(hook);
-    match found {
-        Ok(resources) => Ok(format!("{} ({:?})", resources.2.name, resources.2.backend)),
-        Err(panic) => Err(panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "the renderer could not start".into())),
-    }
-}
-
 /// The probe's answer, asked once.
 static ADAPTER: OnceLock<Result<String, String>> = OnceLock::new();
 
 fn adapter() -> &'static Result<String, String> {
     ADAPTER.get_or_init(|| {
-        let adapter = probe_adapter();
+        let adapter = glowbrick::render::adapter::probe_adapter();
         if let Ok(name) = &adapter {
             eprintln!("GPU tests on {name}");
         }

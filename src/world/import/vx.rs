@@ -28,7 +28,8 @@ const MAX_FILE_BYTES: u64 = 1 << 30;
 /// Most entries accepted (the thesis' files hold about 67 million).
 const MAX_ENTRIES: u32 = 400_000_000;
 
-fn open(path: &Path) -> Result<impl Read, String> {
+/// The decompressed stream of a `.vx` file.
+pub fn open(path: &Path) -> Result<impl Read + use<>, String> {
     let file = File::open(path).map_err(|e| format!("cannot read: {e}"))?;
     Ok(GzDecoder::new(BufReader::with_capacity(1 << 16, file)))
 }
@@ -90,7 +91,19 @@ pub fn load_vx(path: &Path) -> Result<VoxelWorld, LoadError> {
     if meta.len() > MAX_FILE_BYTES {
         return Err(fail(format!("file is {} bytes, larger than the {MAX_FILE_BYTES}-byte limit", meta.len())));
     }
-    let mut positions = open(path).map_err(&fail)?;
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("");
+    read_vx(|| open(path), stem, &location)
+}
+
+/// Imports a `.vx` scene from its gzip stream, opened twice by `open` (positions and values are read side by
+/// side). `stem` names the thesis scene whose camera views it gets.
+pub fn read_vx<R: Read>(
+    open: impl Fn() -> Result<R, String>,
+    stem: &str,
+    location: &str,
+) -> Result<VoxelWorld, LoadError> {
+    let fail = |message: String| LoadError { location: location.to_string(), message };
+    let mut positions = open().map_err(&fail)?;
     let header: Vec<u32> = (0..6)
         .map(|i| read_u32(&mut positions, &format!("header word {i}")))
         .collect::<Result<_, _>>()
@@ -115,9 +128,9 @@ pub fn load_vx(path: &Path) -> Result<VoxelWorld, LoadError> {
     }
     let world_size = size.with_x(mirror);
     let mut world = VoxelWorld::new(world_size, Palette::default());
-    world.views = thesis_views(path.file_stem().and_then(|s| s.to_str()).unwrap_or(""), mirror);
+    world.views = thesis_views(stem, mirror);
 
-    let mut values = open(path).map_err(&fail)?;
+    let mut values = open().map_err(&fail)?;
     skip(&mut values, 24 + 4 * n as u64, "the position block").map_err(&fail)?;
     let mut positions = BufReader::with_capacity(1 << 20, positions);
     let mut values = BufReader::with_capacity(1 << 20, values);

@@ -1,9 +1,10 @@
-//! `glowbrick stress`: a headless soak of the renderer. Every frame edits the world (lamps placed, broken and
+//! The soak (`glowbrick stress`): a headless run of the renderer. Every frame edits the world (lamps placed, broken and
 //! recoloured, blocks placed), the camera jumps or teleports, and the ReSTIR settings cycle through their
 //! extremes; every frame's image is read back and checked for non-finite pixels, and every tenth frame reads the
 //! reservoirs (`debug=reservoir`) for non-finite fields, M and W ranges. Then a static phase (fixed camera, no
 //! edits) measures how the mean luminance of a view drifts over time against the CPU reference of that view.
 
+use super::memory::{MemorySample, MemoryTrack};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::progress::Progress;
 use crate::reference::sampling::Pcg;
@@ -13,6 +14,7 @@ use crate::settings::{DebugView, RenderSettings};
 use crate::world::events::EditRequest;
 use crate::world::{CameraView, Edit, VoxelWorld};
 use bevy::math::{IVec3, Vec3};
+use bevy::render::renderer::RenderDevice;
 use std::fmt;
 
 /// How long and how big.
@@ -62,6 +64,8 @@ pub struct StressReport {
     pub reference_mean: f64,
     /// Standard deviation of one static frame's mean luminance (the noise drift is judged against).
     pub frame_noise: f64,
+    /// Resident and GPU bytes over the soak, a high per block of frames.
+    pub memory: MemoryTrack,
 }
 
 impl StressReport {
@@ -78,9 +82,12 @@ impl StressReport {
 }
 
 impl StressReport {
-    /// Why the run failed, if it did: any non-finite value, or a static view that drifts by more than 5% of the
-    /// reference or sits more than 10% from it.
+    /// Why the run failed, if it did: any non-finite value, memory that grows after warm-up, or a static view
+    /// that drifts by more than 5% of the reference or sits more than 10% from it.
     pub fn failure(&self) -> Option<String> {
+        if let Some(why) = self.memory.failure() {
+            return Some(why);
+        }
         if self.nonfinite_pixels > 0 || self.nonfinite_reservoirs > 0 || self.reservoir_resets > 0 || self.gi_resets > 0
         {
             return Some(format!(
@@ -122,6 +129,7 @@ impl fmt::Display for StressReport {
             "reservoirs: {} reads, non-finite {}, max M {:.0}, W in [{:.3e}, {:.3e}]",
             self.reservoir_reads, self.nonfinite_reservoirs, self.max_m, self.min_w, self.max_w
         )?;
+        writeln!(f, "memory, the high of each {}-frame block:\n{}", super::memory::BLOCK_FRAMES, self.memory)?;
         write!(
             f,
             "static view: mean luminance {:.5} -> {:.5} (drift {:.2}% of the reference {:.5}; one frame's noise \
@@ -136,9 +144,11 @@ impl fmt::Display for StressReport {
     }
 }
 
-/// The settings the soak cycles through: defaults and the extremes of every range.
-const SETTING_CYCLE: [&[&str]; 9] = [
+/// The settings the soak cycles through: defaults and the extremes of every range. The GI cache is on in all
+/// but one (`settings` turns it on).
+const SETTING_CYCLE: [&[&str]; 10] = [
     &[],
+    &["gi=off"],
     // The GI cache at its extremes (a new K also rebuilds its tables).
     &["gi=on", "gi_rays=4", "gi_update=1", "gi_alpha=1"],
     &["gi=on", "gi_rays=128", "gi_update=64", "gi_alpha=0.001", "gi_filter=off"],
@@ -151,7 +161,7 @@ const SETTING_CYCLE: [&[&str]; 9] = [
 ];
 
 fn settings(pairs: &[&str], debug: DebugView) -> Result<RenderSettings, String> {
-    let mut all = vec!["lighting=restir".to_string()];
+    let mut all = vec!["lighting=restir".to_string(), "gi=on".to_string()];
     all.extend(pairs.iter().map(|p| p.to_string()));
     let mut s = RenderSettings::default().with_pairs(&all)?;
     s.debug = debug;
@@ -263,6 +273,8 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
             report.nonfinite_pixels += image.non_finite_pixels() as u64;
         }
         report.frames += 1;
+        let device = renderer.app_mut().world().get_resource::<RenderDevice>();
+        report.memory.record(frame, MemorySample::now(device));
     }
 
     progress.finish();
