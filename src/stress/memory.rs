@@ -55,13 +55,16 @@ pub struct MemoryTrack {
     /// One entry per finished block: (last frame of the block, its highest sample).
     pub blocks: Vec<(u32, MemorySample)>,
     current: Option<MemorySample>,
+    /// The latest sample.
+    pub last: MemorySample,
 }
 
 impl MemoryTrack {
     /// Adds frame `frame`'s sample; closes a block every `BLOCK_FRAMES` frames.
     pub fn record(&mut self, frame: u32, sample: MemorySample) {
+        self.last = sample;
         let high = self.current.map_or(sample, |c| c.max(sample));
-        if (frame + 1) % BLOCK_FRAMES == 0 {
+        if (frame + 1).is_multiple_of(BLOCK_FRAMES) {
             self.blocks.push((frame + 1, high));
             self.current = None;
         } else {
@@ -101,6 +104,12 @@ impl MemoryTrack {
 impl std::fmt::Display for MemoryTrack {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         const MIB: f64 = 1024.0 * 1024.0;
+        writeln!(
+            f,
+            "  last frame: resident {:.1} MiB, GPU buffers + textures {:.1} MiB",
+            self.last.resident_bytes as f64 / MIB,
+            self.last.gpu_bytes as f64 / MIB
+        )?;
         for (frame, s) in &self.blocks {
             writeln!(
                 f,

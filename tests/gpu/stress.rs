@@ -1,6 +1,7 @@
 //! `glowbrick stress --quick` in CI: a short soak (random edits, lights placed, broken and recoloured every frame,
 //! camera teleports, settings at their extremes) with no non-finite pixel or reservoir field, and a static view
-//! afterwards that neither drifts nor strays from the CPU reference (the command's own checks, exit code 1).
+//! afterwards that neither drifts nor strays from the CPU reference (the command's own checks, exit code 1),
+//! and memory sampled from the process and the GPU device.
 
 use std::process::Command;
 
@@ -14,4 +15,9 @@ pub fn quick_stress_run_finds_no_non_finite_value_and_no_drift() {
     // The soak really edited and moved: the report counts what it did.
     let edits: u32 = stdout.split("edits ").nth(1).and_then(|s| s.split(' ').next()).unwrap().parse().unwrap();
     assert!(edits >= 240, "{stdout}");
+    // Memory is sampled: the process and the GPU device (wgpu's counters are on) both hold something.
+    let last = stdout.split("last frame: resident ").nth(1).unwrap_or_default();
+    let mib = |s: &str| s.split(" MiB").next().and_then(|n| n.trim().parse::<f64>().ok()).unwrap_or(0.0);
+    let gpu = last.split("GPU buffers + textures ").nth(1).map(mib).unwrap_or(0.0);
+    assert!(mib(last) > 50.0 && gpu > 1.0, "{stdout}");
 }

@@ -84,7 +84,7 @@ impl Target {
     /// hit the header, counts and positions, and most inputs are compressed again (one in eight mutates the
     /// compressed bytes instead, for the gzip layer).
     fn file_bytes(self, mutated: Vec<u8>, rng: &mut Pcg) -> Vec<u8> {
-        if self != Target::Vx || rng.next_u32() % 8 == 0 {
+        if self != Target::Vx || rng.next_u32().is_multiple_of(8) {
             return mutated;
         }
         corpus::gzip(&mutated)
@@ -364,7 +364,7 @@ fn run_target(config: &FuzzConfig, target: Target, inputs: u64) -> Result<(Targe
                             }
                         }
                         done += 1;
-                        if done % 64 == 0 {
+                        if done.is_multiple_of(64) {
                             progress.advance(64);
                         }
                     }

@@ -55,7 +55,7 @@ pub fn mutate(input: &[u8], donor: &[u8], kind: Kind, rng: &mut Pcg) -> Vec<u8> 
                 }
                 Kind::Binary if bytes.len() >= 4 => {
                     let i = (rng.next_u32() as usize % (bytes.len() / 4)) * 4;
-                    let word = if rng.next_u32() % 4 == 0 {
+                    let word = if rng.next_u32().is_multiple_of(4) {
                         rng.next_u32()
                     } else {
                         WORDS[rng.next_u32() as usize % WORDS.len()]
