@@ -52,6 +52,9 @@ pub struct StressReport {
     pub nonfinite_pixels: u64,
     pub reservoir_reads: u32,
     pub nonfinite_reservoirs: u64,
+    /// Reads with any non-finite reservoir, and the first: (frame, the settings then, pixels).
+    pub bad_reservoir_reads: u32,
+    pub first_bad_read: Option<(u32, String, u64)>,
     /// Counted on the GPU over the whole soak: reservoirs and GI estimates found non-finite and reset.
     pub reservoir_resets: u32,
     pub gi_resets: u32,
@@ -129,6 +132,13 @@ impl fmt::Display for StressReport {
             "reservoirs: {} reads, non-finite {}, max M {:.0}, W in [{:.3e}, {:.3e}]",
             self.reservoir_reads, self.nonfinite_reservoirs, self.max_m, self.min_w, self.max_w
         )?;
+        if let Some((frame, settings, pixels)) = &self.first_bad_read {
+            writeln!(
+                f,
+                "reads with a non-finite reservoir: {}; the first at frame {frame} ({pixels} pixels; settings [{settings}] over lighting=restir gi=on)",
+                self.bad_reservoir_reads
+            )?;
+        }
         writeln!(f, "memory, the high of each {}-frame block:\n{}", super::memory::BLOCK_FRAMES, self.memory)?;
         write!(
             f,
@@ -258,6 +268,7 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
         let image = renderer.render(1)?;
         if debug == DebugView::Reservoir {
             report.reservoir_reads += 1;
+            let before = report.nonfinite_reservoirs;
             for p in &image.pixels {
                 let [w, m, w_sum, bad] = *p;
                 report.nonfinite_reservoirs += (bad != 0.0 || !w.is_finite() || !w_sum.is_finite()) as u64;
@@ -268,6 +279,11 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
                     report.max_w = report.max_w.max(w);
                     report.min_w = report.min_w.min(w);
                 }
+            }
+            let bad = report.nonfinite_reservoirs - before;
+            if bad > 0 {
+                report.bad_reservoir_reads += 1;
+                report.first_bad_read.get_or_insert_with(|| (frame, SETTING_CYCLE[cycle].join(" "), bad));
             }
         } else {
             report.nonfinite_pixels += image.non_finite_pixels() as u64;
@@ -285,7 +301,9 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
     // Static phase: the home view of the world as the soak left it, no edits, unbiased reuse (so the reference
     // comparison measures drift and error, not the biased variant's known darkening).
     renderer.set_view(&home);
-    *renderer.app_mut().world_mut().resource_mut::<RenderSettings>() = settings(&["reuse=unbiased"], DebugView::None)?;
+    // The reference is direct light only, so the GI cache is off here.
+    *renderer.app_mut().world_mut().resource_mut::<RenderSettings>() =
+        settings(&["reuse=unbiased", "gi=off"], DebugView::None)?;
     renderer.render(8)?;
     let mut means = Vec::with_capacity(config.static_frames as usize);
     for _ in 0..config.static_frames.max(8) {
