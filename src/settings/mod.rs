@@ -295,7 +295,10 @@ impl RenderSettings {
                     ron::value::Number::F64(f) => f.get().to_string(),
                     other => format!("{}", other.into_f64()),
                 },
-                other => return Err(format!("{origin}: setting {key}: {other:?} is not a string, number or bool")),
+                other => {
+                    let error = format!("{origin}: setting {key}: {other:?} is not a string, number or bool");
+                    return Err(crate::world::format::one_line(&error));
+                }
             };
             self.set(&format!("{key}={value}")).map_err(|e| format!("{origin}: {e}"))?;
         }

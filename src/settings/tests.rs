@@ -167,3 +167,11 @@ fn an_error_quoting_a_newline_from_a_settings_file_stays_one_line() {
     let error = RenderSettings::default().set("accumulate=o\nn").unwrap_err();
     assert!(!error.contains('\n'), "{error}");
 }
+
+/// Found by the fuzzer (`stress --fuzz 5000000 --seed 2`, settings input 120745): a key spanning lines whose
+/// value is not a string, number or bool printed an error of two lines.
+#[test]
+fn an_error_about_a_value_of_the_wrong_kind_stays_one_line() {
+    let error = RenderSettings::default().with_ron("{\"temp\noral\": ()}", "t.ron").unwrap_err();
+    assert!(!error.contains('\n') && error.contains("is not a string, number or bool"), "{error}");
+}

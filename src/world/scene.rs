@@ -120,6 +120,12 @@ fn apply_op(world: &mut VoxelWorld, seed: u32, op_index: u32, op: &SceneOp) -> R
             if !(params.frequency.is_finite() && params.amplitude.is_finite() && params.base_height.is_finite()) {
                 return Err("terrain parameters must be finite".into());
             }
+            // Found by the fuzzer (recipe input 520195 of seed 2): a frequency of 7e36 put the noise's lattice
+            // coordinates beyond an isize and panicked inside the `noise` crate. Above one cycle per voxel the
+            // terrain is noise anyway.
+            if !(0.0..=1.0).contains(&params.frequency.abs()) {
+                return Err(format!("terrain frequency {} must be within -1..=1 cycles per voxel", params.frequency));
+            }
             fill_terrain(world, seed, params, ids.0, ids.1, ids.2);
             Ok(())
         }

@@ -61,3 +61,16 @@ fn a_file_claiming_a_2048_cubed_world_does_not_get_its_voxels() {
     assert_eq!(loaded.grid.size(), UVec3::splat(2048));
     assert!(held < 256 << 20, "held {} MiB", held >> 20);
 }
+
+/// Found by the fuzzer (`stress --fuzz 5000000 --seed 2`, recipe input 520195): a terrain frequency of 7e36
+/// panicked inside the noise crate. Now one error line.
+#[test]
+fn a_terrain_of_absurd_frequency_is_one_error_line() {
+    let recipe = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/mountain.ron")).unwrap();
+    assert!(recipe.contains("frequency: "), "the mountain recipe has a terrain");
+    let start = recipe.find("frequency: ").unwrap() + "frequency: ".len();
+    let end = start + recipe[start..].find([',', ')']).unwrap();
+    let hostile = format!("{}7.1e36{}", &recipe[..start], &recipe[end..]);
+    let error = glowbrick::world::scene::parse_recipe(&hostile, "r.ron").unwrap_err().to_string();
+    assert!(error.contains("terrain frequency 7100000000000000000000000000000000000 must be within"), "{error}");
+}
