@@ -9,13 +9,13 @@
 
 use crate::game::save_load::{backup_path, save_with_backup};
 use crate::progress::Progress;
-use crate::world::format::{load_world, world_to_string};
+use crate::world::format::{load_world, temporaries_of, world_to_string};
 use crate::world::scene::generated_world;
 use crate::world::source::load_path;
 use crate::world::{Edit, VoxelWorld};
 use bevy::math::{IVec3, UVec3};
 use std::io::{BufRead, BufReader, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -105,21 +105,6 @@ impl std::fmt::Display for KillReport {
     }
 }
 
-/// The temporaries next to `path` (its own and its backup's).
-fn temporaries(path: &Path) -> Vec<PathBuf> {
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default().to_string();
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
-    entries
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| {
-            let n = p.file_name().and_then(|n| n.to_str()).unwrap_or_default();
-            n.starts_with(&format!("{name}.tmp")) || n.starts_with(&format!("{name}.bak.tmp"))
-        })
-        .collect()
-}
-
 /// Starts the saver and waits for its "ready": the child and the length of its save cycle.
 fn start_saver(mut command: Command) -> Result<(Child, Duration), String> {
     let mut child = command
@@ -168,11 +153,13 @@ pub fn run_kills(kills: u32, dir: &Path, saver: impl Fn(&Path) -> Command) -> Re
         std::thread::sleep(cycle.mul_f64((k as f64 + 0.5) / kills as f64));
         child.kill().map_err(|e| e.to_string())?;
         child.wait().map_err(|e| e.to_string())?;
-        let left = temporaries(&path);
-        let has = |suffix: &str| left.iter().any(|p| p.to_string_lossy().ends_with(&format!("{suffix}{pid}")));
-        let moment = if has(".bak.tmp") {
+        let left = temporaries_of(&path);
+        let mine = |backup: bool| {
+            left.iter().any(|(p, owner)| *owner == pid && p.to_string_lossy().contains(".bak.tmp") == backup)
+        };
+        let moment = if mine(true) {
             Moment::WritingBackup
-        } else if has(".tmp") {
+        } else if mine(false) {
             Moment::WritingSave
         } else {
             Moment::Between
@@ -200,7 +187,7 @@ pub fn run_kills(kills: u32, dir: &Path, saver: impl Fn(&Path) -> Command) -> Re
             report.backups_broken += 1;
             report.problems.push(format!("kill {k} ({moment:?}): the backup is not a complete world"));
         }
-        let after = temporaries(&path).len() as u32;
+        let after = temporaries_of(&path).len() as u32;
         report.temporaries_after_load += after;
         if after > 0 {
             report.problems.push(format!("kill {k} ({moment:?}): {after} temporaries survived the next load"));

@@ -309,30 +309,34 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// `<name>.bak.tmp<pid>` of a process that is no longer running, or older than an hour where the platform
 /// cannot tell. Returns how many it removed. A save still running elsewhere keeps its temporary.
 pub fn remove_stale_temporaries(path: &Path) -> usize {
-    let Some(name) = path.file_name().and_then(|n| n.to_str()) else { return 0 };
+    let mut removed = 0;
+    for (temporary, pid) in temporaries_of(path) {
+        if pid != std::process::id() && temporary_is_stale(pid, &temporary) {
+            removed += std::fs::remove_file(&temporary).is_ok() as usize;
+        }
+    }
+    removed
+}
+
+/// The temporaries of saves of `path` and of its `.bak` that exist now, with the PID of the process that wrote
+/// each (`<name>.tmp<pid>`, `<name>.bak.tmp<pid>`).
+pub fn temporaries_of(path: &Path) -> Vec<(std::path::PathBuf, u32)> {
+    let Some(name) = path.file_name().and_then(|n| n.to_str()) else { return Vec::new() };
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let Ok(entries) = std::fs::read_dir(dir) else { return 0 };
+    let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
     let pid_of = |file_name: &str| {
         let rest = file_name.strip_prefix(name)?.strip_prefix('.')?;
         let rest = rest.strip_prefix("bak.").unwrap_or(rest);
         rest.strip_prefix("tmp")?.parse::<u32>().ok()
     };
-    let mut removed = 0;
-    for entry in entries.flatten() {
-        let Some(pid) = entry.file_name().to_str().and_then(pid_of) else { continue };
-        if pid == std::process::id() || !temporary_is_stale(pid, &entry) {
-            continue;
-        }
-        removed += std::fs::remove_file(entry.path()).is_ok() as usize;
-    }
-    removed
+    entries.flatten().filter_map(|e| Some((e.path(), e.file_name().to_str().and_then(pid_of)?))).collect()
 }
 
-fn temporary_is_stale(pid: u32, entry: &std::fs::DirEntry) -> bool {
+fn temporary_is_stale(pid: u32, temporary: &Path) -> bool {
     if Path::new("/proc/self").exists() {
         return !Path::new(&format!("/proc/{pid}")).exists();
     }
-    let age = entry.metadata().and_then(|m| m.modified()).ok().and_then(|t| t.elapsed().ok());
+    let age = std::fs::metadata(temporary).and_then(|m| m.modified()).ok().and_then(|t| t.elapsed().ok());
     age.is_some_and(|a| a > std::time::Duration::from_secs(3600))
 }
 
