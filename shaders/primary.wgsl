@@ -1,23 +1,15 @@
-// Primary rays: one per pixel through the brick grid; albedo lit by a sun (with a shadow ray) and sky light,
-// plus emission, written into the camera's HDR target. Debug views show the pass's inputs.
+// Primary rays: one per pixel through the brick grid, into the G-buffer. Where Voxel ReSTIR shades (emitters to
+// sample, lighting=full or emitters) that is all; otherwise this pass shades too: next-event estimation, the
+// disk and sky of lighting=full without emitters, or the sun-only debug look. Debug views show the pass's inputs.
 
 #import glowbrick::world::materials
-#import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, NOT_A_VOXEL}
+#import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, primary_ray_dir, NOT_A_VOXEL}
 #import glowbrick::gi::cache::{gi_on, gi_touch_surface, gi_incoming}
 #import glowbrick::traversal::{trace_scene, face_normal, INF}
-#import glowbrick::lights::{scene, sky, direct_sample}
+#import glowbrick::lights::{scene, sky, background, direct_sample, disk_sample, sky_sample}
 #import glowbrick::random::{Rng, pcg}
-#import glowbrick::constants::{LIGHTING_NEE, LIGHTING_RESTIR, DEBUG_NONE, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
+#import glowbrick::constants::{LIGHTING_NEE, LIGHTING_EMITTERS, LIGHTING_FULL, DEBUG_NONE, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
     DEBUG_RESERVOIR, RAY_OFFSET}
-
-// The camera ray through the centre of `pixel`; world::camera::camera_ray computes the same on the CPU.
-fn primary_ray_dir(pixel: vec2<u32>, size: vec2<f32>) -> vec3<f32> {
-    let uv = (vec2<f32>(pixel) + 0.5) / size;
-    let ndc = vec2(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
-    // Reverse-Z infinite projection: depth 1 is the near plane.
-    let p = view.world_from_clip * vec4(ndc, 1.0, 1.0);
-    return normalize(p.xyz / p.w - view.world_position);
-}
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -36,14 +28,17 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         gi_touch_surface(point, hit.face, hit.object);
     }
     // Voxel ReSTIR shades in its own passes when there is a light to sample; without one it is emission only.
-    let restir = scene.mode == LIGHTING_RESTIR;
+    let full = scene.mode == LIGHTING_FULL;
+    let restir = scene.mode == LIGHTING_EMITTERS || full;
     if restir && scene.light_count > 0u && (frame.debug_view == DEBUG_NONE || frame.debug_view == DEBUG_RESERVOIR) {
         return;
     }
     let nee = scene.mode == LIGHTING_NEE || restir;
     var colour = vec4(0.0);
     if !hit.found {
-        if frame.debug_view == DEBUG_NONE && !nee {
+        if frame.debug_view == DEBUG_NONE && full {
+            colour = vec4(background(dir) * frame.exposure, 1.0);
+        } else if frame.debug_view == DEBUG_NONE && !nee {
             colour = vec4(sky(dir) * frame.exposure, 1.0);
         }
     } else {
@@ -69,6 +64,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                     var rng = Rng(pcg(id.x + size.x * id.y) ^ pcg(frame.frame * 0x9E3779B9u + 1u));
                     var radiance = material.radiance.rgb
                         + direct_sample(point, normal, material.albedo.rgb, scene.light_count, scene.power_pick == 1u, &rng);
+                    if full {
+                        // No emitters to sample (ReSTIR would have shaded): the disk, and the sky below.
+                        radiance += disk_sample(point, normal, material.albedo.rgb, &rng);
+                        if !gi_on() {
+                            radiance += sky_sample(point, normal, material.albedo.rgb, &rng);
+                        }
+                    }
                     if gi_on() {
                         radiance += material.albedo.rgb * gi_incoming(point, hit.face, hit.object);
                     }

@@ -205,8 +205,45 @@ impl HeadlessRenderer {
     pub fn render(&mut self, frames: u32) -> Result<LinearImage, String> {
         check_frames(frames)?;
         let goal = self.frames_rendered() + frames;
-        let start = Instant::now();
         let mut readback: Option<Entity> = None;
+        self.until_captured(|renderer| {
+            if readback.is_none() && renderer.frames_rendered() >= goal {
+                readback = Some(renderer.spawn_readback());
+            }
+            readback
+        })
+    }
+
+    /// Renders one frame and returns its image: the frame that applies whatever was asked before the call (an
+    /// edit message, a setting), not a later one. (The copy arrives while the next frame renders, so two frames
+    /// run.)
+    pub fn render_next(&mut self) -> Result<LinearImage, String> {
+        let readback = self.spawn_readback();
+        self.until_captured(|_| Some(readback))
+    }
+
+    /// Asks for the render target of the next frame rendered.
+    fn spawn_readback(&mut self) -> Entity {
+        let sink = self.captured.clone();
+        self.app
+            .world_mut()
+            .spawn(Readback::texture(self.target.clone()))
+            .observe(move |event: On<ReadbackComplete>| {
+                if let Ok(mut slot) = sink.0.lock() {
+                    slot.get_or_insert_with(|| event.data.clone());
+                }
+            })
+            .id()
+    }
+
+    /// Steps frames until a readback delivers an image; `after_step` (also asked once before the first step)
+    /// spawns the readback when it is time and says which it is (despawned once it delivered).
+    fn until_captured(
+        &mut self,
+        mut after_step: impl FnMut(&mut Self) -> Option<Entity>,
+    ) -> Result<LinearImage, String> {
+        let start = Instant::now();
+        let mut readback = after_step(self);
         loop {
             self.step();
             if let Some(bytes) = self.captured.0.lock().map_err(|_| "readback lock poisoned")?.take() {
@@ -215,27 +252,14 @@ impl HeadlessRenderer {
                 }
                 return decode_rgba32f(&bytes, self.width, self.height);
             }
-            if readback.is_none() && self.frames_rendered() >= goal {
-                let sink = self.captured.clone();
-                let entity = self
-                    .app
-                    .world_mut()
-                    .spawn(Readback::texture(self.target.clone()))
-                    .observe(move |event: On<ReadbackComplete>| {
-                        if let Ok(mut slot) = sink.0.lock() {
-                            slot.get_or_insert_with(|| event.data.clone());
-                        }
-                    })
-                    .id();
-                readback = Some(entity);
-            }
+            readback = after_step(self);
             let render_world = self.app.sub_app(RenderApp).world();
             if let Some(error) = crate::render::frame::pipeline_error(render_world) {
                 return Err(error);
             }
             if start.elapsed() > self.timeout {
                 return Err(format!(
-                    "timed out after {:?}: {} of {goal} frames rendered (is a GPU adapter available?)",
+                    "timed out after {:?}: {} frames rendered (is a GPU adapter available?)",
                     self.timeout,
                     self.frames_rendered()
                 ));

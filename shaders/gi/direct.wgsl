@@ -1,25 +1,30 @@
-// Direct light for the GI cache: what a surface reflects of the sun (sun-and-sky mode) or of the light pool
-// (one next-event-estimation sample), and each entry's own estimate of it, kept once per entry per frame with one
+// Direct light for the GI cache: what a surface reflects of the sun (the sun-only look), of the light pool (one
+// next-event-estimation sample), or of both the pool and the sun's or moon's disk (lighting=full), and each entry's own estimate of it, kept once per entry per frame with one
 // shadow ray (refresh.wgsl) so a cache ray that hits the entry's face reads it instead of tracing its own.
 #define_import_path glowbrick::gi::direct
 
 #import glowbrick::world::{materials, voxel_at}
 #import glowbrick::traversal::{trace_scene, face_normal, INF}
-#import glowbrick::lights::{scene, direct_sample}
+#import glowbrick::lights::{scene, direct_sample, disk_sample}
 #import glowbrick::random::{Rng, rng_next, pcg}
 #import glowbrick::guards::finite3
-#import glowbrick::constants::{LIGHTING_SUN, RAY_OFFSET}
+#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET}
 #import glowbrick::gi::cache::{gi, gi_direct, tangent_axes, slot_seed, GiEntry}
 
 // The blend of an entry's direct estimate: young entries average evenly, then an exponential blend over about
 // 10 frames (faster than the indirect light's alpha: direct light is the bounce's source, so its lag adds up).
 const DIRECT_ALPHA: f32 = 0.1;
 
-// Direct light reflected by a surface at `point` (normal n): the sun with a shadow ray in sun-and-sky mode, else
-// one next-event-estimation sample of the light pool.
+// Direct light reflected by a surface at `point` (normal n): the sun with a shadow ray in the sun-only look, else
+// one next-event-estimation sample of the light pool, plus one of the disk with lighting=full. (The sky is not
+// direct light here: the cache's own rays that leave the world bring it, update.wgsl.)
 fn direct_at(point: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
     if scene.mode != LIGHTING_SUN {
-        return direct_sample(point, n, albedo, scene.light_count, scene.power_pick == 1u, rng);
+        var direct = direct_sample(point, n, albedo, scene.light_count, scene.power_pick == 1u, rng);
+        if scene.mode == LIGHTING_FULL {
+            direct += disk_sample(point, n, albedo, rng);
+        }
+        return direct;
     }
     let cos_sun = dot(n, scene.sun.xyz);
     if scene.sun.w > 0.0 && cos_sun > 0.0 && (scene.shadows == 0u || !trace_scene(point + n * RAY_OFFSET, scene.sun.xyz, INF).found) {

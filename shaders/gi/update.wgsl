@@ -2,7 +2,8 @@
 // directions from its cached static hits (brought up to date by refresh.wgsl) or, for a moving object's
 // entry, from rays traced now; light at a hit is the hit face's direct light (its entry's estimate, kept once a
 // frame by refresh.wgsl; traced here only when the face has none yet) plus its face's cached indirect light from
-// last frame (and emission where the shading passes do not already count it); blend.
+// last frame (and emission where the shading passes do not already count it); blend. Rays that leave the world
+// bring the sky (lighting=full and the sun-only look).
 
 #import glowbrick::world::{materials, voxel_at, objects, object_index, object_count}
 #import glowbrick::traversal::{trace, trace_objects, trace_scene, face_normal, INF}
@@ -10,7 +11,7 @@
 #import glowbrick::random::{Rng, pcg}
 #import glowbrick::guards::finite3
 #import glowbrick::counters::counters
-#import glowbrick::constants::{LIGHTING_SUN, RAY_OFFSET, GI_BOUNCES, GI_CACHE, COUNT_GI_UPDATED, COUNT_GI_LIVE, COUNT_GI_EVICTED,
+#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET, GI_BOUNCES, GI_CACHE, COUNT_GI_UPDATED, COUNT_GI_LIVE, COUNT_GI_EVICTED,
     COUNT_GI_BORROWED, COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
 #import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_edits, gi_direct, GiEntry,
     gi_touch, gi_find, used_within, slot_seed, ray_direction, ray_origin, encode_hit, hit_face, hit_distance, is_live_key,
@@ -79,8 +80,9 @@ fn object_hit_radiance(point: vec3<f32>, face: u32, material: u32, fallback: vec
     return radiance;
 }
 
+// A ray that leaves the world sees the sky (not the disk: hits sample that as direct light) where there is one.
 fn miss_radiance(dir: vec3<f32>) -> vec3<f32> {
-    return select(vec3(0.0), sky(dir), scene.mode == LIGHTING_SUN);
+    return select(vec3(0.0), sky(dir), scene.mode == LIGHTING_SUN || scene.mode == LIGHTING_FULL);
 }
 
 // Ages and re-shades the entry in `slot`. Static entries read their cached static hits and test only

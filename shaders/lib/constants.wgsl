@@ -20,7 +20,8 @@ const LIGHT_SIZE_MASK: u32 = #{LIGHT_SIZE_MASK}u;
 // Lighting modes and debug views (src/settings.rs).
 const LIGHTING_SUN: u32 = #{LIGHTING_SUN}u;
 const LIGHTING_NEE: u32 = #{LIGHTING_NEE}u;
-const LIGHTING_RESTIR: u32 = #{LIGHTING_RESTIR}u;
+const LIGHTING_EMITTERS: u32 = #{LIGHTING_EMITTERS}u;
+const LIGHTING_FULL: u32 = #{LIGHTING_FULL}u;
 const DEBUG_NONE: u32 = #{DEBUG_NONE}u;
 const DEBUG_ALBEDO: u32 = #{DEBUG_ALBEDO}u;
 const DEBUG_NORMAL: u32 = #{DEBUG_NORMAL}u;

@@ -62,6 +62,15 @@ fn unpack_surface(texel: vec4<f32>) -> Surface {
         (bits >> GBUFFER_MATERIAL_SHIFT) & GBUFFER_MATERIAL_MASK, bits >> GBUFFER_OBJECT_SHIFT);
 }
 
+// The camera ray through the centre of `pixel`; world::camera::camera_ray computes the same on the CPU.
+fn primary_ray_dir(pixel: vec2<u32>, size: vec2<f32>) -> vec3<f32> {
+    let uv = (vec2<f32>(pixel) + 0.5) / size;
+    let ndc = vec2(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+    // Reverse-Z infinite projection: depth 1 is the near plane.
+    let p = view.world_from_clip * vec4(ndc, 1.0, 1.0);
+    return normalize(p.xyz / p.w - view.world_position);
+}
+
 fn pixel_index(pixel: vec2<u32>) -> u32 {
     return pixel.x + u32(view.viewport.z) * pixel.y;
 }

@@ -1,9 +1,9 @@
-// The scene's lighting on the GPU (group 2): this frame's sun and sky, the light pool's slots and power alias
+// The scene's lighting on the GPU (group 2): this frame's sun (or moon) and sky and their sampling, the light pool's slots and power alias
 // table (src/lights), and next-event estimation with one light sample and a shadow ray. Mirrors src/reference (Scene::direct_sample) so GPU and CPU estimate the same
 // integral: pick a light (power or uniform), a uniform point on a cube face that sees the point, one shadow ray.
 #define_import_path glowbrick::lights
 
-#import glowbrick::traversal::trace_scene
+#import glowbrick::traversal::{trace_scene, INF}
 #import glowbrick::random::{Rng, rng_next, rng_next_u32}
 #import glowbrick::constants::{RAY_OFFSET, PI, LIGHT_FACES_SHIFT, LIGHT_SIZE_MASK}
 
@@ -31,7 +31,7 @@ struct SceneLighting {
     sun_radiance: vec4<f32>,
     sky_zenith: vec4<f32>,
     sky_horizon: vec4<f32>,
-    // LIGHTING_*: sun and sky, or emitters only (next-event estimation or Voxel ReSTIR).
+    // LIGHTING_*: full (disk, sky and emitters), emitters only (ReSTIR or next-event estimation), or sun (debug).
     mode: u32,
     // 1: pick lights by power (alias table); 0: uniformly.
     power_pick: u32,
@@ -43,10 +43,68 @@ struct SceneLighting {
 @group(2) @binding(1) var<storage, read> alias_table: array<AliasEntry>;
 @group(2) @binding(2) var<uniform> scene: SceneLighting;
 
-// Sky radiance in direction `dir` (sun-and-sky lighting only).
+// Sky radiance in direction `dir`, not counting the disk (lights::daylight::Daylight::sky).
 fn sky(dir: vec3<f32>) -> vec3<f32> {
     let up = clamp(dir.y * 0.5 + 0.5, 0.0, 1.0);
     return mix(scene.sky_horizon.rgb, scene.sky_zenith.rgb, up);
+}
+
+// The sun's (or moon's) disk's cone, 1 - cos(radius).
+fn disk_cone() -> f32 {
+    return scene.sun_radiance.w;
+}
+
+// What a camera ray that leaves the world sees with lighting=full: the sky, and the disk itself (its irradiance
+// over its solid angle) where the ray points into it (Daylight::background).
+fn background(dir: vec3<f32>) -> vec3<f32> {
+    var disk = vec3(0.0);
+    if scene.sun.w > 0.0 && dot(dir, scene.sun.xyz) >= 1.0 - disk_cone() {
+        disk = scene.sun_radiance.rgb / (2.0 * disk_cone());
+    }
+    return sky(dir) + disk;
+}
+
+// An orthonormal frame (t, b, n) around unit n (Duff et al. 2017), as lights::daylight::frame.
+fn frame_of(n: vec3<f32>) -> mat3x3<f32> {
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return mat3x3(vec3(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), vec3(b, sign + n.y * n.y * a, -n.y), n);
+}
+
+// One sample of the light the disk gives a diffuse surface at p (normal n): a uniform direction in its cone
+// (pdf 1 / solid angle, which cancels against the radiance's 1 / solid angle) and one shadow ray.
+fn disk_sample(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+    let u1 = rng_next(rng);
+    let u2 = rng_next(rng);
+    if scene.sun.w <= 0.0 {
+        return vec3(0.0);
+    }
+    let cos_theta = 1.0 - u1 * disk_cone();
+    let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
+    let phi = 2.0 * PI * u2;
+    let dir = normalize(frame_of(scene.sun.xyz) * vec3(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta));
+    let cos_surface = dot(n, dir);
+    if cos_surface <= 0.0 {
+        return vec3(0.0);
+    }
+    if scene.shadows != 0u && trace_scene(p + n * RAY_OFFSET, dir, INF).found {
+        return vec3(0.0);
+    }
+    return albedo * scene.sun_radiance.rgb * cos_surface;
+}
+
+// One cosine-distributed ray from a diffuse surface at p: the sky it reaches if it leaves the world (cos / pi
+// cancels against the pdf). The sky's direct light where no GI cache brings it.
+fn sky_sample(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+    let r = sqrt(rng_next(rng));
+    let phi = 2.0 * PI * rng_next(rng);
+    let local = vec3(r * cos(phi), r * sin(phi), sqrt(max(1.0 - r * r, 0.0)));
+    let dir = normalize(frame_of(n) * local);
+    if trace_scene(p + n * RAY_OFFSET, dir, INF).found {
+        return vec3(0.0);
+    }
+    return albedo * sky(dir);
 }
 
 struct PickedLight {

@@ -1,14 +1,16 @@
-// Voxel ReSTIR pass 3: shading. Emission plus the reservoir's sample: f(y) V(y) W, with a final shadow ray.
+// Voxel ReSTIR pass 3: shading. Emission plus the reservoir's sample: f(y) V(y) W, with a final shadow ray; with
+// lighting=full also one sample of the sun's (or moon's) disk and, where no GI cache brings the sky, one of the sky.
 // An occluded sample gets W = 0 and keeps its M (visibility reuse): next frame's temporal reuse does not pick it
 // again, and its M still says how many candidates found this pixel's light occluded. (Emptying it instead, M = 0,
 // forgets that evidence and measurably brightens penumbrae.)
 
 #import glowbrick::world::materials
-#import glowbrick::frame::{frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output}
-#import glowbrick::constants::DEBUG_RESERVOIR
+#import glowbrick::frame::{frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output,
+    primary_ray_dir}
+#import glowbrick::constants::{DEBUG_RESERVOIR, LIGHTING_FULL}
 #import glowbrick::guards::finite
-#import glowbrick::restir::common::{reservoirs_final, validated, shading, unshadowed, reservoir_visible, NO_LIGHT}
-#import glowbrick::lights::lights
+#import glowbrick::restir::common::{reservoirs_final, validated, shading, unshadowed, reservoir_visible, pixel_rng, NO_LIGHT}
+#import glowbrick::lights::{lights, scene, background, disk_sample, sky_sample}
 #import glowbrick::gi::cache::{gi_on, gi_incoming}
 
 @compute @workgroup_size(8, 8, 1)
@@ -19,9 +21,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let index = pixel_index(id.xy);
     let surface = unpack_surface(gbuffer[index]);
+    let full = scene.mode == LIGHTING_FULL;
     if !surface.found {
-        // Emitters only, as in the reference: no sky.
-        write_output(id.xy, vec4(0.0));
+        // A miss sees the sky and the disk with lighting=full, nothing with emitters only (the thesis' protocol).
+        var sky_seen = vec3(0.0);
+        if full && frame.debug_view != DEBUG_RESERVOIR {
+            sky_seen = background(primary_ray_dir(id.xy, vec2<f32>(size))) * frame.exposure;
+        }
+        write_output(id.xy, vec4(sky_seen, select(0.0, 1.0, full)));
         return;
     }
     let x = shading(surface);
@@ -44,6 +51,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     reservoirs_final[index] = r;
+    if full {
+        var rng = pixel_rng(id.xy, 3u);
+        radiance += disk_sample(x.point, x.normal, x.albedo, &rng);
+        if !gi_on() {
+            radiance += sky_sample(x.point, x.normal, x.albedo, &rng);
+        }
+    }
     if gi_on() {
         radiance += materials[surface.material].albedo.rgb * gi_incoming(x.point, surface.face, surface.object);
     }

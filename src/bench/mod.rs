@@ -12,12 +12,14 @@
 //! accumulates NEE frames for the time one default ReSTIR frame takes: the equal-time comparison.
 
 pub mod convergence;
+pub mod daylight;
 pub mod gi;
 pub mod plot;
 pub mod thesis;
 
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::{LinearImage, read_image, write_image};
+use crate::lights::daylight::Daylight;
 use crate::progress::Progress;
 use crate::reference::flip::{Encoding, flip};
 use crate::reference::metrics::{Metrics, compare};
@@ -153,8 +155,19 @@ pub fn reference_noise(
     config: &BenchConfig,
     reference: &LinearImage,
 ) -> Result<f64, String> {
-    let other = cached_seeded_reference(world, view, config, 0, 2)?;
-    Ok(compare(&other, reference)?.mae)
+    reference_noise_of(world, view, config, &Reference::default(), reference)
+}
+
+/// The noise of the reference `what` (already rendered as `image`): MAE against one with another seed.
+pub fn reference_noise_of(
+    world: &VoxelWorld,
+    view: &CameraView,
+    config: &BenchConfig,
+    what: &Reference,
+    image: &LinearImage,
+) -> Result<f64, String> {
+    let other = cached_seeded_reference(world, view, config, what, 2)?;
+    Ok(compare(&other, image)?.mae)
 }
 
 /// The reference with `bounces` diffuse bounces (0: direct light), cached like `cached_reference`.
@@ -164,17 +177,39 @@ pub fn cached_path_reference(
     config: &BenchConfig,
     bounces: u32,
 ) -> Result<LinearImage, String> {
-    cached_seeded_reference(world, view, config, bounces, 1)
+    cached_reference_of(world, view, config, &Reference { bounces, daylight: None })
+}
+
+/// Which light a reference integrates: emitters only (the default) or with a sun or moon and sky, and how many
+/// diffuse bounces.
+#[derive(Clone, Debug, Default)]
+pub struct Reference {
+    pub bounces: u32,
+    pub daylight: Option<Daylight>,
+}
+
+/// The reference `what`, computed once and cached by world, view, size, spp and lighting.
+pub fn cached_reference_of(
+    world: &VoxelWorld,
+    view: &CameraView,
+    config: &BenchConfig,
+    what: &Reference,
+) -> Result<LinearImage, String> {
+    cached_seeded_reference(world, view, config, what, 1)
 }
 
 fn cached_seeded_reference(
     world: &VoxelWorld,
     view: &CameraView,
     config: &BenchConfig,
-    bounces: u32,
+    what: &Reference,
     seed: u64,
 ) -> Result<LinearImage, String> {
-    let light = if bounces == 0 { "direct".to_string() } else { format!("{bounces}bounces") };
+    let bounces = what.bounces;
+    let mut light = if bounces == 0 { "direct".to_string() } else { format!("{bounces}bounces") };
+    if let Some(day) = &what.daylight {
+        light += &format!("|{day:?}");
+    }
     let defaults = ReferenceOptions::default();
     // The estimator's version is part of the key: a cached image from another estimator is not reused.
     let key = format!(
@@ -198,6 +233,7 @@ fn cached_seeded_reference(
         spp: config.reference_spp,
         bounces,
         seed,
+        daylight: what.daylight,
         ..defaults
     };
     let reference = render_reference(world, view, &options)?;

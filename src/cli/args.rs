@@ -86,6 +86,11 @@ impl SettingArgs {
         self.settings_over(RenderSettings::default())
     }
 
+    /// The settings for rendering `world`: its saved time of day, then the file and the pairs.
+    pub fn settings_for(&self, world: &VoxelWorld) -> Result<RenderSettings, String> {
+        self.settings_over(RenderSettings::default().with_world_time(world))
+    }
+
     /// The settings file and pairs applied over `base`.
     pub fn settings_over(&self, base: RenderSettings) -> Result<RenderSettings, String> {
         let mut settings = base;

@@ -1,9 +1,10 @@
-//! `glowbrick bench`: run time against error, in one of three modes. Each mode's flags are refused in the other
+//! `glowbrick bench`: run time against error, in one of four modes. Each mode's flags are refused in the other
 //! modes by clap, as a conflict or as a missing `--thesis`/`--gi`, so no flag is ever silently ignored. Conflicts
 //! are listed flag by flag, not by group: clap names every member of a group in its error, given or not.
 
 use super::args::parse_camera;
 use super::on_gpu;
+use crate::bench::daylight::run_daylight_bench;
 use crate::bench::{ALL_SCENES, BenchConfig, QUICK_SCENES, gi::run_gi_bench, run_bench, thesis::run_thesis_bench};
 use crate::world::CameraView;
 use clap::{ArgGroup, Args};
@@ -11,10 +12,10 @@ use std::path::{Path, PathBuf};
 
 /// The flags of the settings sweep and the flags that pick another mode: each set refuses the other.
 const SWEEP: [&str; 4] = ["scenes", "quick", "settings", "camera"];
-const MODES: [&str; 2] = ["thesis", "gi"];
+const MODES: [&str; 3] = ["thesis", "gi", "daylight"];
 
 #[derive(Args)]
-#[command(group(ArgGroup::new("mode").args(["thesis", "gi"])))]
+#[command(group(ArgGroup::new("mode").args(MODES)))]
 pub struct BenchArgs {
     /// Comma-separated scene names (default: all thesis-like scenes, or a small set with --quick).
     #[arg(long, value_delimiter = ',', conflicts_with_all = MODES)]
@@ -30,10 +31,15 @@ pub struct BenchArgs {
     /// the cost of edits, memory; writes gi.md.
     #[arg(long)]
     gi: bool,
+    /// The game's lighting bench instead: lighting=full with the GI cache at noon, dusk and night against a
+    /// reference with the same sun, sky and lamps and 3 bounces, and the cost of the sun and sky at 10^3 and
+    /// 10^5 lamps; writes daylight.md.
+    #[arg(long)]
+    daylight: bool,
     /// With --thesis: image size as a fraction of the thesis' 1600x1024.
-    #[arg(long, default_value_t = 0.2, requires = "thesis", conflicts_with = "gi", conflicts_with_all = SWEEP)]
+    #[arg(long, default_value_t = 0.2, requires = "thesis", conflicts_with_all = ["gi", "daylight", "scenes", "quick", "settings", "camera"])]
     scale: f32,
-    /// With --thesis or --gi: samples per pixel of the CPU reference.
+    /// With --thesis, --gi or --daylight: samples per pixel of the CPU reference.
     #[arg(long, default_value_t = 1024, requires = "mode", conflicts_with_all = SWEEP)]
     spp: u32,
     /// Comma-separated bench settings to run (default: all), e.g. restir,nee-power.
@@ -54,6 +60,8 @@ enum BenchMode {
     Thesis { scale: f32, spp: u32 },
     /// The GI cache bench: gi.md.
     Gi { spp: u32 },
+    /// The game's lighting at three times of day: daylight.md.
+    Daylight { spp: u32 },
 }
 
 impl BenchArgs {
@@ -77,6 +85,10 @@ impl BenchArgs {
                 };
                 on_gpu(|| run_gi_bench(&config, &out)).map(|text| println!("{text}"))
             }
+            BenchMode::Daylight { spp } => {
+                let config = BenchConfig { width: 160, height: 90, reference_spp: spp, ..BenchConfig::full() };
+                on_gpu(|| run_daylight_bench(&config, &out)).map(|text| println!("{text}"))
+            }
         }
     }
 
@@ -86,6 +98,8 @@ impl BenchArgs {
             BenchMode::Thesis { scale: self.scale, spp: self.spp }
         } else if self.gi {
             BenchMode::Gi { spp: self.spp }
+        } else if self.daylight {
+            BenchMode::Daylight { spp: self.spp }
         } else {
             BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }
         }

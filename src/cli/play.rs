@@ -37,7 +37,8 @@ impl PlayArgs {
         // The game lights with the GI cache unless told otherwise (`--set gi=off`, or G in game).
         let mut base = RenderSettings::default();
         base.gi.enabled = true;
-        let settings = self.settings.settings_over(base)?;
+        // Refused before the world loads; the world's saved time of day goes under the pairs.
+        self.settings.settings_over(base.clone())?;
         // Without --world or --scene the game generates a world, --new or not (clap refuses --new with either).
         let source = self.world.source().unwrap_or(WorldSource::Generated { seed: self.seed, size: self.size });
         let save = self.save.unwrap_or_else(|| {
@@ -46,6 +47,7 @@ impl PlayArgs {
         });
         let model = self.model.as_deref().map(load_model).transpose()?;
         let world = source.load().map_err(|e| e.to_string())?;
+        let settings = self.settings.settings_over(base.with_world_time(&world))?;
         can_open_a_window()?;
         crate::game::run_game(world, settings, save, model);
         Ok(())

@@ -1,9 +1,11 @@
-//! `glowbrick reference`: the CPU ground truth (direct light, or with `--bounces` diffuse bounces) of a view.
+//! `glowbrick reference`: the CPU ground truth (direct light, or with `--bounces` diffuse bounces) of a view,
+//! under the lighting `render` uses: the `--set` keys `lighting`, `time` and `sun` (others are `render`'s own).
 
-use super::args::ShotArgs;
+use super::args::{SettingArgs, ShotArgs};
 use super::check_output;
 use crate::image_io::write_image;
 use crate::reference::{ReferenceOptions, render_reference};
+use crate::settings::Lighting;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -25,6 +27,8 @@ pub struct ReferenceArgs {
     /// Lights resampled per shadow ray (1: plain next-event estimation by power).
     #[arg(long, default_value_t = 16)]
     candidates: u32,
+    #[command(flatten)]
+    settings: SettingArgs,
     /// Output image (.exr keeps linear values).
     #[arg(long)]
     out: PathBuf,
@@ -32,7 +36,14 @@ pub struct ReferenceArgs {
 
 impl ReferenceArgs {
     pub fn run(self) -> Result<(), String> {
+        self.settings.settings()?;
         let (world, view) = self.shot.world_and_view("reference")?;
+        let settings = self.settings.settings_for(&world)?;
+        if settings.lighting == Lighting::Sun {
+            return Err("lighting=sun is a debug look with no ground truth; use lighting=full (the same sun and \
+                        sky, physically) or lighting=emitters"
+                .into());
+        }
         check_output(&self.out, &["exr", "png"])?;
         if let Some(s) = self.seconds.filter(|s| !(s.is_finite() && *s > 0.0)) {
             return Err(format!("--seconds {s} must be a positive number"));
@@ -46,15 +57,18 @@ impl ReferenceArgs {
             candidates: self.candidates,
             time_budget: self.seconds.map(std::time::Duration::from_secs_f64),
             show_progress: true,
+            daylight: settings.daylight(),
         };
         let result = render_reference(&world, &view, &options)?;
         write_image(&result.image, &self.out)?;
         println!(
-            "wrote {} ({}x{}, view '{}', {} spp, {} bounces, {} candidates, {:.1} s, {:.2} Mrays/s)",
+            "wrote {} ({}x{}, view '{}', lighting={} time={}, {} spp, {} bounces, {} candidates, {:.1} s, {:.2} Mrays/s)",
             self.out.display(),
             self.shot.width,
             self.shot.height,
             view.name,
+            crate::settings::Named::name(settings.lighting),
+            settings.time,
             result.spp,
             self.bounces,
             self.candidates,

@@ -23,8 +23,10 @@ pub struct RenderArgs {
 
 impl RenderArgs {
     pub fn run(self) -> Result<(), String> {
-        let settings = self.settings.settings()?;
+        // Bad settings are refused before the world is read; the world's saved time of day goes under them.
+        self.settings.settings()?;
         let (world, view) = self.shot.world_and_view("render")?;
+        let settings = self.settings.settings_for(&world)?;
         check_output(&self.out, &["png", "exr"])?;
         let options = HeadlessOptions {
             width: self.shot.width,

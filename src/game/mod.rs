@@ -34,6 +34,11 @@ impl Plugin for GameLogicPlugin {
     }
 }
 
+/// The clock `hours` moved by `step` hours, wrapping around midnight (0 and 24 are the same time; 24 reads 0).
+pub fn step_clock(hours: f32, step: f32) -> f32 {
+    (hours + step).rem_euclid(24.0)
+}
+
 /// Opens the game window on `world` and runs until the window closes. F5 and F9 use `save_path`; V drops
 /// `model`, when given.
 pub fn run_game(
@@ -84,9 +89,15 @@ pub fn run_game(
     .run()
 }
 
-/// F3 cycles the debug views (lit, albedo, normal, depth); G turns the GI cache on and off.
+/// F3 cycles the debug views (lit, albedo, normal, depth); G turns the GI cache on and off; T moves the clock an
+/// hour on (Shift+T back).
 fn toggle_debug_view(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<RenderSettings>) {
     use crate::settings::DebugView;
+    if keys.just_pressed(KeyCode::KeyT) {
+        let back = keys.pressed(KeyCode::ShiftLeft) || keys.pressed(KeyCode::ShiftRight);
+        settings.time = step_clock(settings.time, if back { -1.0 } else { 1.0 });
+        info!("time of day: {:.1} h", settings.time);
+    }
     if keys.just_pressed(KeyCode::KeyG) {
         settings.gi.enabled = !settings.gi.enabled;
         info!("{}", settings.summary());

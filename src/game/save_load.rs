@@ -1,4 +1,5 @@
-//! Saving and loading in game: F5 saves the world (with the player's camera as its first view) to the save
+//! Saving and loading in game: F5 saves the world (with the player's camera as its first view and the time of
+//! day) to the save
 //! path with an atomic write, keeping one `.bak` of the previous save; F9 loads the save path. A failed load
 //! leaves the current world as it is and says why on the HUD.
 
@@ -73,6 +74,7 @@ fn save_or_load(
     path: Res<SavePath>,
     mut camera: Query<(&mut Transform, &mut Player, &Projection)>,
     mut status: ResMut<StatusLine>,
+    mut settings: Option<ResMut<crate::settings::RenderSettings>>,
 ) {
     let Some(mut world) = world else { return };
     for action in actions.read() {
@@ -86,6 +88,9 @@ fn save_or_load(
                     world.views.retain(|v| v.name != "player");
                     world.views.insert(0, player_view(transform, fov));
                 }
+                if let Some(settings) = &settings {
+                    world.time_of_day = Some(settings.time);
+                }
                 match save_with_backup(&world, &path.0) {
                     Ok(()) => status.show(format!("saved {}", path.0.display())),
                     Err(e) => status.show(format!("could not save {}: {e}", path.0.display())),
@@ -96,6 +101,9 @@ fn save_or_load(
                     if let (Some(view), Ok((mut transform, mut player, _))) = (loaded.view(None), camera.single_mut()) {
                         *transform = crate::world::view_transform(view);
                         *player = Player { walking: player.walking, ..Player::looking(view) };
+                    }
+                    if let (Some(settings), Some(hours)) = (settings.as_mut(), loaded.time_of_day) {
+                        settings.time = hours;
                     }
                     status.show(format!("loaded {}", path.0.display()));
                     commands.insert_resource(loaded);

@@ -6,8 +6,19 @@ use crate::settings::{RenderSettings, setting};
 use bevy::prelude::*;
 
 /// The settings the panel shows, top to bottom (keys of `crate::settings::SETTINGS`).
-pub const ROWS: [&str; 10] =
-    ["lighting", "candidates", "taps", "radius", "temporal", "spatial", "sample", "reuse", "pick", "accumulate"];
+pub const ROWS: [&str; 11] = [
+    "lighting",
+    "candidates",
+    "taps",
+    "radius",
+    "temporal",
+    "spatial",
+    "sample",
+    "reuse",
+    "pick",
+    "accumulate",
+    "time",
+];
 
 #[derive(Resource, Default, Debug)]
 pub struct SettingsPanel {
@@ -129,11 +140,13 @@ mod tests {
             RenderSettings::default().set(&pair).unwrap();
         }
         adjust(&mut s, row("lighting"), 1);
+        assert_eq!(s.lighting, Lighting::Emitters);
+        adjust(&mut s, row("lighting"), 1);
         assert_eq!(s.lighting, Lighting::Nee);
         adjust(&mut s, row("lighting"), 1);
-        assert_eq!(s.lighting, Lighting::Restir);
-        adjust(&mut s, row("lighting"), 1);
         assert_eq!(s.lighting, Lighting::Sun);
+        adjust(&mut s, row("lighting"), 1);
+        assert_eq!(s.lighting, Lighting::Full);
         let text = panel_text(&s, &SettingsPanel { open: true, row: 1 });
         assert!(text.contains("> candidates  1") && text.contains("  radius      0 px"), "{text}");
     }

@@ -10,6 +10,7 @@
 //! - Candidates are drawn from an alias table over emitted power (`alias`), rebuilt when the pool changed.
 
 pub mod alias;
+pub mod daylight;
 pub mod plugin;
 pub mod summary;
 

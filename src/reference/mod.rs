@@ -10,7 +10,10 @@
 //!   the shadow ray on a light that is near and facing, not on one picked by power alone.
 //! - Indirect light (`bounces` > 0): cosine-sampled diffuse bounces with next-event estimation at every vertex;
 //!   emission is counted only at the camera hit and through next-event estimation, never twice.
-//! - Lighting is emitters only (the thesis' convention: no sky); a primary miss is black.
+//! - Lighting is the emitters only (the thesis' convention: a primary miss is black), or with `daylight` also the
+//!   sun's (or moon's) disk, by one shadow ray to a uniform direction of its cone at every vertex, and the sky,
+//!   reached by the cosine-sampled ray that leaves each vertex (with `bounces` 0 too: that ray is the sky's
+//!   direct light); a primary miss sees the sky and the disk. Each light is counted by one strategy only.
 //! - Deterministic: each (pixel, sample) has its own random stream, whatever the thread schedule (rayon rows).
 
 pub mod flip;
@@ -19,6 +22,7 @@ pub mod sampling;
 
 use crate::colour::luminance;
 use crate::image_io::LinearImage;
+use crate::lights::daylight::Daylight;
 use crate::lights::{AliasTable, Light, LightPool};
 use crate::progress::Progress;
 use crate::world::traversal::RAY_OFFSET;
@@ -45,6 +49,8 @@ pub struct ReferenceOptions {
     pub time_budget: Option<Duration>,
     /// Show a progress bar (or periodic lines) on stderr.
     pub show_progress: bool,
+    /// The sun or moon and the sky (`lighting=full`), or `None` for the emitters only.
+    pub daylight: Option<Daylight>,
 }
 
 impl Default for ReferenceOptions {
@@ -58,6 +64,7 @@ impl Default for ReferenceOptions {
             candidates: 16,
             time_budget: None,
             show_progress: false,
+            daylight: None,
         }
     }
 }
@@ -182,6 +189,30 @@ impl Scene<'_> {
         })
     }
 
+    /// One sample of the light the disk of `day` gives a diffuse surface at `p`: a uniform direction of its cone
+    /// (pdf 1 / solid angle, cancelling the radiance's) and one shadow ray. `shaders/lib/lights.wgsl`
+    /// `disk_sample` is the same.
+    pub fn disk_sample(
+        &self,
+        day: &Daylight,
+        p: Vec3,
+        n: Vec3,
+        albedo: [f32; 3],
+        rng: &mut Pcg,
+        rays: &mut u64,
+    ) -> Vec3 {
+        let dir = day.disk_direction(rng.next_f32(), rng.next_f32());
+        let cos_surface = n.dot(dir);
+        if !day.disk_on() || cos_surface <= 0.0 {
+            return Vec3::ZERO;
+        }
+        *rays += 1;
+        if trace(&self.world.grid, &Ray::new(p + n * RAY_OFFSET, dir), f32::INFINITY).is_some() {
+            return Vec3::ZERO;
+        }
+        Vec3::from(albedo) * day.disk * cos_surface
+    }
+
     /// One path sample of the radiance leaving the camera hit `first` towards the camera.
     pub fn path_sample(&self, first: &SurfaceHit, options: &ReferenceOptions, rng: &mut Pcg, rays: &mut u64) -> Vec3 {
         let mut radiance = first.emission;
@@ -189,15 +220,28 @@ impl Scene<'_> {
         let (mut p, mut n, mut albedo) = (first.position, first.normal, first.albedo);
         for bounce in 0..=options.bounces {
             radiance += throughput * self.direct_sample(p, n, albedo, options.candidates, rng, rays);
-            if bounce == options.bounces {
+            if let Some(day) = &options.daylight {
+                radiance += throughput * self.disk_sample(day, p, n, albedo, rng, rays);
+            }
+            let last = bounce == options.bounces;
+            // Without a sky the last vertex's ray could only find emitters, which next-event estimation counts.
+            if last && options.daylight.is_none() {
                 break;
             }
             // Cosine sampling cancels cos / pi against the pdf: the throughput picks up the albedo.
             throughput *= Vec3::from(albedo);
             let dir = cosine_direction(n, rng.next_f32(), rng.next_f32());
             *rays += 1;
-            let Some(next) = self.surface(&Ray::new(p + n * RAY_OFFSET, dir)) else { break };
-            (p, n, albedo) = (next.position, next.normal, next.albedo);
+            match self.surface(&Ray::new(p + n * RAY_OFFSET, dir)) {
+                None => {
+                    if let Some(day) = &options.daylight {
+                        radiance += throughput * day.sky(dir);
+                    }
+                    break;
+                }
+                Some(next) if !last => (p, n, albedo) = (next.position, next.normal, next.albedo),
+                Some(_) => break,
+            }
         }
         radiance
     }
@@ -229,11 +273,15 @@ pub fn render_reference(
     let scene = Scene { world, pool: &pool, alias: &alias };
     let transform = view_transform(view);
     let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
-    // Camera hits once per pixel: every sample of a pixel shades the same point.
-    let hits: Vec<Option<SurfaceHit>> = (0..w * h)
+    // Camera hits once per pixel: every sample of a pixel shades the same point. A miss sees the background.
+    let background = |ray: &Ray| options.daylight.map_or(Vec3::ZERO, |day| day.background(ray.dir));
+    let (hits, backgrounds): (Vec<Option<SurfaceHit>>, Vec<Vec3>) = (0..w * h)
         .into_par_iter()
-        .map(|i| scene.surface(&camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h)))
-        .collect();
+        .map(|i| {
+            let ray = camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h);
+            (scene.surface(&ray), background(&ray))
+        })
+        .unzip();
     let mut rays = (w * h) as u64;
     let mut sum = vec![Vec3::ZERO; (w * h) as usize];
     let mut done = 0u32;
@@ -267,6 +315,11 @@ pub fn render_reference(
         }
     }
     progress.finish();
-    let pixels = sum.iter().map(|s| (*s / done as f32).extend(1.0).to_array()).collect();
+    let pixels = sum
+        .iter()
+        .zip(&hits)
+        .zip(&backgrounds)
+        .map(|((s, hit), background)| if hit.is_some() { *s / done as f32 } else { *background }.extend(1.0).to_array())
+        .collect();
     Ok(Reference { image: LinearImage { width: w, height: h, pixels }, spp: done, elapsed: start.elapsed(), rays })
 }

@@ -2,6 +2,7 @@
 //! hemisphere directions, and uniform points on the faces of a light's cube that face the shading point.
 
 use crate::lights::Light;
+pub use crate::lights::daylight::frame;
 use bevy::math::{IVec3, Vec3};
 
 /// PCG32 (O'Neill), seeded per pixel and sample so renders are deterministic whatever the thread schedule.
@@ -26,14 +27,6 @@ impl Pcg {
     pub fn next_f32(&mut self) -> f32 {
         (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
     }
-}
-
-/// An orthonormal frame around unit `n` (Duff et al. 2017).
-pub fn frame(n: Vec3) -> (Vec3, Vec3) {
-    let sign = 1f32.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), Vec3::new(b, sign + n.y * n.y * a, -n.y))
 }
 
 /// A cosine-distributed direction around unit `n` (pdf = cos / pi).

@@ -20,7 +20,7 @@ use super::scene::objects::GpuObjects;
 use super::scene::world::{GpuWorld, WorldLayout};
 use super::shaders::GlowbrickShaders;
 use super::{FramesRendered, Highlight, VoxelCamera, primary, restir};
-use crate::settings::{DebugView, LightSample, Lighting, RenderSettings, Reuse};
+use crate::settings::{DebugView, LightSample, RenderSettings, Reuse};
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy::render::diagnostic::RecordDiagnostics;
@@ -167,13 +167,14 @@ pub fn prepare_view_resources(
 ) {
     let settings = settings.map(|s| s.clone()).unwrap_or_default();
     let highlight = highlight.map(|h| *h).unwrap_or_default();
+    let lights_changed = gpu_lights.as_ref().is_some_and(|l| l.changed);
     let scene_changed = gpu_world.as_ref().is_some_and(|w| w.uploaded_bytes > 0)
-        || gpu_lights.as_ref().is_some_and(|l| l.changed)
+        || lights_changed
         || objects.as_ref().is_some_and(|o| o.changed);
     let light_count = gpu_lights.as_ref().map_or(0, |l| l.light_count);
     let mut params = frame_params(&settings, &highlight, frames.0.load(Ordering::Relaxed));
     // ReSTIR runs only where it has something to sample; its history is valid if last frame ran it too.
-    let run_restir = settings.lighting == Lighting::Restir
+    let run_restir = settings.lighting.uses_restir()
         && matches!(settings.debug, DebugView::None | DebugView::Reservoir)
         && light_count > 0;
     for (entity, view, resources) in &mut views {
@@ -192,7 +193,13 @@ pub fn prepare_view_resources(
         resources.run_restir = run_restir;
         params.prev_clip_from_world = resources.prev_clip_from_world.to_cols_array_2d();
         let p = resources.prev_camera;
-        params.prev_camera = [p.x, p.y, p.z, if resources.prev_restir && run_restir { 1.0 } else { 0.0 }];
+        // A frame whose light pool changed starts ReSTIR's history afresh: last frame's reservoirs were drawn
+        // from other lights, and the temporal MIS weights, which assume last frame could have drawn this
+        // frame's samples, would weigh a lamp placed now at M_init / (M_init + history) of its light
+        // (measured in tests/gpu/daylight.rs: a lamp placed at night lit 41 of its 340 pixels in its first frame;
+        // with the history restarted, 391 of 499).
+        let history = resources.prev_restir && run_restir && !lights_changed;
+        params.prev_camera = [p.x, p.y, p.z, if history { 1.0 } else { 0.0 }];
         resources.prev_clip_from_world = clip_from_world;
         resources.prev_camera = view.world_from_view.translation();
         resources.prev_restir = run_restir;

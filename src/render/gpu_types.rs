@@ -64,8 +64,9 @@ const _: () = assert!(crate::world::grid::BRICK_SIZE as u32 <= LIGHT_SIZE_MASK);
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct SceneLighting {
-    /// xyz: unit direction towards the sun; w: 1 when the sun is on.
+    /// xyz: unit direction towards the sun (or the moon at night); w: 1 when its disk gives light.
     pub sun: [f32; 4],
+    /// rgb: the disk's irradiance over pi (`lights::daylight::Daylight::disk`); w: its cone, 1 - cos(radius).
     pub sun_radiance: [f32; 4],
     pub sky_zenith: [f32; 4],
     pub sky_horizon: [f32; 4],
@@ -275,7 +276,8 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         // Lighting modes and debug views (src/settings).
         ("LIGHTING_SUN", U32(Lighting::Sun as u32)),
         ("LIGHTING_NEE", U32(Lighting::Nee as u32)),
-        ("LIGHTING_RESTIR", U32(Lighting::Restir as u32)),
+        ("LIGHTING_EMITTERS", U32(Lighting::Emitters as u32)),
+        ("LIGHTING_FULL", U32(Lighting::Full as u32)),
         ("DEBUG_NONE", U32(DebugView::None.shader_index())),
         ("DEBUG_ALBEDO", U32(DebugView::Albedo.shader_index())),
         ("DEBUG_NORMAL", U32(DebugView::Normal.shader_index())),

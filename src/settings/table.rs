@@ -19,7 +19,7 @@ impl Section {
     pub fn applies(self, settings: &RenderSettings) -> bool {
         match self {
             Section::General => true,
-            Section::Restir => settings.lighting == Lighting::Restir,
+            Section::Restir => settings.lighting.uses_restir(),
             Section::Gi => settings.gi.enabled,
         }
     }
@@ -27,7 +27,7 @@ impl Section {
     fn title(self) -> &'static str {
         match self {
             Section::General => "General",
-            Section::Restir => "Voxel ReSTIR (used with lighting=restir)",
+            Section::Restir => "Voxel ReSTIR (used with lighting=full and lighting=emitters)",
             Section::Gi => "GI cache (used with gi=on)",
         }
     }
@@ -187,7 +187,8 @@ pub static SETTINGS: &[Setting] = &[
     Setting {
         key: "lighting",
         section: Section::General,
-        about: "How surfaces are lit: sun and sky; emitters by next-event estimation; emitters by Voxel ReSTIR.",
+        about: "How surfaces are lit: sun or moon, sky and emitters (ReSTIR); emitters only by Voxel ReSTIR \
+                (the thesis' protocol; also `restir`); emitters only by next-event estimation; the old sun-only look.",
         field: &Choice { get: |s| s.lighting, set: |s, v| s.lighting = v },
     },
     Setting {
@@ -211,13 +212,19 @@ pub static SETTINGS: &[Setting] = &[
     Setting {
         key: "sun",
         section: Section::General,
-        about: "Sun light with lighting=sun (off leaves sky light and emission).",
+        about: "Sun (or moon) light with lighting=full or sun (off leaves sky light and emission).",
         field: &Choice { get: |s| s.sun, set: |s, v| s.sun = v },
+    },
+    Setting {
+        key: "time",
+        section: Section::General,
+        about: "Time of day in hours: noon 12, sunset 18, night 0; moves the sun and colours it and the sky.",
+        field: &Range { range: TIME_RANGE, step: Step::Add(1.0), unit: " h", get: |s| s.time, set: |s, v| s.time = v },
     },
     Setting {
         key: "shadows",
         section: Section::General,
-        about: "Shadow rays towards the sun.",
+        about: "Shadow rays towards the sun or moon.",
         field: &Choice { get: |s| s.shadows, set: |s, v| s.shadows = v },
     },
     Setting {

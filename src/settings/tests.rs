@@ -13,10 +13,12 @@ fn valid_values(setting: &Setting) -> Vec<String> {
 
 #[test]
 fn the_messages_list_the_keys_and_values_as_before_the_table() {
+    // As before the table, with the game's lighting (`full`, `emitters`) and the time of day added.
     assert_eq!(
         valid_pairs(),
-        "lighting=sun|nee|restir, pick=power|uniform, accumulate=on|off, \
-         debug=none|albedo|normal|hit|depth|reservoir, sun=on|off, shadows=on|off, exposure=<0.001..1000>, \
+        "lighting=full|emitters|nee|sun, pick=power|uniform, accumulate=on|off, \
+         debug=none|albedo|normal|hit|depth|reservoir, sun=on|off, time=<0..24>, shadows=on|off, \
+         exposure=<0.001..1000>, \
          candidates=<1..64>, taps=<0..16>, radius=<0..100>, temporal=on|off, spatial=on|off, \
          sample=area|point, reuse=biased|one-ray|unbiased, gi=on|off, gi_rays=<4..128>, gi_update=<1..64>, \
          gi_alpha=<0.001..1>, gi_filter=on|off, gi_bounces=on|off, gi_cache=on|off"
@@ -112,9 +114,9 @@ fn panel_steps_stay_within_what_set_accepts() {
         lighting.step(&mut s, 1);
         cycle.push(lighting.get(&s));
     }
-    assert_eq!(cycle, ["nee", "restir", "sun"]);
+    assert_eq!(cycle, ["emitters", "nee", "sun"]);
     lighting.step(&mut s, -1);
-    assert_eq!(s.lighting, Lighting::Restir);
+    assert_eq!(s.lighting, Lighting::Nee);
     let mut s = RenderSettings::default();
     (0..20).for_each(|_| setting("gi_rays").unwrap().step(&mut s, 1));
     assert_eq!(s.gi.rays, GI_RAYS_RANGE.1);
@@ -127,14 +129,17 @@ fn help_text_gives_every_key_its_values_and_default() {
         let line = format!("  {}={}  [default: {}]", setting.key, setting.accepts(), setting.default_value());
         assert!(help.contains(&line), "{line}\n{help}");
     }
-    assert!(help.contains("  candidates=<1..64>  [default: 32]") && help.contains("  lighting=sun|nee|restir"));
+    assert!(help.contains("  candidates=<1..64>  [default: 32]") && help.contains("  lighting=full|emitters|nee|sun"));
 }
 
 #[test]
 fn the_summary_shows_the_sections_that_apply() {
     let s = RenderSettings::default();
-    assert_eq!(s.summary().lines().count(), 1);
-    assert!(s.summary().starts_with("lighting=sun pick=power"), "{}", s.summary());
+    // The default, lighting=full, samples its emitters by ReSTIR: those settings apply.
+    assert_eq!(s.summary().lines().count(), 2);
+    assert!(s.summary().starts_with("lighting=full pick=power"), "{}", s.summary());
+    let sun_only = s.clone().with_pairs(&["lighting=sun".to_string()]).unwrap();
+    assert_eq!(sun_only.summary().lines().count(), 1);
     let s = s.with_pairs(&["lighting=restir".to_string(), "gi=on".to_string(), "sample=point".to_string()]);
     let summary = s.unwrap().summary();
     assert_eq!(summary.lines().count(), 3, "{summary}");
@@ -146,7 +151,9 @@ fn the_summary_shows_the_sections_that_apply() {
 fn a_ron_settings_file_sets_what_set_sets_and_rejects_the_same() {
     let text = r#"{"lighting": "restir", "candidates": 16, "temporal": false, "radius": 12.5, "sample": "point"}"#;
     let s = RenderSettings::default().with_ron(text, "t.ron").unwrap();
-    assert_eq!(s.lighting, Lighting::Restir);
+    // `restir` is read as `emitters`, the name it had before the sun and sky joined ReSTIR.
+    assert_eq!(s.lighting, Lighting::Emitters);
+    assert_eq!(setting("lighting").unwrap().get(&s), "emitters");
     assert_eq!((s.restir.candidates, s.restir.temporal, s.restir.radius), (16, false, 12.5));
     assert_eq!(s.restir.sample, LightSample::Point);
     let bad = RenderSettings::default().with_ron(r#"{"candidates": 0}"#, "t.ron").unwrap_err();

@@ -7,6 +7,7 @@
 //!     size: (64, 32, 64),
 //!     palette: [(name: "stone", albedo: (0.45, 0.45, 0.47), emission: (0, 0, 0), strength: 0)],
 //!     views: [(name: "overview", origin: (-16, 46, -16), direction: (0.6, -0.5, 0.6), fov_deg: 60)],
+//!     time_of_day: Some(17.5),
 //!     bricks: [
 //!         (at: (0, 0, 0), fill: Uniform(1)),
 //!         (at: (1, 0, 0), fill: Runs([(64, 1), (448, 0)])),
@@ -64,6 +65,9 @@ pub struct WorldFile {
     pub palette: Palette,
     #[serde(default)]
     pub views: Vec<CameraView>,
+    /// Hours, 0-24; absent in files written before the time of day was saved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_of_day: Option<f32>,
     pub bricks: Vec<BrickRecord>,
 }
 
@@ -132,6 +136,7 @@ impl WorldFile {
             size: (size.x, size.y, size.z),
             palette: world.palette.clone(),
             views: world.views.clone(),
+            time_of_day: world.time_of_day,
             bricks,
         }
     }
@@ -147,8 +152,12 @@ impl WorldFile {
         }
         let (sx, sy, sz) = self.size;
         check_world_header(self.size, &self.palette.materials, "palette", &self.views).map_err(fail)?;
+        if let Some(hours) = self.time_of_day.filter(|h| !(h.is_finite() && (0.0..=24.0).contains(h))) {
+            return Err(fail(format!("time_of_day {hours} must be within 0..24 hours")));
+        }
         let mut world = VoxelWorld::new(UVec3::new(sx, sy, sz), self.palette);
         world.views = self.views;
+        world.time_of_day = self.time_of_day;
         let dims = world.grid.brick_dims();
         let ids = world.palette.id_count();
         let mut seen = vec![false; (dims.x * dims.y * dims.z) as usize];

@@ -69,6 +69,9 @@ pub struct VoxelWorld {
     pub grid: BrickGrid,
     pub palette: Palette,
     pub views: Vec<CameraView>,
+    /// The time of day the world was saved at, in hours (0-24); `None` in files from before it was saved, which
+    /// then show the settings' time.
+    pub time_of_day: Option<f32>,
     /// Whether homogeneous emissive bricks become one brick light (the default) or 512 voxel lights; the thesis
     /// measures its cornell box both ways. Not saved: a rule of the light pool, set by the bench.
     pub brick_lights: bool,
@@ -82,7 +85,14 @@ static NEXT_WORLD_INSTANCE: std::sync::atomic::AtomicU64 = std::sync::atomic::At
 impl VoxelWorld {
     pub fn new(size: UVec3, palette: Palette) -> Self {
         let instance = NEXT_WORLD_INSTANCE.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        VoxelWorld { grid: BrickGrid::new(size), palette, views: Vec::new(), brick_lights: true, instance }
+        VoxelWorld {
+            grid: BrickGrid::new(size),
+            palette,
+            views: Vec::new(),
+            time_of_day: None,
+            brick_lights: true,
+            instance,
+        }
     }
 
     /// The view called `name`, or the first view when `name` is `None`.

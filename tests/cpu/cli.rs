@@ -67,7 +67,7 @@ fn bad_settings_and_arguments_fail_cleanly() {
         ("radius=NaN", "radius: NaN is out of range (valid: 0..100)"),
         ("sample=sphere", "sample: 'sphere' is not one of area|point"),
         ("reuse=maybe", "reuse: 'maybe' is not one of biased|one-ray|unbiased"),
-        ("lighting=path", "lighting: 'path' is not one of sun|nee|restir"),
+        ("lighting=path", "lighting: 'path' is not one of full|emitters|nee|sun"),
     ] {
         let out = glowbrick(&["render", "--scene", "test-room", "--set", pair, "--out", "/tmp/x.png"]);
         assert_eq!(out.status.code(), Some(1), "{pair}");
@@ -177,6 +177,9 @@ fn conflicting_flags_are_refused() {
         (&["bench", "--gi", "--settings", "restir"], "--gi", "--settings"),
         (&["bench", "--gi", camera], "--gi", "--camera"),
         (&["bench", "--gi", "--scale", "0.5"], "--gi", "--scale"),
+        (&["bench", "--daylight", "--scale", "0.5"], "--daylight", "--scale"),
+        (&["bench", "--daylight", "--quick"], "--daylight", "--quick"),
+        (&["bench", "--daylight", "--gi"], "--daylight", "--gi"),
         (&["bench", "--scale", "0.5", "--settings", "restir"], "--scale", "--settings"),
         (&["bench", "--quick", "--spp", "4"], "--spp", "--quick"),
         (&["bench", "--scale", "0.5", "--out", NOWHERE], "--thesis", "required"),

@@ -2,6 +2,7 @@
 //! `tests/gpu`.
 
 mod cli;
+mod daylight;
 mod game_building;
 mod hostile_files;
 mod imports;

@@ -16,6 +16,7 @@
 mod bench_quick;
 mod cli;
 mod common;
+mod daylight;
 mod extreme_scenes;
 mod gi;
 mod nee_converges;
@@ -38,6 +39,10 @@ fn tests() -> Vec<(&'static str, fn())> {
     gpu_tests![
         bench_quick: [quick_bench_writes_csv_markdown_and_plot],
         cli: [render_writes_exr_and_png_headless],
+        daylight: [
+            a_lamp_placed_at_night_lights_the_floor_in_the_frame_that_places_it,
+            full_lighting_converges_to_the_reference_at_noon_dusk_and_night,
+        ],
         extreme_scenes: [
             a_hundred_thousand_lights,
             a_light_one_voxel_above_the_floor,

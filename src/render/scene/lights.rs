@@ -3,6 +3,7 @@
 //! count). Staged in the main world (PostUpdate), written to GPU buffers in the render world (PrepareResources).
 
 use super::storage_buffer;
+use crate::lights::daylight::Daylight;
 use crate::lights::{AliasEntry, Light, LightPool};
 use crate::render::gpu_types::{GpuLight, LIGHT_FACES_SHIFT, SceneLighting};
 use crate::settings::{LightPick, RenderSettings};
@@ -38,14 +39,16 @@ fn add(app: &mut App) {
         .add_systems(ExtractSchedule, extract_light_upload);
 }
 
-/// This frame's sun, sky and mode (`settings`) with the light count.
+/// This frame's sun (or moon), sky and mode (`settings`) with the light count. Emitters-only modes carry the
+/// time of day's values too; their shaders ignore them.
 pub fn scene_lighting(settings: &RenderSettings, light_count: u32) -> SceneLighting {
-    let sun = Vec3::new(0.45, 0.8, 0.3).normalize();
+    let day = Daylight::at(settings.time, settings.sun);
+    let d = day.direction;
     SceneLighting {
-        sun: [sun.x, sun.y, sun.z, if settings.sun { 1.0 } else { 0.0 }],
-        sun_radiance: [1.1, 1.0, 0.9, 0.0],
-        sky_zenith: [0.35, 0.55, 0.95, 0.0],
-        sky_horizon: [0.75, 0.82, 0.9, 0.0],
+        sun: [d.x, d.y, d.z, if day.disk_on() { 1.0 } else { 0.0 }],
+        sun_radiance: day.disk.extend(day.cone).to_array(),
+        sky_zenith: day.zenith.extend(0.0).to_array(),
+        sky_horizon: day.horizon.extend(0.0).to_array(),
         mode: settings.lighting as u32,
         power_pick: (settings.pick == LightPick::Power) as u32,
         light_count,
