@@ -3,12 +3,13 @@
 // disk and sky of lighting=full without emitters, or the sun-only debug look. Debug views show the pass's inputs.
 
 #import glowbrick::world::materials
-#import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, primary_ray_dir, NOT_A_VOXEL}
+#import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, primary_ray_dir, lit_view,
+    NOT_A_VOXEL}
 #import glowbrick::gi::cache::{gi_on, gi_touch_surface, gi_incoming}
 #import glowbrick::traversal::{trace_scene, face_normal, INF}
 #import glowbrick::lights::{scene, sky, background, direct_sample, disk_sample, sky_sample}
 #import glowbrick::random::{Rng, pcg}
-#import glowbrick::constants::{LIGHTING_NEE, LIGHTING_EMITTERS, LIGHTING_FULL, DEBUG_NONE, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
+#import glowbrick::constants::{LIGHTING_NEE, LIGHTING_EMITTERS, LIGHTING_FULL, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
     DEBUG_RESERVOIR, RAY_OFFSET}
 
 @compute @workgroup_size(8, 8, 1)
@@ -30,15 +31,15 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     // Voxel ReSTIR shades in its own passes when there is a light to sample; without one it is emission only.
     let full = scene.mode == LIGHTING_FULL;
     let restir = scene.mode == LIGHTING_EMITTERS || full;
-    if restir && scene.light_count > 0u && (frame.debug_view == DEBUG_NONE || frame.debug_view == DEBUG_RESERVOIR) {
+    if restir && scene.light_count > 0u && (lit_view() || frame.debug_view == DEBUG_RESERVOIR) {
         return;
     }
     let nee = scene.mode == LIGHTING_NEE || restir;
     var colour = vec4(0.0);
     if !hit.found {
-        if frame.debug_view == DEBUG_NONE && full {
+        if lit_view() && full {
             colour = vec4(background(dir) * frame.exposure, 1.0);
-        } else if frame.debug_view == DEBUG_NONE && !nee {
+        } else if lit_view() && !nee {
             colour = vec4(sky(dir) * frame.exposure, 1.0);
         }
     } else {

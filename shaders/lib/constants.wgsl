@@ -28,6 +28,8 @@ const DEBUG_NORMAL: u32 = #{DEBUG_NORMAL}u;
 const DEBUG_HIT: u32 = #{DEBUG_HIT}u;
 const DEBUG_DEPTH: u32 = #{DEBUG_DEPTH}u;
 const DEBUG_RESERVOIR: u32 = #{DEBUG_RESERVOIR}u;
+const DEBUG_VARIANCE: u32 = #{DEBUG_VARIANCE}u;
+const DEBUG_HISTORY: u32 = #{DEBUG_HISTORY}u;
 
 // FrameParams.restir_flags bits and the largest spatial tap count.
 const RESTIR_TEMPORAL: u32 = #{RESTIR_TEMPORAL}u;
@@ -35,6 +37,8 @@ const RESTIR_SPATIAL: u32 = #{RESTIR_SPATIAL}u;
 const RESTIR_POINT: u32 = #{RESTIR_POINT}u;
 const RESTIR_UNBIASED: u32 = #{RESTIR_UNBIASED}u;
 const RESTIR_ONE_RAY: u32 = #{RESTIR_ONE_RAY}u;
+const DENOISE_ON: u32 = #{DENOISE_ON}u;
+const DENOISE_HISTORY: u32 = #{DENOISE_HISTORY}u;
 const MAX_TAPS: u32 = #{MAX_TAPS}u;
 
 // GiParams.flags bits.

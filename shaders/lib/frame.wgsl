@@ -1,11 +1,13 @@
 // What every per-view pass shares: the frame parameters, the view's buffers (group 1), the G-buffer encoding,
-// the selection highlight and the final write with progressive accumulation.
+// reprojection, the selection highlight and the final write with progressive accumulation (through the
+// denoiser when it is on).
 #define_import_path glowbrick::frame
 
 #import bevy_render::view::View
 #import glowbrick::traversal::face_normal
 #import glowbrick::guards::finite3
-#import glowbrick::constants::{GBUFFER_FACE_SHIFT, GBUFFER_MATERIAL_SHIFT, GBUFFER_MATERIAL_MASK, GBUFFER_OBJECT_SHIFT}
+#import glowbrick::constants::{GBUFFER_FACE_SHIFT, GBUFFER_MATERIAL_SHIFT, GBUFFER_MATERIAL_MASK, GBUFFER_OBJECT_SHIFT,
+    DENOISE_ON, DEBUG_NONE, DEBUG_VARIANCE, DEBUG_HISTORY}
 
 // FrameParams in src/render/gpu_types.rs: one view's parameters this frame (the scene's lighting, the same for
 // every view, is SceneLighting in glowbrick::lights).
@@ -30,6 +32,12 @@ struct FrameParams {
     taps: u32,
     radius: f32,
     restir_flags: u32,
+    // DENOISE_* flags.
+    denoise: u32,
+    // Padding to 16 bytes (FrameParams::_pad).
+    spare_a: u32,
+    spare_b: u32,
+    spare_c: u32,
 }
 
 @group(1) @binding(0) var output: texture_storage_2d<rgba16float, write>;
@@ -40,6 +48,26 @@ struct FrameParams {
 // Per pixel: hit point (xyz) and the packed hit (w, see pack_surface); this frame's and last frame's.
 @group(1) @binding(4) var<storage, read_write> gbuffer: array<vec4<f32>>;
 @group(1) @binding(5) var<storage, read_write> prev_gbuffer: array<vec4<f32>>;
+// Bindings 6 and 7 are Voxel ReSTIR's reservoirs (restir/common.wgsl). The denoiser's (render::denoise): the
+// shading passes' noisy frame; per pixel two texels of history (demodulated colour and length, luminance
+// moments), this frame's and last frame's; the wavelet's two halves (colour and variance).
+@group(1) @binding(8) var<storage, read_write> noisy: array<vec4<f32>>;
+@group(1) @binding(9) var<storage, read_write> history: array<vec4<f32>>;
+@group(1) @binding(10) var<storage, read_write> prev_history: array<vec4<f32>>;
+@group(1) @binding(11) var<storage, read_write> wavelet: array<vec4<f32>>;
+
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
+
+// Whether the view shows the lit image (or the denoiser's view of it), as DebugView::is_lit.
+fn lit_view() -> bool {
+    return frame.debug_view == DEBUG_NONE || frame.debug_view == DEBUG_VARIANCE || frame.debug_view == DEBUG_HISTORY;
+}
+
+fn denoising() -> bool {
+    return (frame.denoise & DENOISE_ON) != 0u;
+}
 
 // The G-buffer's w: bit 0 hit, then the face (3 bits), the material and the moving object's id (0: the static
 // world), at the GBUFFER_* shifts. Zero (a cleared buffer) reads as a miss.
@@ -75,8 +103,32 @@ fn pixel_index(pixel: vec2<u32>) -> u32 {
     return pixel.x + u32(view.viewport.z) * pixel.y;
 }
 
-// Outlines the targeted voxel's edges, brightens its targeted face, and tints voxels in the box selection.
+// Last frame's pixel that saw `point` (xy, z = 1), or z = -1 when it was off screen.
+fn previous_pixel(point: vec3<f32>, size: vec2<u32>) -> vec3<i32> {
+    let clip = frame.prev_clip_from_world * vec4(point, 1.0);
+    if clip.w <= 0.0 {
+        return vec3(-1);
+    }
+    let ndc = clip.xy / clip.w;
+    let uv = vec2(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    let pixel = vec2<i32>(floor(uv * vec2<f32>(size)));
+    if any(pixel < vec2(0)) || any(pixel >= vec2<i32>(size)) {
+        return vec3(-1);
+    }
+    return vec3(pixel, 1);
+}
+
+// The highlight, where the shading passes write the image; the denoiser draws it after filtering instead (an
+// outline filtered along with the light would smear across its face).
 fn highlight(colour: vec3<f32>, hit_voxel: vec3<i32>, face: u32, point: vec3<f32>, distance: f32) -> vec3<f32> {
+    if denoising() {
+        return colour;
+    }
+    return draw_highlight(colour, hit_voxel, face, point, distance);
+}
+
+// Outlines the targeted voxel's edges, brightens its targeted face, and tints voxels in the box selection.
+fn draw_highlight(colour: vec3<f32>, hit_voxel: vec3<i32>, face: u32, point: vec3<f32>, distance: f32) -> vec3<f32> {
     var c = colour;
     if frame.selection_min.w == 1 && all(hit_voxel >= frame.selection_min.xyz) && all(hit_voxel <= frame.selection_max.xyz) {
         c = mix(c, vec3(0.25, 0.6, 1.0), 0.35);
@@ -112,8 +164,17 @@ fn surface_voxel(s: Surface) -> vec3<i32> {
     return vec3<i32>(floor(s.point - face_normal(s.face) * 0.5));
 }
 
-// Progressive accumulation (the running mean of the frames since anything changed), then the HDR target.
+// A shading pass's result: the image, or with the denoiser on its noisy input (render::denoise).
 fn write_output(pixel: vec2<u32>, colour: vec4<f32>) {
+    if denoising() {
+        noisy[pixel_index(pixel)] = colour;
+        return;
+    }
+    present(pixel, colour);
+}
+
+// Progressive accumulation (the running mean of the frames since anything changed), then the HDR target.
+fn present(pixel: vec2<u32>, colour: vec4<f32>) {
     let index = pixel_index(pixel);
     // A non-finite value would poison the running sum until the next restart: write black instead.
     let c = select(vec3(0.0), colour.rgb, finite3(colour.rgb));

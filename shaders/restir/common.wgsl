@@ -12,7 +12,7 @@
 #import glowbrick::guards::finite
 #import glowbrick::constants::{RAY_OFFSET, PI, RESTIR_POINT, RESTIR_UNBIASED, RESTIR_ONE_RAY,
     COUNT_RESERVOIR_RESETS}
-#import glowbrick::frame::{frame, view, Surface}
+#import glowbrick::frame::{frame, view, Surface, luminance}
 
 // 32 bytes. `face` is the light cube's face (0 +X, 1 -X, ... as the traversal numbers faces) or POINT_FACE,
 // `uv` the point on it (pack2x16unorm). `w_sum` is only meaningful while a pass streams candidates; `big_w` is the
@@ -66,10 +66,6 @@ fn validated(r: Reservoir) -> Reservoir {
         return empty_reservoir();
     }
     return r;
-}
-
-fn luminance(c: vec3<f32>) -> f32 {
-    return dot(c, vec3(0.2126, 0.7152, 0.0722));
 }
 
 // The sampled point: on face `face` of the light's cube at (u, v) along the face's two other axes, or the centre.

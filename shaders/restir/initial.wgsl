@@ -1,7 +1,7 @@
 // Voxel ReSTIR pass 1: M_init candidates per pixel by resampled importance sampling, one visibility ray for the
 // chosen one, then temporal reuse of last frame's final reservoir at the reprojected pixel.
 
-#import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index}
+#import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index, previous_pixel}
 #import glowbrick::constants::RESTIR_TEMPORAL
 #import glowbrick::random::{Rng, rng_next}
 #import glowbrick::restir::common::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
@@ -9,21 +9,6 @@
 
 // Temporal history is capped at this many times M_init (DESIGN.md), so old samples cannot dominate forever.
 const HISTORY_CAP: f32 = 20.0;
-
-// Last frame's pixel that saw `point`, if it is on screen.
-fn reproject(point: vec3<f32>, size: vec2<u32>) -> vec3<i32> {
-    let clip = frame.prev_clip_from_world * vec4(point, 1.0);
-    if clip.w <= 0.0 {
-        return vec3(-1);
-    }
-    let ndc = clip.xy / clip.w;
-    let uv = vec2(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-    let pixel = vec2<i32>(floor(uv * vec2<f32>(size)));
-    if any(pixel < vec2(0)) || any(pixel >= vec2<i32>(size)) {
-        return vec3(-1);
-    }
-    return vec3(pixel, 1);
-}
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -58,7 +43,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 
     if (frame.restir_flags & RESTIR_TEMPORAL) != 0u && frame.prev_camera.w > 0.0 {
-        let prev_pixel = reproject(x.point, size);
+        let prev_pixel = previous_pixel(x.point, size);
         if prev_pixel.z == 1 {
             let prev_index = u32(prev_pixel.x) + size.x * u32(prev_pixel.y);
             let prev_surface = unpack_surface(prev_gbuffer[prev_index]);

@@ -16,9 +16,9 @@ use std::time::Instant;
 
 /// The times of day measured: noon, a low sun before sunset, and night (moon and lamps).
 pub const TIMES: [(&str, f32); 3] = [("noon", 12.0), ("dusk", 17.5), ("night", 0.0)];
-/// Diffuse bounces of the reference (the GI cache's own bench uses 8 on closed rooms; open worlds lose most
-/// light to the sky after 3).
-pub const REFERENCE_BOUNCES: u32 = 3;
+/// Diffuse bounces of the reference, as the GI cache's own bench (the cache keeps bouncing through its own
+/// entries; a room lit through its window keeps several percent of its light after 3 bounces).
+pub const REFERENCE_BOUNCES: u32 = 8;
 /// Frames for the GI cache to settle before accumulating, frames timed, frames averaged.
 const SETTLE_FRAMES: u32 = 100;
 const TIMED_FRAMES: u32 = 16;

@@ -32,7 +32,7 @@ pub struct BenchArgs {
     #[arg(long)]
     gi: bool,
     /// The game's lighting bench instead: lighting=full with the GI cache at noon, dusk and night against a
-    /// reference with the same sun, sky and lamps and 3 bounces, and the cost of the sun and sky at 10^3 and
+    /// reference with the same sun, sky and lamps and 8 bounces, and the cost of the sun and sky at 10^3 and
     /// 10^5 lamps; writes daylight.md.
     #[arg(long)]
     daylight: bool,

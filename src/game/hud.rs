@@ -36,7 +36,7 @@ struct StatusText;
 struct HelpPanel;
 
 const HINT: &str = "WASD move | mouse look | LMB break | RMB place | MMB pick | wheel/1-9 block | B box brush | \
-                    F walk/fly | Ctrl+Z/Y undo/redo | L lighting | T time | G GI | O lantern | F4 settings | F5 save | F9 load | F1 help";
+                    F walk/fly | Ctrl+Z/Y undo/redo | L lighting | T time | G GI | N denoise | O lantern | F4 settings | F5 save | F9 load | F1 help";
 
 const HELP: &str = "glowbrick controls\n\n\
     click          capture the mouse (Esc releases it)\n\
@@ -50,10 +50,11 @@ const HELP: &str = "glowbrick controls\n\n\
     B              box brush: click two corners to fill (right) or clear (left)\n\
     Ctrl+Z, Ctrl+Y undo, redo\n\
     V              drop the --model .vox model in front of you\n\
-    F3             debug views (lit, albedo, normal, depth)\n\
+    F3             debug views (lit, albedo, normal, depth, denoiser variance, history)\n\
     L              lighting: full (sun, sky, lamps) / emitters only (ReSTIR) / NEE / sun debug look\n\
     T, Shift+T     time of day: an hour on / back (noon 12, dusk 18, night 0)\n\
     G              indirect light (the GI cache) on / off\n\
+    N              denoiser on / off\n\
     O              spawn a drifting lantern in front of you\n\
     F4             render settings panel (arrows choose and change)\n\
     F5, F9         save, load\n\

@@ -89,8 +89,8 @@ pub fn run_game(
     .run()
 }
 
-/// F3 cycles the debug views (lit, albedo, normal, depth); G turns the GI cache on and off; T moves the clock an
-/// hour on (Shift+T back).
+/// F3 cycles the debug views (lit, albedo, normal, depth, the denoiser's variance and history); G turns the GI
+/// cache on and off, N the denoiser; T moves the clock an hour on (Shift+T back).
 fn toggle_debug_view(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<RenderSettings>) {
     use crate::settings::DebugView;
     if keys.just_pressed(KeyCode::KeyT) {
@@ -102,11 +102,17 @@ fn toggle_debug_view(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<Rende
         settings.gi.enabled = !settings.gi.enabled;
         info!("{}", settings.summary());
     }
+    if keys.just_pressed(KeyCode::KeyN) {
+        settings.denoise = !settings.denoise;
+        info!("{}", settings.summary());
+    }
     if keys.just_pressed(KeyCode::F3) {
         settings.debug = match settings.debug {
             DebugView::None => DebugView::Albedo,
             DebugView::Albedo => DebugView::Normal,
             DebugView::Normal => DebugView::Depth,
+            DebugView::Depth => DebugView::Variance,
+            DebugView::Variance => DebugView::History,
             _ => DebugView::None,
         };
         info!("debug view: {:?}", settings.debug);

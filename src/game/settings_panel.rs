@@ -6,7 +6,7 @@ use crate::settings::{RenderSettings, setting};
 use bevy::prelude::*;
 
 /// The settings the panel shows, top to bottom (keys of `crate::settings::SETTINGS`).
-pub const ROWS: [&str; 11] = [
+pub const ROWS: [&str; 12] = [
     "lighting",
     "candidates",
     "taps",
@@ -18,6 +18,7 @@ pub const ROWS: [&str; 11] = [
     "pick",
     "accumulate",
     "time",
+    "denoise",
 ];
 
 #[derive(Resource, Default, Debug)]

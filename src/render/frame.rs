@@ -2,7 +2,8 @@
 //! dispatch shape); two systems list the passes top to bottom:
 //!
 //! - `view_frame` (Core3d, main pass, once per camera): the G-buffer, then Voxel ReSTIR's three passes when it
-//!   lights the view; the view's bind group is built once here and shared by every pass.
+//!   lights the view, then the denoiser's passes when it is on; the view's bind group is built once here and
+//!   shared by every pass.
 //! - `world_frame` (RenderGraph, after every camera, once per frame): the GI cache's passes, which keep a
 //!   world-level cache and so must not run once per camera. The cameras' passes inserted this frame's entries;
 //!   the shading passes read the values this writes next frame (one frame of latency).
@@ -12,14 +13,14 @@
 
 use super::gi::{self, GiCache};
 use super::gpu_types::{
-    ACCUMULATION_TEXEL_BYTES, FrameParams, GBUFFER_TEXEL_BYTES, RESERVOIR_BYTES, RESTIR_ONE_RAY, RESTIR_POINT,
-    RESTIR_SPATIAL, RESTIR_TEMPORAL, RESTIR_UNBIASED, shader_defs,
+    ACCUMULATION_TEXEL_BYTES, DENOISE_HISTORY, DENOISE_ON, DENOISE_TEXEL_BYTES, FrameParams, GBUFFER_TEXEL_BYTES,
+    RESERVOIR_BYTES, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL, RESTIR_TEMPORAL, RESTIR_UNBIASED, shader_defs,
 };
 use super::scene::lights::{GpuLights, LightsLayout};
 use super::scene::objects::GpuObjects;
 use super::scene::world::{GpuWorld, WorldLayout};
 use super::shaders::GlowbrickShaders;
-use super::{FramesRendered, Highlight, VoxelCamera, primary, restir};
+use super::{FramesRendered, Highlight, VoxelCamera, denoise, primary, restir};
 use crate::settings::{DebugView, LightSample, RenderSettings, Reuse};
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
@@ -57,6 +58,7 @@ pub enum Dispatch {
 pub fn all_passes() -> Vec<VoxelPass> {
     let mut passes = vec![primary::PRIMARY];
     passes.extend(restir::PASSES);
+    passes.extend(denoise::PASSES);
     passes.extend(gi::STATIC_PASSES);
     passes.extend(gi::DYNAMIC_PASSES);
     passes
@@ -84,11 +86,14 @@ pub fn frame_params(settings: &RenderSettings, highlight: &Highlight, frame: u32
             | flag(restir.sample == LightSample::Point, RESTIR_POINT)
             | flag(restir.reuse == Reuse::Unbiased, RESTIR_UNBIASED)
             | flag(restir.reuse == Reuse::OneRay, RESTIR_ONE_RAY),
+        denoise: 0,
+        _pad: [0; 3],
     }
 }
 
 /// A view's own buffers: frame parameters, the running sum of accumulated frames, this and last frame's
-/// G-buffer, and the two reservoir buffers of Voxel ReSTIR.
+/// G-buffer, the two reservoir buffers of Voxel ReSTIR, and the denoiser's noisy frame, history (this and last
+/// frame's) and wavelet ping-pong.
 #[derive(Component)]
 pub struct ViewResources {
     frame_params: Buffer,
@@ -97,6 +102,10 @@ pub struct ViewResources {
     prev_gbuffer: Buffer,
     reservoirs_temporal: Buffer,
     reservoirs_final: Buffer,
+    noisy: Buffer,
+    history: Buffer,
+    prev_history: Buffer,
+    wavelet: Buffer,
     size: UVec2,
     /// What the average so far was rendered with; any difference restarts it.
     last_key: Option<AccumulationKey>,
@@ -107,6 +116,9 @@ pub struct ViewResources {
     prev_restir: bool,
     /// Whether this frame runs the ReSTIR passes (set in prepare, read by the frame).
     pub run_restir: bool,
+    /// Whether last frame ran the denoiser, and whether this one does.
+    prev_denoise: bool,
+    pub run_denoise: bool,
 }
 
 impl ViewResources {
@@ -131,6 +143,18 @@ impl ViewResources {
             ),
             reservoirs_temporal: buffer("glowbrick_reservoirs_temporal", pixels * RESERVOIR_BYTES, storage),
             reservoirs_final: buffer("glowbrick_reservoirs_final", pixels * RESERVOIR_BYTES, storage),
+            noisy: buffer("glowbrick_denoise_noisy", pixels * DENOISE_TEXEL_BYTES, storage),
+            history: buffer(
+                "glowbrick_denoise_history",
+                2 * pixels * DENOISE_TEXEL_BYTES,
+                storage | BufferUsages::COPY_SRC,
+            ),
+            prev_history: buffer(
+                "glowbrick_denoise_prev_history",
+                2 * pixels * DENOISE_TEXEL_BYTES,
+                storage | BufferUsages::COPY_DST,
+            ),
+            wavelet: buffer("glowbrick_denoise_wavelet", 2 * pixels * DENOISE_TEXEL_BYTES, storage),
             size,
             last_key: None,
             accumulated: 0,
@@ -138,6 +162,8 @@ impl ViewResources {
             prev_camera: Vec3::ZERO,
             prev_restir: false,
             run_restir: false,
+            prev_denoise: false,
+            run_denoise: false,
         }
     }
 }
@@ -175,8 +201,12 @@ pub fn prepare_view_resources(
     let mut params = frame_params(&settings, &highlight, frames.0.load(Ordering::Relaxed));
     // ReSTIR runs only where it has something to sample; its history is valid if last frame ran it too.
     let run_restir = settings.lighting.uses_restir()
-        && matches!(settings.debug, DebugView::None | DebugView::Reservoir)
+        && (settings.debug.is_lit() || settings.debug == DebugView::Reservoir)
         && light_count > 0;
+    let run_denoise = settings.denoise && settings.debug.is_lit();
+    // The denoiser's history restarts where the image changed without the camera moving: an edit (geometry or
+    // lights). Moving objects are left to the reprojection test (their pixels fail it).
+    let world_changed = gpu_world.as_ref().is_some_and(|w| w.uploaded_bytes > 0) || lights_changed;
     for (entity, view, resources) in &mut views {
         let size = view.viewport.zw();
         let clip_from_world = view.clip_from_view * view.world_from_view.to_matrix().inverse();
@@ -203,6 +233,10 @@ pub fn prepare_view_resources(
         resources.prev_clip_from_world = clip_from_world;
         resources.prev_camera = view.world_from_view.translation();
         resources.prev_restir = run_restir;
+        let denoise_history = resources.prev_denoise && run_denoise && !world_changed;
+        params.denoise = if run_denoise { DENOISE_ON } else { 0 } | if denoise_history { DENOISE_HISTORY } else { 0 };
+        resources.prev_denoise = run_denoise;
+        resources.run_denoise = run_denoise;
         queue.write_buffer(&resources.frame_params, 0, bytemuck::bytes_of(&params));
         if let Some(new) = created {
             // A new or resized view: its buffers live on its render-world entity from now on.
@@ -228,6 +262,11 @@ fn view_layouts() -> ViewLayouts {
                 uniform_buffer::<ViewUniform>(true),
                 uniform_buffer_sized(false, NonZeroU64::new(size_of::<FrameParams>() as u64)),
                 storage_buffer_sized(false, None),
+                storage_buffer_sized(false, None),
+                storage_buffer_sized(false, None),
+                storage_buffer_sized(false, None),
+                storage_buffer_sized(false, None),
+                // The denoiser: noisy frame, history, last frame's history, wavelet ping-pong.
                 storage_buffer_sized(false, None),
                 storage_buffer_sized(false, None),
                 storage_buffer_sized(false, None),
@@ -365,6 +404,13 @@ pub fn view_frame(
         },
         false => None,
     };
+    let denoise = match resources.run_denoise {
+        true => match pipelines.get(&pipeline_cache, &denoise::PASSES) {
+            Some(denoise) => Some(denoise),
+            None => return,
+        },
+        false => None,
+    };
     let Some(view_binding) = view_uniforms.uniforms.binding() else { return };
     let size = target.main_texture().size();
     let view_group = ctx.render_device().create_bind_group(
@@ -379,14 +425,22 @@ pub fn view_frame(
             resources.prev_gbuffer.as_entire_binding(),
             resources.reservoirs_temporal.as_entire_binding(),
             resources.reservoirs_final.as_entire_binding(),
+            resources.noisy.as_entire_binding(),
+            resources.history.as_entire_binding(),
+            resources.prev_history.as_entire_binding(),
+            resources.wavelet.as_entire_binding(),
         )),
     );
     let diagnostics = ctx.diagnostic_recorder();
     let encoder = ctx.command_encoder();
-    // Keep last frame's G-buffer for ReSTIR's temporal reprojection before this frame overwrites it (only
-    // ReSTIR reads it, so other modes skip the copy).
-    if restir.is_some() {
+    // Keep last frame's G-buffer for the temporal reprojections (ReSTIR's and the denoiser's) before this frame
+    // overwrites it, and the denoiser's history likewise; other modes skip the copies.
+    if restir.is_some() || denoise.is_some() {
         encoder.copy_buffer_to_buffer(&resources.gbuffer, 0, &resources.prev_gbuffer, 0, resources.gbuffer.size());
+    }
+    if denoise.is_some() {
+        let history = &resources.history;
+        encoder.copy_buffer_to_buffer(history, 0, &resources.prev_history, 0, history.size());
     }
     let mut recorder = PassRecorder {
         encoder,
@@ -403,6 +457,12 @@ pub fn view_frame(
     // 2-4. Voxel ReSTIR: candidates + temporal reuse, spatial reuse, shading.
     if let Some(restir_pipelines) = restir {
         for (pass, pipeline) in restir::PASSES.iter().zip(restir_pipelines) {
+            recorder.dispatch(pass, pipeline, size);
+        }
+    }
+    // 5-9. The denoiser: temporal accumulation, then the wavelet's iterations, the last writing the image.
+    if let Some(denoise_pipelines) = denoise {
+        for (pass, pipeline) in denoise::PASSES.iter().zip(denoise_pipelines) {
             recorder.dispatch(pass, pipeline, size);
         }
     }

@@ -103,6 +103,9 @@ pub struct FrameParams {
     pub taps: u32,
     pub radius: f32,
     pub restir_flags: u32,
+    /// `DENOISE_*` flags: the denoiser runs; its history (last frame's) may be reused.
+    pub denoise: u32,
+    pub _pad: [u32; 3],
 }
 
 /// Group 3, binding 0 (`GiParams` in `shaders/gi/cache.wgsl`).
@@ -158,6 +161,9 @@ pub const GBUFFER_TEXEL_BYTES: u64 = 16;
 pub const RESERVOIR_BYTES: u64 = 32;
 /// An accumulation texel (rgb sum, `vec4<f32>`).
 pub const ACCUMULATION_TEXEL_BYTES: u64 = 16;
+/// The denoiser's per-pixel texels (`vec4<f32>`): the noisy frame (one), the history (two: colour and length,
+/// moments), the wavelet's ping-pong (two: colour and variance).
+pub const DENOISE_TEXEL_BYTES: u64 = 16;
 /// A GI entry's radiance (blended or filtered, `vec4<f32>`) and a GI table key (`u32`).
 pub const GI_RADIANCE_BYTES: u64 = 16;
 pub const GI_KEY_BYTES: u64 = 4;
@@ -171,7 +177,7 @@ const _: () = assert!(size_of::<GpuObject>() == 32);
 const _: () = assert!(size_of::<GpuLight>() == 32);
 const _: () = assert!(size_of::<crate::lights::AliasEntry>() == 16);
 const _: () = assert!(size_of::<SceneLighting>() == 80);
-const _: () = assert!(size_of::<FrameParams>() == 160);
+const _: () = assert!(size_of::<FrameParams>() == 176);
 const _: () = assert!(size_of::<GiParams>() == 48);
 const _: () = assert!(size_of::<GiEntry>() == 64);
 const _: () = assert!(size_of::<GiEdit>() == 32);
@@ -232,6 +238,10 @@ pub const RESTIR_SPATIAL: u32 = 2;
 pub const RESTIR_POINT: u32 = 4;
 pub const RESTIR_UNBIASED: u32 = 8;
 pub const RESTIR_ONE_RAY: u32 = 16;
+/// `FrameParams::denoise`: the denoiser runs this frame.
+pub const DENOISE_ON: u32 = 1;
+/// `FrameParams::denoise`: last frame's denoiser history is valid (same size, nothing in the scene changed).
+pub const DENOISE_HISTORY: u32 = 2;
 
 /// `GiParams::flags` bits.
 pub const GI_FILTER: u32 = 1;
@@ -284,12 +294,16 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("DEBUG_HIT", U32(DebugView::Hit.shader_index())),
         ("DEBUG_DEPTH", U32(DebugView::Depth.shader_index())),
         ("DEBUG_RESERVOIR", U32(DebugView::Reservoir.shader_index())),
+        ("DEBUG_VARIANCE", U32(DebugView::Variance.shader_index())),
+        ("DEBUG_HISTORY", U32(DebugView::History.shader_index())),
         // Flags.
         ("RESTIR_TEMPORAL", U32(RESTIR_TEMPORAL)),
         ("RESTIR_SPATIAL", U32(RESTIR_SPATIAL)),
         ("RESTIR_POINT", U32(RESTIR_POINT)),
         ("RESTIR_UNBIASED", U32(RESTIR_UNBIASED)),
         ("RESTIR_ONE_RAY", U32(RESTIR_ONE_RAY)),
+        ("DENOISE_ON", U32(DENOISE_ON)),
+        ("DENOISE_HISTORY", U32(DENOISE_HISTORY)),
         ("MAX_TAPS", U32(MAX_TAPS)),
         ("GI_FILTER", U32(GI_FILTER)),
         ("GI_BOUNCES", U32(GI_BOUNCES)),

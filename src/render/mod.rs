@@ -13,6 +13,7 @@
 
 pub mod adapter;
 pub mod camera;
+pub mod denoise;
 pub mod frame;
 pub mod gi;
 pub mod gpu_types;

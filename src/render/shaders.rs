@@ -1,12 +1,12 @@
 //! The WGSL, embedded at compile time so the binary runs from any directory. `shaders/lib/` holds the libraries
 //! every pass imports (`glowbrick::world`, `::traversal`, `::random`, `::guards`, `::lights`, `::frame`,
-//! `::constants`, `::counters`); `shaders/restir/` and `shaders/gi/` one technique each.
+//! `::constants`, `::counters`); `shaders/restir/`, `shaders/gi/` and `shaders/denoise/` one technique each.
 
 use bevy::prelude::*;
 use bevy::shader::Shader;
 
 /// Every shader file: its path under `shaders/` and its source. Libraries first (they only define imports).
-pub const SOURCES: [(&str, &str); 18] = [
+pub const SOURCES: [(&str, &str); 21] = [
     ("lib/constants.wgsl", include_str!("../../shaders/lib/constants.wgsl")),
     ("lib/random.wgsl", include_str!("../../shaders/lib/random.wgsl")),
     ("lib/guards.wgsl", include_str!("../../shaders/lib/guards.wgsl")),
@@ -18,6 +18,7 @@ pub const SOURCES: [(&str, &str); 18] = [
     ("gi/cache.wgsl", include_str!("../../shaders/gi/cache.wgsl")),
     ("gi/direct.wgsl", include_str!("../../shaders/gi/direct.wgsl")),
     ("restir/common.wgsl", include_str!("../../shaders/restir/common.wgsl")),
+    ("denoise/common.wgsl", include_str!("../../shaders/denoise/common.wgsl")),
     ("primary.wgsl", include_str!("../../shaders/primary.wgsl")),
     ("restir/initial.wgsl", include_str!("../../shaders/restir/initial.wgsl")),
     ("restir/spatial.wgsl", include_str!("../../shaders/restir/spatial.wgsl")),
@@ -25,6 +26,8 @@ pub const SOURCES: [(&str, &str); 18] = [
     ("gi/refresh.wgsl", include_str!("../../shaders/gi/refresh.wgsl")),
     ("gi/update.wgsl", include_str!("../../shaders/gi/update.wgsl")),
     ("gi/filter.wgsl", include_str!("../../shaders/gi/filter.wgsl")),
+    ("denoise/temporal.wgsl", include_str!("../../shaders/denoise/temporal.wgsl")),
+    ("denoise/wavelet.wgsl", include_str!("../../shaders/denoise/wavelet.wgsl")),
 ];
 
 /// Handles of every embedded shader, by its path under `shaders/`. Holding them keeps the libraries loaded.

@@ -56,6 +56,10 @@ pub enum DebugView {
     /// Voxel ReSTIR's final reservoir per pixel, raw: (W, M, w_sum, 1 if a field was non-finite and was reset).
     /// For the stress run; only meaningful with `lighting=restir`.
     Reservoir,
+    /// The denoiser's luminance variance estimate (its square root, grey), where it filters.
+    Variance,
+    /// The denoiser's history length per pixel, over its cap (1 = white: a full history).
+    History,
 }
 
 impl Named for DebugView {
@@ -66,6 +70,8 @@ impl Named for DebugView {
         ("hit", DebugView::Hit),
         ("depth", DebugView::Depth),
         ("reservoir", DebugView::Reservoir),
+        ("variance", DebugView::Variance),
+        ("history", DebugView::History),
     ];
 }
 
@@ -73,6 +79,11 @@ impl DebugView {
     /// The value the shader switches on.
     pub fn shader_index(self) -> u32 {
         self as u32
+    }
+
+    /// Whether the view shows the lit image (or the denoiser's view of it), so every lighting pass runs.
+    pub fn is_lit(self) -> bool {
+        matches!(self, DebugView::None | DebugView::Variance | DebugView::History)
     }
 }
 
@@ -262,6 +273,9 @@ pub struct RenderSettings {
     pub shadows: bool,
     /// Linear scale applied before tonemapping.
     pub exposure: f32,
+    /// The spatiotemporal denoiser (`render::denoise`): on in `play`, off by default so `render`, the bench and
+    /// the thesis protocol measure raw frames.
+    pub denoise: bool,
     pub restir: RestirSettings,
     pub gi: GiSettings,
 }
@@ -277,6 +291,7 @@ impl Default for RenderSettings {
             time: crate::lights::daylight::DEFAULT_HOURS,
             shadows: true,
             exposure: 1.0,
+            denoise: false,
             restir: RestirSettings::default(),
             gi: GiSettings::default(),
         }

@@ -240,6 +240,13 @@ pub static SETTINGS: &[Setting] = &[
         },
     },
     Setting {
+        key: "denoise",
+        section: Section::General,
+        about: "Spatiotemporal denoiser (SVGF family) on the lit image; play turns it on (debug=variance|history \
+                show its inputs).",
+        field: &Choice { get: |s| s.denoise, set: |s, v| s.denoise = v },
+    },
+    Setting {
         key: "candidates",
         section: Section::Restir,
         about: "Initial light candidates per pixel (M_init).",

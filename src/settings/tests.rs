@@ -17,8 +17,8 @@ fn the_messages_list_the_keys_and_values_as_before_the_table() {
     assert_eq!(
         valid_pairs(),
         "lighting=full|emitters|nee|sun, pick=power|uniform, accumulate=on|off, \
-         debug=none|albedo|normal|hit|depth|reservoir, sun=on|off, time=<0..24>, shadows=on|off, \
-         exposure=<0.001..1000>, \
+         debug=none|albedo|normal|hit|depth|reservoir|variance|history, sun=on|off, time=<0..24>, \
+         shadows=on|off, exposure=<0.001..1000>, denoise=on|off, \
          candidates=<1..64>, taps=<0..16>, radius=<0..100>, temporal=on|off, spatial=on|off, \
          sample=area|point, reuse=biased|one-ray|unbiased, gi=on|off, gi_rays=<4..128>, gi_update=<1..64>, \
          gi_alpha=<0.001..1>, gi_filter=on|off, gi_bounces=on|off, gi_cache=on|off"

@@ -17,6 +17,7 @@ mod bench_quick;
 mod cli;
 mod common;
 mod daylight;
+mod denoise;
 mod extreme_scenes;
 mod gi;
 mod nee_converges;
@@ -42,6 +43,11 @@ fn tests() -> Vec<(&'static str, fn())> {
         daylight: [
             a_lamp_placed_at_night_lights_the_floor_in_the_frame_that_places_it,
             full_lighting_converges_to_the_reference_at_noon_dusk_and_night,
+        ],
+        denoise: [
+            a_denoised_frame_is_closer_to_the_reference_and_adds_little_bias,
+            a_lamp_switched_off_leaves_no_ghost,
+            with_the_denoiser_off_none_of_its_passes_runs,
         ],
         extreme_scenes: [
             a_hundred_thousand_lights,
