@@ -13,6 +13,7 @@
 
 pub mod convergence;
 pub mod daylight;
+pub mod denoise;
 pub mod gi;
 pub mod plot;
 pub mod thesis;

@@ -1,10 +1,11 @@
-//! `glowbrick bench`: run time against error, in one of four modes. Each mode's flags are refused in the other
+//! `glowbrick bench`: run time against error, in one of five modes. Each mode's flags are refused in the other
 //! modes by clap, as a conflict or as a missing `--thesis`/`--gi`, so no flag is ever silently ignored. Conflicts
 //! are listed flag by flag, not by group: clap names every member of a group in its error, given or not.
 
 use super::args::parse_camera;
 use super::on_gpu;
 use crate::bench::daylight::run_daylight_bench;
+use crate::bench::denoise::run_denoise_bench;
 use crate::bench::{ALL_SCENES, BenchConfig, QUICK_SCENES, gi::run_gi_bench, run_bench, thesis::run_thesis_bench};
 use crate::world::CameraView;
 use clap::{ArgGroup, Args};
@@ -12,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 /// The flags of the settings sweep and the flags that pick another mode: each set refuses the other.
 const SWEEP: [&str; 4] = ["scenes", "quick", "settings", "camera"];
-const MODES: [&str; 3] = ["thesis", "gi", "daylight"];
+const MODES: [&str; 4] = ["thesis", "gi", "daylight", "denoise"];
 
 #[derive(Args)]
 #[command(group(ArgGroup::new("mode").args(MODES)))]
@@ -36,10 +37,14 @@ pub struct BenchArgs {
     /// 10^5 lamps; writes daylight.md.
     #[arg(long)]
     daylight: bool,
+    /// The denoiser bench instead: one frame raw and denoised against the reference on four scenes, the bias it
+    /// adds, flicker, reaction to a lamp switched off and on, cost at 320x180 and 1280x720; writes denoise.md.
+    #[arg(long)]
+    denoise: bool,
     /// With --thesis: image size as a fraction of the thesis' 1600x1024.
-    #[arg(long, default_value_t = 0.2, requires = "thesis", conflicts_with_all = ["gi", "daylight", "scenes", "quick", "settings", "camera"])]
+    #[arg(long, default_value_t = 0.2, requires = "thesis", conflicts_with_all = ["gi", "daylight", "denoise", "scenes", "quick", "settings", "camera"])]
     scale: f32,
-    /// With --thesis, --gi or --daylight: samples per pixel of the CPU reference.
+    /// With --thesis, --gi, --daylight or --denoise: samples per pixel of the CPU reference.
     #[arg(long, default_value_t = 1024, requires = "mode", conflicts_with_all = SWEEP)]
     spp: u32,
     /// Comma-separated bench settings to run (default: all), e.g. restir,nee-power.
@@ -62,6 +67,8 @@ enum BenchMode {
     Gi { spp: u32 },
     /// The game's lighting at three times of day: daylight.md.
     Daylight { spp: u32 },
+    /// The denoiser: denoise.md.
+    Denoise { spp: u32 },
 }
 
 impl BenchArgs {
@@ -89,6 +96,10 @@ impl BenchArgs {
                 let config = BenchConfig { width: 160, height: 90, reference_spp: spp, ..BenchConfig::full() };
                 on_gpu(|| run_daylight_bench(&config, &out)).map(|text| println!("{text}"))
             }
+            BenchMode::Denoise { spp } => {
+                let config = BenchConfig { width: 160, height: 90, reference_spp: spp, ..BenchConfig::full() };
+                on_gpu(|| run_denoise_bench(&config, &out)).map(|text| println!("{text}"))
+            }
         }
     }
 
@@ -100,6 +111,8 @@ impl BenchArgs {
             BenchMode::Gi { spp: self.spp }
         } else if self.daylight {
             BenchMode::Daylight { spp: self.spp }
+        } else if self.denoise {
+            BenchMode::Denoise { spp: self.spp }
         } else {
             BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }
         }

@@ -180,6 +180,7 @@ fn conflicting_flags_are_refused() {
         (&["bench", "--daylight", "--scale", "0.5"], "--daylight", "--scale"),
         (&["bench", "--daylight", "--quick"], "--daylight", "--quick"),
         (&["bench", "--daylight", "--gi"], "--daylight", "--gi"),
+        (&["bench", "--denoise", "--settings", "restir"], "--denoise", "--settings"),
         (&["bench", "--scale", "0.5", "--settings", "restir"], "--scale", "--settings"),
         (&["bench", "--quick", "--spp", "4"], "--spp", "--quick"),
         (&["bench", "--scale", "0.5", "--out", NOWHERE], "--thesis", "required"),

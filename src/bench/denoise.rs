@@ -1,0 +1,261 @@
+//! The denoiser bench (`glowbrick bench --denoise`): one real-time frame of the game's lighting (`lighting=full`
+//! with the GI cache) raw and denoised against a converged reference on four scenes; what the filter does to
+//! the mean once frames accumulate; how much a still view flickers; how many frames a lamp switched off or on
+//! takes to show; and what the passes cost at 320x180 and 1280x720. Writes `denoise.md`.
+
+use super::{BenchConfig, Reference, cached_reference_of, reference_noise_of};
+use crate::colour::luminance;
+use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::image_io::LinearImage;
+use crate::lights::daylight::{DEFAULT_HOURS, Daylight};
+use crate::reference::metrics::{Metrics, compare};
+use crate::render::denoise::DENOISE_PASS_NAMES;
+use crate::settings::RenderSettings;
+use crate::world::events::EditRequest;
+use crate::world::scene::load_scene;
+use crate::world::{CameraView, Edit, VoxelWorld};
+use bevy::math::IVec3;
+use std::path::Path;
+use std::time::Instant;
+
+/// Scenes and views: the window room, the cornell box, the letters, the apartments (first view where `None`).
+const SCENES: [(&str, Option<&str>); 4] =
+    [("window-room", Some("inside")), ("cornell", Some("front")), ("letters", None), ("apartments", None)];
+const REFERENCE_BOUNCES: u32 = 8;
+/// Frames for the GI cache (and the denoiser's history) to settle, frames whose changes are averaged for the
+/// flicker, frames accumulated for the bias.
+const SETTLE_FRAMES: u32 = 64;
+const FLICKER_FRAMES: u32 = 8;
+const ACCUMULATED_FRAMES: u32 = 64;
+/// The game's frame.
+const GAME: [&str; 2] = ["lighting=full", "gi=on"];
+
+struct SceneRow {
+    scene: &'static str,
+    raw: Metrics,
+    denoised: Metrics,
+    raw_accumulated: Metrics,
+    denoised_accumulated: Metrics,
+    raw_flicker: f64,
+    denoised_flicker: f64,
+    mean: f64,
+    noise: f64,
+}
+
+struct CostRow {
+    size: (u32, u32),
+    raw_ms: f64,
+    denoised_ms: f64,
+    /// GPU ms of each denoiser pass (None without timestamps).
+    passes: Vec<Option<f64>>,
+}
+
+fn renderer(
+    world: &VoxelWorld,
+    view: &CameraView,
+    size: (u32, u32),
+    pairs: &[&str],
+) -> Result<HeadlessRenderer, String> {
+    let pairs: Vec<String> = GAME.iter().chain(pairs).map(|p| p.to_string()).collect();
+    let settings = RenderSettings::default().with_pairs(&pairs)?;
+    let options = HeadlessOptions { width: size.0, height: size.1, settings, ..Default::default() };
+    HeadlessRenderer::new(world.clone(), view, &options)
+}
+
+/// Mean absolute luminance change between consecutive frames of a still view.
+fn flicker(r: &mut HeadlessRenderer, frames: u32) -> Result<f64, String> {
+    let mut previous = r.render_next()?;
+    let mut sum = 0.0;
+    for _ in 0..frames {
+        let now = r.render_next()?;
+        let change: f64 = previous
+            .pixels
+            .iter()
+            .zip(&now.pixels)
+            .map(|(a, b)| (luminance([a[0], a[1], a[2]]) - luminance([b[0], b[1], b[2]])).abs() as f64)
+            .sum();
+        sum += change / now.pixels.len() as f64;
+        previous = now;
+    }
+    Ok(sum / frames as f64)
+}
+
+/// One frame, the flicker and the accumulated image of one setting against `truth`.
+fn measure(
+    world: &VoxelWorld,
+    view: &CameraView,
+    config: &BenchConfig,
+    truth: &LinearImage,
+    denoise: &str,
+) -> Result<(Metrics, f64, Metrics), String> {
+    let mut r = renderer(world, view, (config.width, config.height), &[denoise])?;
+    r.render(SETTLE_FRAMES)?;
+    let single = compare(&r.render_next()?, truth)?;
+    let flicker = flicker(&mut r, FLICKER_FRAMES)?;
+    r.app_mut().world_mut().resource_mut::<RenderSettings>().accumulate = true;
+    let accumulated = compare(&r.render(ACCUMULATED_FRAMES)?, truth)?;
+    Ok((single, flicker, accumulated))
+}
+
+fn measure_scene(scene: &'static str, view: Option<&str>, config: &BenchConfig) -> Result<SceneRow, String> {
+    let world = load_scene(scene).map_err(|e| e.to_string())?;
+    let view = world.view(view).cloned().ok_or_else(|| format!("{scene}: no such view"))?;
+    let what = Reference { bounces: REFERENCE_BOUNCES, daylight: Some(Daylight::at(DEFAULT_HOURS, true)) };
+    let truth = cached_reference_of(&world, &view, config, &what)?;
+    let noise = reference_noise_of(&world, &view, config, &what, &truth)?;
+    let (raw, raw_flicker, raw_accumulated) = measure(&world, &view, config, &truth, "denoise=off")?;
+    let (denoised, denoised_flicker, denoised_accumulated) = measure(&world, &view, config, &truth, "denoise=on")?;
+    Ok(SceneRow {
+        scene,
+        raw,
+        denoised,
+        raw_accumulated,
+        denoised_accumulated,
+        raw_flicker,
+        denoised_flicker,
+        mean: truth.mean_luminance(),
+        noise,
+    })
+}
+
+/// Frames until the mean over the pixels a lamp lights is within 10% of its converged value after the lamp is
+/// switched off, then on again (test-room at night, denoised), or `None` when 16 frames are not enough.
+fn reaction(config: &BenchConfig) -> Result<(Option<u32>, Option<u32>), String> {
+    let world = load_scene("test-room").map_err(|e| e.to_string())?;
+    let view = world.view(Some("inside")).cloned().ok_or("test-room: no view 'inside'")?;
+    let lamp = world.palette.id_of("lamp").ok_or("test-room: no lamp")?;
+    let (lo, hi) = (IVec3::new(24, 1, 24), IVec3::new(24, 2, 24));
+    let mut dark = world.clone();
+    dark.apply(Edit::FillBox { min: lo, max: hi, material: 0 }).map_err(|e| e.to_string())?;
+    let size = (config.width, config.height);
+    let converged = |w: &VoxelWorld| -> Result<LinearImage, String> {
+        renderer(w, &view, size, &["time=0", "accumulate=on"])?.render(ACCUMULATED_FRAMES)
+    };
+    let (lit, unlit) = (converged(&world)?, converged(&dark)?);
+    let affected: Vec<usize> =
+        (0..lit.pixels.len()).filter(|&i| lit.pixels[i][1] > 2.0 * unlit.pixels[i][1] + 0.005).collect();
+    let mean = |image: &LinearImage| {
+        affected.iter().map(|&i| image.pixels[i][1] as f64).sum::<f64>() / affected.len().max(1) as f64
+    };
+    let mut r = renderer(&world, &view, size, &["time=0", "denoise=on"])?;
+    r.render(SETTLE_FRAMES)?;
+    let frames_after = |r: &mut HeadlessRenderer, edit: Edit, target: f64| -> Result<Option<u32>, String> {
+        r.app_mut().world_mut().write_message(EditRequest::player(edit));
+        for frame in 1..=16 {
+            if (mean(&r.render_next()?) - target).abs() <= 0.1 * target.max(1e-4) {
+                return Ok(Some(frame));
+            }
+        }
+        Ok(None)
+    };
+    let off = frames_after(&mut r, Edit::FillBox { min: lo, max: hi, material: 0 }, mean(&unlit))?;
+    r.render(SETTLE_FRAMES)?;
+    let on = frames_after(&mut r, Edit::FillBox { min: lo, max: hi, material: lamp }, mean(&lit))?;
+    Ok((off, on))
+}
+
+fn cost(size: (u32, u32)) -> Result<CostRow, String> {
+    let world = load_scene("cornell").map_err(|e| e.to_string())?;
+    let view = world.view(Some("front")).cloned().ok_or("cornell: no view 'front'")?;
+    let time = |denoise: &str| -> Result<(f64, Vec<Option<f64>>), String> {
+        let mut r = renderer(&world, &view, size, &[denoise])?;
+        r.render(8)?;
+        let start = Instant::now();
+        for _ in 0..8 {
+            r.step();
+        }
+        let ms = start.elapsed().as_secs_f64() * 1000.0 / 8.0;
+        Ok((ms, DENOISE_PASS_NAMES.iter().map(|n| r.gpu_pass_ms(n)).collect()))
+    };
+    let (raw_ms, _) = time("denoise=off")?;
+    let (denoised_ms, passes) = time("denoise=on")?;
+    Ok(CostRow { size, raw_ms, denoised_ms, passes })
+}
+
+/// Runs the bench at the config's size, writes `denoise.md` into `out` and returns its text.
+pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let mut rows = Vec::new();
+    for (scene, view) in SCENES {
+        let row = measure_scene(scene, view, config)?;
+        eprintln!("denoise bench: {scene}: raw {} / denoised {}", row.raw, row.denoised);
+        rows.push(row);
+    }
+    let reaction = reaction(config)?;
+    eprintln!("denoise bench: lamp off {:?} frames, on {:?} frames", reaction.0, reaction.1);
+    let costs = [cost((320, 180))?, cost((1280, 720))?];
+    let text = markdown(&rows, reaction, &costs, config);
+    let path = out.join("denoise.md");
+    std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(text)
+}
+
+fn markdown(
+    rows: &[SceneRow],
+    reaction: (Option<u32>, Option<u32>),
+    costs: &[CostRow],
+    config: &BenchConfig,
+) -> String {
+    let mut text = format!(
+        "# The denoiser: error, bias, flicker, reaction and cost\n\n`glowbrick bench --denoise`: {}x{}, the game's \
+         frame (`lighting=full gi=on`, time {DEFAULT_HOURS} h), {SETTLE_FRAMES} frames to settle, then one frame, \
+         {FLICKER_FRAMES} frame-to-frame changes and {ACCUMULATED_FRAMES} accumulated frames, raw (`denoise=off`) \
+         and denoised, against a {}-spp CPU reference with {REFERENCE_BOUNCES} bounces (its own noise: MAE against \
+         another seed).\n\n## One frame\n\n| scene | raw MAE | raw relMSE | raw bias | denoised MAE | denoised \
+         relMSE | denoised bias | relMSE raw / denoised | reference noise |\n|---|---|---|---|---|---|---|---|---|\n",
+        config.width, config.height, config.reference_spp
+    );
+    for r in rows {
+        text += &format!(
+            "| {} | {:.5} | {:.4} | {:+.5} | {:.5} | {:.4} | {:+.5} | {:.1}x | {:.5} |\n",
+            r.scene,
+            r.raw.mae,
+            r.raw.relmse,
+            r.raw.bias,
+            r.denoised.mae,
+            r.denoised.relmse,
+            r.denoised.bias,
+            r.raw.relmse / r.denoised.relmse.max(1e-12),
+            r.noise
+        );
+    }
+    text += "\n## What the filter does to the mean, and flicker\n\nBias of the accumulated images against the \
+             reference; the filter's own bias is the difference, as a share of the reference's mean. Flicker: the \
+             mean absolute luminance change between consecutive frames of the still view.\n\n| scene | raw bias \
+             (accumulated) | denoised bias | added by the filter | raw flicker | denoised flicker |\n\
+             |---|---|---|---|---|---|\n";
+    for r in rows {
+        text += &format!(
+            "| {} | {:+.5} | {:+.5} | {:+.2}% | {:.5} | {:.5} |\n",
+            r.scene,
+            r.raw_accumulated.bias,
+            r.denoised_accumulated.bias,
+            100.0 * (r.denoised_accumulated.bias - r.raw_accumulated.bias) / r.mean.max(1e-12),
+            r.raw_flicker,
+            r.denoised_flicker
+        );
+    }
+    let frames = |f: Option<u32>| f.map_or("more than 16".to_string(), |f| f.to_string());
+    text += &format!(
+        "\n## Reaction\n\ntest-room at night, denoised: frames until the mean over the pixels its lamp lights is \
+         within 10% of its converged value: lamp switched off {}, switched on again {}.\n",
+        frames(reaction.0),
+        frames(reaction.1)
+    );
+    text += "\n## Cost\n\ncornell, the game's frame, mean wall time of 8 frames (lavapipe), and the GPU time of each \
+             denoiser pass (timestamp queries).\n\n| size | frame ms raw | frame ms denoised | share of the frame | \
+             temporal | wavelet 1 | 2 | 4 | 8 + write |\n|---|---|---|---|---|---|---|---|---|\n";
+    for c in costs {
+        let passes: Vec<String> = c.passes.iter().map(|p| p.map_or("-".into(), |ms| format!("{ms:.1}"))).collect();
+        text += &format!(
+            "| {}x{} | {:.1} | {:.1} | {:.0}% | {} |\n",
+            c.size.0,
+            c.size.1,
+            c.raw_ms,
+            c.denoised_ms,
+            100.0 * (c.denoised_ms - c.raw_ms) / c.denoised_ms.max(1e-9),
+            passes.join(" | ")
+        );
+    }
+    text
+}
