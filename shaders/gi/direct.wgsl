@@ -8,7 +8,7 @@
 #import glowbrick::lights::{scene, direct_sample, disk_sample}
 #import glowbrick::random::{Rng, rng_next, pcg}
 #import glowbrick::guards::finite3
-#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET}
+#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET, GI_RESTART}
 #import glowbrick::gi::cache::{gi, gi_direct, tangent_axes, slot_seed, GiEntry}
 
 // The blend of an entry's direct estimate: young entries average evenly, then an exponential blend over about
@@ -53,7 +53,9 @@ fn update_direct(slot: u32, e: GiEntry) {
         estimate = vec3(0.0);
     }
     let old = gi_direct[slot];
-    let weight = max(DIRECT_ALPHA, 1.0 / (old.w + 1.0));
-    let blended = select(mix(old.rgb, estimate, weight), estimate, old.w == 0.0);
-    gi_direct[slot] = vec4(blended, min(old.w + 1.0, 1.0e6));
+    // After a change of light the estimate starts over (as the indirect light's blend, update.wgsl).
+    let count = select(old.w, 0.0, (gi.flags & GI_RESTART) != 0u);
+    let weight = max(DIRECT_ALPHA, 1.0 / (count + 1.0));
+    let blended = select(mix(old.rgb, estimate, weight), estimate, count == 0.0);
+    gi_direct[slot] = vec4(blended, min(count + 1.0, 1.0e6));
 }

@@ -11,7 +11,7 @@
 #import glowbrick::random::{Rng, pcg}
 #import glowbrick::guards::finite3
 #import glowbrick::counters::counters
-#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET, GI_BOUNCES, GI_CACHE, COUNT_GI_UPDATED, COUNT_GI_LIVE, COUNT_GI_EVICTED,
+#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET, GI_BOUNCES, GI_CACHE, GI_RESTART, COUNT_GI_UPDATED, COUNT_GI_LIVE, COUNT_GI_EVICTED,
     COUNT_GI_BORROWED, COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
 #import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_edits, gi_direct, GiEntry,
     gi_touch, gi_find, used_within, slot_seed, ray_direction, ray_origin, encode_hit, hit_face, hit_distance, is_live_key,
@@ -120,6 +120,9 @@ fn update_entry(slot: u32) {
     // The refresh pass (refresh.wgsl) has brought the cached hits up to date this frame.
     let cached = (gi.flags & GI_CACHE) != 0u && !dynamic;
     let samples = e.samples;
+    // After a change of light the blend starts over from this frame's estimate (the samples count stays for
+    // the readers: the entry still has a value).
+    let age = select(samples, 0u, (gi.flags & GI_RESTART) != 0u);
     let seen = used_within(e.last_seen, 1u) && !dynamic;
     let own = select(vec3(0.0), gi_filtered[slot].rgb, samples > 0u);
     let seed = slot_seed(slot);
@@ -160,10 +163,10 @@ fn update_entry(slot: u32) {
         estimate = vec3(0.0);
     }
     // Young entries average evenly; after 1/alpha frames it becomes an exponential blend.
-    let weight = max(gi.alpha, 1.0 / f32(samples + 1u));
-    let blended = select(mix(gi_irradiance[slot].rgb, estimate, weight), estimate, samples == 0u);
+    let weight = max(gi.alpha, 1.0 / f32(age + 1u));
+    let blended = select(mix(gi_irradiance[slot].rgb, estimate, weight), estimate, age == 0u);
     gi_irradiance[slot] = vec4(blended, 1.0);
-    gi_entries[slot].samples = min(samples + 1u, 1u << 20u);
+    gi_entries[slot].samples = min(age + 1u, 1u << 20u);
 }
 
 @compute @workgroup_size(64, 1, 1)

@@ -11,9 +11,10 @@
 
 use super::frame::{Dispatch, VoxelPass};
 use super::gpu_types::{
-    GI_BOUNCES, GI_CACHE, GI_FILTER, GI_KEY_BYTES, GI_RADIANCE_BYTES, GI_RAY_BYTES, GiEdit, GiEntry, GiParams,
+    GI_BOUNCES, GI_CACHE, GI_FILTER, GI_KEY_BYTES, GI_RESTART, GI_RADIANCE_BYTES, GI_RAY_BYTES, GiEdit, GiEntry, GiParams,
 };
 use super::scene::SceneUploaded;
+use super::scene::lights::GpuLights;
 use super::scene::world::GpuWorld;
 use crate::settings::{GiSettings, RenderSettings};
 use bevy::prelude::*;
@@ -169,6 +170,8 @@ pub struct GiCache {
     epoch: u32,
     lost_epoch: u32,
     frame: u32,
+    /// The lighting the entries were blended under (mode, time of day, sun, shadows); a change restarts them.
+    lighting: Option<(crate::settings::Lighting, u32, bool, bool)>,
     pub bind_group: Option<BindGroup>,
     /// Whether GI runs this frame.
     pub enabled: bool,
@@ -197,6 +200,7 @@ pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
         epoch: 1,
         lost_epoch: 0,
         frame: FIRST_FRAME,
+        lighting: None,
         bind_group: None,
         enabled: false,
     });
@@ -245,12 +249,20 @@ pub fn prepare_gi(
     mut cache: ResMut<GiCache>,
     settings: Option<Res<RenderSettings>>,
     gpu_world: Option<Res<GpuWorld>>,
+    gpu_lights: Option<Res<GpuLights>>,
     layout: Res<GiLayout>,
     pipeline_cache: Res<PipelineCache>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
 ) {
-    let gi = settings.map(|s| s.gi.clone()).unwrap_or_default();
+    let settings = settings.map(|s| s.clone()).unwrap_or_default();
+    let gi = settings.gi.clone();
+    // A change of light restarts the entries' blends, so a lamp switched off or the clock moved on does not
+    // linger for 1 / alpha frames (at the game's alpha 0.03, more than 16 frames after a lamp went out:
+    // docs/bench/denoise.md).
+    let lighting = Some((settings.lighting, settings.time.to_bits(), settings.sun, settings.shadows));
+    let restart = gpu_lights.as_ref().is_some_and(|l| l.changed) || cache.lighting != lighting;
+    cache.lighting = lighting;
     let shape = Shape::of(&gi);
     if shape != cache.shape || gpu_world.as_ref().is_some_and(|w| w.replaced) {
         cache.reset(&device, shape);
@@ -266,7 +278,10 @@ pub fn prepare_gi(
     let flag = |on: bool, bit: u32| if on { bit } else { 0 };
     let params = GiParams {
         enabled: gi.enabled as u32,
-        flags: flag(gi.filter, GI_FILTER) | flag(gi.bounces, GI_BOUNCES) | flag(gi.cache, GI_CACHE),
+        flags: flag(gi.filter, GI_FILTER)
+            | flag(gi.bounces, GI_BOUNCES)
+            | flag(gi.cache, GI_CACHE)
+            | flag(restart, GI_RESTART),
         rays: shape.rays,
         update_rays: gi.update_rays.clamp(1, shape.rays),
         alpha: gi.alpha,

@@ -247,6 +247,9 @@ pub const DENOISE_HISTORY: u32 = 2;
 pub const GI_FILTER: u32 = 1;
 pub const GI_BOUNCES: u32 = 2;
 pub const GI_CACHE: u32 = 4;
+/// `GiParams::flags`: the light changed this frame (a lamp placed or removed, the time of day, the lighting
+/// mode): entries replace their blended light with this frame's estimate and average evenly from there.
+pub const GI_RESTART: u32 = 8;
 
 /// The G-buffer's packed hit: bit 0 hit, bits 1-3 face, bits 4-19 material, bits 20-31 the moving object's id.
 pub const GBUFFER_FACE_SHIFT: u32 = 1;
@@ -308,6 +311,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("GI_FILTER", U32(GI_FILTER)),
         ("GI_BOUNCES", U32(GI_BOUNCES)),
         ("GI_CACHE", U32(GI_CACHE)),
+        ("GI_RESTART", U32(GI_RESTART)),
         // The G-buffer's packed hit.
         ("GBUFFER_FACE_SHIFT", U32(GBUFFER_FACE_SHIFT)),
         ("GBUFFER_MATERIAL_SHIFT", U32(GBUFFER_MATERIAL_SHIFT)),

@@ -85,3 +85,20 @@ pub fn a_lamp_placed_at_night_lights_the_floor_in_the_frame_that_places_it() {
     // history kept across the edit it was 41 of 340.
     assert!(first_lit * 10 >= settled_lit * 6, "{first_lit} of {settled_lit} pixels lit in the first frame");
 }
+
+pub fn the_clock_moved_in_a_running_game_moves_the_light() {
+    let world = load_scene("test-room").unwrap();
+    let view = world.view(Some("inside")).unwrap().clone();
+    let pairs = ["gi=off", "denoise=on", "accumulate=on", "time=12"];
+    let mut running = common::renderer_with(&world, &view, W, H, &pairs);
+    running.render(8).unwrap();
+    running.app_mut().world_mut().resource_mut::<glowbrick::settings::RenderSettings>().time = 0.0;
+    let moved = running.render(64).unwrap();
+    let night = common::renderer_with(&world, &view, W, H, &["gi=off", "denoise=on", "accumulate=on", "time=0"])
+        .render(64)
+        .unwrap();
+    let noon = common::renderer_with(&world, &view, W, H, &pairs).render(64).unwrap();
+    let (to_night, to_noon) = (compare(&moved, &night).unwrap(), compare(&moved, &noon).unwrap());
+    eprintln!("clock moved to night: against night {to_night}, against noon {to_noon}");
+    assert!(to_night.mae * 4.0 < to_noon.mae, "the running renderer still shows noon");
+}

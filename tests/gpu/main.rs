@@ -43,6 +43,7 @@ fn tests() -> Vec<(&'static str, fn())> {
         daylight: [
             a_lamp_placed_at_night_lights_the_floor_in_the_frame_that_places_it,
             full_lighting_converges_to_the_reference_at_noon_dusk_and_night,
+            the_clock_moved_in_a_running_game_moves_the_light,
         ],
         denoise: [
             a_denoised_frame_is_closer_to_the_reference_and_adds_little_bias,
