@@ -11,7 +11,8 @@
 
 use super::frame::{Dispatch, VoxelPass};
 use super::gpu_types::{
-    GI_BOUNCES, GI_CACHE, GI_FILTER, GI_KEY_BYTES, GI_RESTART, GI_RADIANCE_BYTES, GI_RAY_BYTES, GiEdit, GiEntry, GiParams,
+    GI_BOUNCES, GI_CACHE, GI_FILTER, GI_KEY_BYTES, GI_RADIANCE_BYTES, GI_RAY_BYTES, GI_RESTART, GiEdit, GiEntry,
+    GiParams,
 };
 use super::scene::SceneUploaded;
 use super::scene::lights::GpuLights;
@@ -172,6 +173,8 @@ pub struct GiCache {
     frame: u32,
     /// The lighting the entries were blended under (mode, time of day, sun, shadows); a change restarts them.
     lighting: Option<(crate::settings::Lighting, u32, bool, bool)>,
+    /// Frames left in which the entries restart their blends.
+    restart_frames: u32,
     pub bind_group: Option<BindGroup>,
     /// Whether GI runs this frame.
     pub enabled: bool,
@@ -201,6 +204,7 @@ pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
         lost_epoch: 0,
         frame: FIRST_FRAME,
         lighting: None,
+        restart_frames: 0,
         bind_group: None,
         enabled: false,
     });
@@ -259,10 +263,16 @@ pub fn prepare_gi(
     let gi = settings.gi.clone();
     // A change of light restarts the entries' blends, so a lamp switched off or the clock moved on does not
     // linger for 1 / alpha frames (at the game's alpha 0.03, more than 16 frames after a lamp went out:
-    // docs/bench/denoise.md).
+    // docs/bench/denoise.md). For RESTART_FRAMES frames each entry takes that frame's estimate alone: its bounces
+    // read last frame's values, which still hold the old light, and one restart would average that into the
+    // next 1 / alpha frames.
     let lighting = Some((settings.lighting, settings.time.to_bits(), settings.sun, settings.shadows));
-    let restart = gpu_lights.as_ref().is_some_and(|l| l.changed) || cache.lighting != lighting;
+    if gpu_lights.as_ref().is_some_and(|l| l.changed) || cache.lighting != lighting {
+        cache.restart_frames = RESTART_FRAMES;
+    }
     cache.lighting = lighting;
+    let restart = cache.restart_frames > 0;
+    cache.restart_frames = cache.restart_frames.saturating_sub(1);
     let shape = Shape::of(&gi);
     if shape != cache.shape || gpu_world.as_ref().is_some_and(|w| w.replaced) {
         cache.reset(&device, shape);
@@ -314,6 +324,10 @@ pub fn prepare_gi(
         )),
     ));
 }
+
+/// Frames after a change of light in which every entry takes only that frame's estimate (each removes one more
+/// bounce of the old light).
+const RESTART_FRAMES: u32 = 3;
 
 /// Adds the cache and its preparation to the render app (its passes are in `frame::world_frame`).
 pub fn add(render_app: &mut SubApp) {
