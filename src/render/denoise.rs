@@ -7,11 +7,11 @@
 //!    10%), blend (1 / history length, at least 0.1), luminance moments give the variance (a 3x3 estimate while
 //!    the history is short). No firefly clamp: one at 10x the brightest neighbour cost -5% of the mean and
 //!    gained nothing (docs/bench/denoise.md).
-//! 2-5. `wavelet` (`shaders/denoise/wavelet.wgsl`): four a-trous iterations of a 5x5 B3-spline kernel (steps 1,
-//!    2, 4, 8 pixels), each tap kept only on the same voxel-face plane (voxel faces are flat: an exact edge
-//!    stop) and weighted by luminance against the larger variance of the pair (each pixel's own darkened the
-//!    image by 5%: a dark pixel refused a bright neighbour's light); the last remodulates (albedo x filtered + emission),
-//!    draws the highlight and writes the image.
+//! 2. `wavelet` (`shaders/denoise/wavelet.wgsl`), passes 2 to 5: four a-trous iterations of a 5x5 B3-spline
+//!    kernel (steps 1, 2, 4, 8 pixels), each tap kept only on the same voxel-face plane (voxel faces are flat: an
+//!    exact edge stop) and weighted by luminance against the larger variance of the pair (each pixel's own
+//!    darkened the image by 5%: a dark pixel refused a bright neighbour's light); the last remodulates (albedo x
+//!    filtered + emission), draws the highlight and writes the image.
 //!
 //! The history restarts on frames where an edit changed the world or its lights (`frame::prepare_view_resources`),
 //! so a lamp switched on or off shows at once, noisier for a few frames. Off (`denoise=off`, `render`'s
