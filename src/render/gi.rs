@@ -259,7 +259,14 @@ pub fn prepare_gi(
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
 ) {
-    let settings = settings.map(|s| s.clone()).unwrap_or_default();
+    let fallback;
+    let settings = match settings.as_deref() {
+        Some(s) => s,
+        None => {
+            fallback = RenderSettings::default();
+            &fallback
+        }
+    };
     let gi = settings.gi.clone();
     // A change of light restarts the entries' blends, so a lamp switched off or the clock moved on does not
     // linger for 1 / alpha frames (at the game's alpha 0.03, more than 16 frames after a lamp went out:
