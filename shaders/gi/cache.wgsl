@@ -74,6 +74,24 @@ const DISTANCE_SCALE: f32 = 256.0;
 // Per entry: the direct light its face reflects, averaged over the face and over frames (rgb), and the samples
 // blended so far (w; 0 = no value yet). Written by refresh.wgsl, read by update.wgsl at ray hits (direct.wgsl).
 @group(3) @binding(7) var<storage, read_write> gi_direct: array<vec4<f32>>;
+// This frame's work (compact.wgsl): per table an indirect dispatch size (x, y, z) and the count of listed
+// entries, words WORK_STATIC.. and WORK_DYNAMIC..; and the lists, the static table's due slots from 0, the
+// dynamic table's from static_capacity.
+@group(3) @binding(8) var<storage, read_write> gi_work: array<atomic<u32>>;
+@group(3) @binding(9) var<storage, read_write> gi_list: array<u32>;
+
+const WORK_STATIC: u32 = 0u;
+const WORK_DYNAMIC: u32 = 4u;
+const WORK_COUNT: u32 = 3u;
+
+// The slot listed at index i of this frame's work for a table (WORK_STATIC or WORK_DYNAMIC), or NOT_FOUND past
+// its end (the last workgroup's spare threads).
+fn listed_slot(work: u32, i: u32) -> u32 {
+    if i >= atomicLoad(&gi_work[work + WORK_COUNT]) {
+        return NOT_FOUND;
+    }
+    return gi_list[select(0u, gi.static_capacity, work == WORK_DYNAMIC) + i];
+}
 
 fn key_hash(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
     return pcg(pcg(pcg(pcg(u32(voxel.x)) ^ u32(voxel.y)) ^ u32(voxel.z)) ^ (face | (object << 3u)));

@@ -1,31 +1,15 @@
-// GI cache filter, one thread per slot: the value shading reads is the mean of the entry and its neighbours of
-// the same face orientation in the 3x3x3 block around its voxel (filter on), or the entry's own value (off).
+// GI cache filter, one thread per entry due this frame (listed by compact.wgsl): the value shading reads is the
+// mean of the entry and its neighbours of the same face orientation in the 3x3x3 block around its voxel (filter
+// on), or the entry's own value (off).
 // Same orientation keeps the two sides of a one-voxel wall apart: the far side faces the other way.
 
-#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_find, used_within, is_live_key,
-    next_slot, NOT_FOUND, UPDATE_AGE, EMPTY_KEY, FREED_KEY}
+#import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_find, listed_slot, NOT_FOUND, WORK_STATIC,
+    WORK_DYNAMIC}
 #import glowbrick::constants::GI_FILTER
 
-// A freed slot followed by an empty one ends every chain through it anyway: make it empty, so misses stop
-// early again. Safe here: no pass inserts while the filter runs, and a lookup that sees either word ends at the
-// next slot at the latest. A run of freed slots clears from its end, one slot a frame.
-fn clear_tombstone(slot: u32) {
-    if atomicLoad(&gi_keys[next_slot(slot)]) == EMPTY_KEY {
-        atomicStore(&gi_keys[slot], EMPTY_KEY);
-    }
-}
-
 fn filter_entry(slot: u32) {
-    let key = atomicLoad(&gi_keys[slot]);
-    if key == FREED_KEY {
-        clear_tombstone(slot);
-        return;
-    }
-    if !is_live_key(key) {
-        return;
-    }
     let e = gi_entries[slot];
-    if !used_within(e.last_used, UPDATE_AGE) || e.samples == 0u {
+    if e.samples == 0u {
         return;
     }
     var filtered = gi_irradiance[slot].rgb;
@@ -48,15 +32,17 @@ fn filter_entry(slot: u32) {
 
 @compute @workgroup_size(64, 1, 1)
 fn filter_static(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x < gi.static_capacity {
-        filter_entry(id.x);
+    let slot = listed_slot(WORK_STATIC, id.x);
+    if slot != NOT_FOUND {
+        filter_entry(slot);
     }
 }
 
 // The moving objects' table (same orientation, same object), dispatched only while objects exist.
 @compute @workgroup_size(64, 1, 1)
 fn filter_dynamic(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x < gi.dynamic_capacity {
-        filter_entry(gi.static_capacity + id.x);
+    let slot = listed_slot(WORK_DYNAMIC, id.x);
+    if slot != NOT_FOUND {
+        filter_entry(slot);
     }
 }

@@ -1,12 +1,11 @@
-// GI cache refresh, one thread per static slot, before the update: brings a due entry's K cached static hits up
+// GI cache refresh, one thread per static entry due this frame (listed by compact.wgsl), before the update: brings a due entry's K cached static hits up
 // to date. A new entry traces all K; after an edit, only the rays whose segments cross an edited brick are traced
 // again, and entries whose rays cannot reach any edit keep every hit (counted: COUNT_GI_RETRACED, COUNT_GI_RAYS_TRACED).
 
 #import glowbrick::world::world_info
 #import glowbrick::traversal::{trace, box_entry, INF}
-#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_rays, gi_edits, gi_direct, GiEntry, used_within,
-    ray_direction, ray_origin, slot_seed, encode_hit, hit_face, hit_distance, is_live_key, NEVER_TRACED, MISS_FACE,
-    UPDATE_AGE}
+#import glowbrick::gi::cache::{gi, gi_entries, gi_rays, gi_edits, gi_direct, GiEntry, listed_slot, ray_direction,
+    ray_origin, slot_seed, encode_hit, hit_face, hit_distance, NEVER_TRACED, MISS_FACE, NOT_FOUND, WORK_STATIC}
 #import glowbrick::gi::direct::update_direct
 #import glowbrick::counters::counters
 #import glowbrick::constants::{GI_CACHE, COUNT_GI_RETRACED, COUNT_GI_RAYS_TRACED}
@@ -96,14 +95,11 @@ fn refresh(slot: u32, e: GiEntry, origin: vec3<f32>) -> u32 {
 // light, one shadow ray (direct.wgsl), which the update pass reads wherever a cache ray hits this face.
 @compute @workgroup_size(64, 1, 1)
 fn refresh_static(@builtin(global_invocation_id) id: vec3<u32>) {
-    let slot = id.x;
-    if slot >= gi.static_capacity || !is_live_key(atomicLoad(&gi_keys[slot])) {
+    let slot = listed_slot(WORK_STATIC, id.x);
+    if slot == NOT_FOUND {
         return;
     }
     let e = gi_entries[slot];
-    if !used_within(e.last_used, UPDATE_AGE) {
-        return;
-    }
     if (gi.flags & GI_CACHE) != 0u && refresh(slot, e, ray_origin(e.voxel, e.face, vec3(0.0))) > 0u {
         // What it blended so far saw the old world: start over, its direct light too (an edit reached it).
         gi_entries[slot].samples = 0u;

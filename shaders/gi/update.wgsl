@@ -1,4 +1,4 @@
-// GI cache update, one thread per table slot: age out unused entries, then re-shade `update_rays` of an entry's K
+// GI cache update, one thread per entry due this frame (listed by compact.wgsl): re-shade `update_rays` of an entry's K
 // directions from its cached static hits (brought up to date by refresh.wgsl) or, for a moving object's
 // entry, from rays traced now; light at a hit is the hit face's direct light (its entry's estimate, kept once a
 // frame by refresh.wgsl; traced here only when the face has none yet) plus its face's cached indirect light from
@@ -11,11 +11,11 @@
 #import glowbrick::random::{Rng, pcg}
 #import glowbrick::guards::finite3
 #import glowbrick::counters::counters
-#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET, GI_BOUNCES, GI_CACHE, GI_RESTART, COUNT_GI_UPDATED, COUNT_GI_LIVE, COUNT_GI_EVICTED,
-    COUNT_GI_BORROWED, COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
-#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_edits, gi_direct, GiEntry,
-    gi_touch, gi_find, used_within, slot_seed, ray_direction, ray_origin, encode_hit, hit_face, hit_distance, is_live_key,
-    NEVER_TRACED, NOT_FOUND, MISS_FACE, UPDATE_AGE, MAX_AGE, FREED_KEY}
+#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, COUNT_GI_BORROWED,
+    COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
+#import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_touch, gi_find,
+    listed_slot, used_within, slot_seed, ray_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
+    WORK_STATIC, WORK_DYNAMIC}
 #import glowbrick::gi::direct::direct_at
 
 // Light arriving along a ray that hit (voxel, face) at `point`: the hit face's direct light, with bounces on its
@@ -45,7 +45,7 @@ fn hit_radiance(point: vec3<f32>, face: u32, seen: bool, fallback: vec3<f32>, rn
         radiance = gi_direct[slot].rgb;
     } else {
         // No estimate yet (new, or not in the cache): this ray's own sample, unbiased, counted.
-        atomicAdd(&counters[COUNT_GI_DIRECT_TRACED], 1u);
+        direct_traced++;
         radiance = direct_at(point, n, m.albedo.rgb, rng);
     }
     if scene.mode == LIGHTING_SUN {
@@ -59,7 +59,7 @@ fn hit_radiance(point: vec3<f32>, face: u32, seen: bool, fallback: vec3<f32>, rn
         if slot != NOT_FOUND && gi_entries[slot].samples > 0u {
             incoming = gi_filtered[slot].rgb;
         } else {
-            atomicAdd(&counters[COUNT_GI_BORROWED], 1u);
+            borrowed++;
         }
         radiance += m.albedo.rgb * incoming;
     }
@@ -89,32 +89,13 @@ fn miss_radiance(dir: vec3<f32>) -> vec3<f32> {
 // the moving objects per frame; a moving object's entries trace everything every frame (nothing of theirs stays
 // put).
 fn update_entry(slot: u32) {
-    if !is_live_key(atomicLoad(&gi_keys[slot])) {
-        return;
-    }
     let e = gi_entries[slot];
     let dynamic = e.object != 0u;
-    // Only a moving object's entry looks its object up (a scan of the object list).
-    var index = 0u;
-    if dynamic {
-        index = object_index(e.object);
-    }
-    let gone = dynamic && index == object_count();
-    if !used_within(e.last_used, MAX_AGE) || gone {
-        // A tombstone, not an empty slot: entries inserted further along the chain stay reachable.
-        atomicStore(&gi_keys[slot], FREED_KEY);
-        gi_entries[slot].samples = 0u;
-        atomicAdd(&counters[COUNT_GI_EVICTED], 1u);
-        return;
-    }
-    atomicAdd(&counters[COUNT_GI_LIVE], 1u);
-    if !used_within(e.last_used, UPDATE_AGE) {
-        return;
-    }
-    atomicAdd(&counters[COUNT_GI_UPDATED], 1u);
+    // Only a moving object's entry looks its object up (a scan of the object list; compact.wgsl freed the
+    // entries of objects that are gone).
     var base = vec3(0.0);
     if dynamic {
-        base = objects[index].min;
+        base = objects[object_index(e.object)].min;
     }
     let origin = ray_origin(e.voxel, e.face, base);
     // The refresh pass (refresh.wgsl) has brought the cached hits up to date this frame.
@@ -147,7 +128,6 @@ fn update_entry(slot: u32) {
             distance = hit.distance;
         }
         // A moving object in front of the static hit replaces it for this frame.
-        // A moving object in front of the static hit replaces it for this frame.
         let object = trace_objects(origin, dir, select(INF, distance, found));
         if object.found {
             sum += object_hit_radiance(origin + dir * object.distance, object.face, object.material, own, &rng);
@@ -169,17 +149,44 @@ fn update_entry(slot: u32) {
     gi_entries[slot].samples = min(age + 1u, 1u << 20u);
 }
 
-@compute @workgroup_size(64, 1, 1)
-fn update_static(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x < gi.static_capacity {
-        update_entry(id.x);
+// This thread's hits that borrowed their value or traced their own direct light, summed per workgroup and
+// added to the counters once per workgroup (a global atomic per ray serialises the lanes).
+var<private> borrowed: u32;
+var<private> direct_traced: u32;
+var<workgroup> borrowed_in_group: atomic<u32>;
+var<workgroup> direct_traced_in_group: atomic<u32>;
+
+fn update_listed(work: u32, i: u32, local: u32) {
+    // Workgroup memory starts undefined (pipelines do not ask for it zeroed).
+    if local == 0u {
+        atomicStore(&borrowed_in_group, 0u);
+        atomicStore(&direct_traced_in_group, 0u);
     }
+    workgroupBarrier();
+    let slot = listed_slot(work, i);
+    if slot != NOT_FOUND {
+        update_entry(slot);
+    }
+    if borrowed > 0u {
+        atomicAdd(&borrowed_in_group, borrowed);
+    }
+    if direct_traced > 0u {
+        atomicAdd(&direct_traced_in_group, direct_traced);
+    }
+    workgroupBarrier();
+    if local == 0u {
+        atomicAdd(&counters[COUNT_GI_BORROWED], atomicLoad(&borrowed_in_group));
+        atomicAdd(&counters[COUNT_GI_DIRECT_TRACED], atomicLoad(&direct_traced_in_group));
+    }
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn update_static(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    update_listed(WORK_STATIC, id.x, local);
 }
 
 // The moving objects' table, dispatched only while objects exist.
 @compute @workgroup_size(64, 1, 1)
-fn update_dynamic(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x < gi.dynamic_capacity {
-        update_entry(gi.static_capacity + id.x);
-    }
+fn update_dynamic(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    update_listed(WORK_DYNAMIC, id.x, local);
 }

@@ -50,7 +50,7 @@ struct GiRow {
     frame_ms: f64,
     primary_ms: Option<f64>,
     /// Refresh, update and filter GPU ms (None where the pass did not run).
-    gi_ms: [Option<f64>; 3],
+    gi_ms: [Option<f64>; 4],
     metrics: Metrics,
     live: u32,
     megabytes: f64,
@@ -206,15 +206,16 @@ fn markdown(rows: &[GiRow], edits: &[EditCost], config: &BenchConfig) -> String 
         "# GI cache: run time against error\n\n`glowbrick bench --gi`: {}x{}, NEE direct light plus the cache (alpha \
          0.1), {SETTLE_FRAMES} frames to settle, {TIMED_FRAMES} timed, then {AVERAGED_FRAMES} averaged and compared \
          with a {}-spp, {REFERENCE_BOUNCES}-bounce CPU path tracer. GPU ms are timestamp queries averaged over the \
-         recent frames (refresh: tracing cached static hits again; update: re-shading 8 rays per visible entry; \
+         recent frames (lists: ageing entries and listing those due; refresh: tracing cached static hits again and \
+         each entry's direct light; update: re-shading 8 rays per visible entry; \
          filter: the 3x3x3 same-orientation mean). Memory: the two tables at the given K.\n\n\
-         | scene | setting | frame ms | primary ms | refresh ms | update ms | filter ms | MAE | relMSE | bias | \
-         live entries | cache MiB |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+         | scene | setting | frame ms | primary ms | lists ms | refresh ms | update ms | filter ms | MAE | relMSE | \
+         bias | live entries | cache MiB |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         config.width, config.height, config.reference_spp
     );
     for r in rows {
         text += &format!(
-            "| {} | {} | {:.1} | {} | {} | {} | {} | {:.5} | {:.5} | {:+.5} | {} | {:.1} |\n",
+            "| {} | {} | {:.1} | {} | {} | {} | {} | {} | {:.5} | {:.5} | {:+.5} | {} | {:.1} |\n",
             r.scene,
             r.name,
             r.frame_ms,
@@ -222,6 +223,7 @@ fn markdown(rows: &[GiRow], edits: &[EditCost], config: &BenchConfig) -> String 
             ms(r.gi_ms[0]),
             ms(r.gi_ms[1]),
             ms(r.gi_ms[2]),
+            ms(r.gi_ms[3]),
             r.metrics.mae,
             r.metrics.relmse,
             r.metrics.bias,
@@ -257,17 +259,18 @@ fn markdown(rows: &[GiRow], edits: &[EditCost], config: &BenchConfig) -> String 
             100.0 * e.rays as f64 / (e.live as f64 * 64.0).max(1.0)
         );
     }
+    let static_slots = crate::render::gi::static_capacity(&crate::settings::GiSettings::default());
     text += &format!(
-        "\n## Memory\n\nPer entry: {ENTRY_BYTES} bytes (key, payload, blended and filtered radiance, direct light) plus {RAY_BYTES} \
+        "\n## Memory\n\nPer entry: {ENTRY_BYTES} bytes (key, payload, blended and filtered radiance, direct light, \
+         work-list slot) plus {RAY_BYTES} \
          bytes per cached ray: {} bytes at K = 16, {} at K = 64, {} at K = 128. The tables hold {} static and {} \
-         dynamic entries: {:.1} MiB at K = 64; GI off keeps a 120-byte placeholder.\n",
+         dynamic entries: {:.1} MiB at K = 64; GI off keeps a 188-byte placeholder.\n",
         ENTRY_BYTES + 16 * RAY_BYTES,
         ENTRY_BYTES + 64 * RAY_BYTES,
         ENTRY_BYTES + 128 * RAY_BYTES,
-        crate::render::gi::STATIC_CAPACITY,
+        static_slots,
         crate::render::gi::DYNAMIC_CAPACITY,
-        (crate::render::gi::STATIC_CAPACITY + crate::render::gi::DYNAMIC_CAPACITY) as f64
-            * (ENTRY_BYTES + 64 * RAY_BYTES) as f64
+        (static_slots + crate::render::gi::DYNAMIC_CAPACITY) as f64 * (ENTRY_BYTES + 64 * RAY_BYTES) as f64
             / (1024.0 * 1024.0)
     );
     text

@@ -50,8 +50,11 @@ pub struct VoxelPass {
 pub enum Dispatch {
     /// One thread per pixel of the view, 8x8 workgroups; group 1 is the view.
     Pixels,
-    /// One thread per slot of a GI table of this many slots, 64 per workgroup; no view.
-    Slots(u32),
+    /// One thread per slot of both GI tables, 64 per workgroup; no view.
+    Slots,
+    /// One thread per entry the GI compaction pass listed: the dispatch size is read from the GI work buffer at
+    /// this byte offset; no view.
+    Listed(u64),
 }
 
 /// Every pass, for pipeline creation and compile errors.
@@ -59,6 +62,7 @@ pub fn all_passes() -> Vec<VoxelPass> {
     let mut passes = vec![primary::PRIMARY];
     passes.extend(restir::PASSES);
     passes.extend(denoise::PASSES);
+    passes.push(gi::COMPACT_PASS);
     passes.extend(gi::STATIC_PASSES);
     passes.extend(gi::DYNAMIC_PASSES);
     passes
@@ -354,6 +358,8 @@ struct PassRecorder<'a> {
     encoder: &'a mut CommandEncoder,
     diagnostics: Option<&'a bevy::render::diagnostic::DiagnosticsRecorder>,
     groups: [(&'a BindGroup, &'a [u32]); 4],
+    /// The GI cache's slot count and dispatch sizes, for its passes (None in a camera's frame).
+    gi_work: Option<(u32, &'a Buffer)>,
 }
 
 impl PassRecorder<'_> {
@@ -371,7 +377,14 @@ impl PassRecorder<'_> {
             Dispatch::Pixels => {
                 compute.dispatch_workgroups(view_size.width.div_ceil(8), view_size.height.div_ceil(8), 1)
             }
-            Dispatch::Slots(slots) => compute.dispatch_workgroups(slots.div_ceil(64), 1, 1),
+            Dispatch::Slots => {
+                let (slots, _) = self.gi_work.expect("GI passes are recorded with the cache's work");
+                compute.dispatch_workgroups(slots.div_ceil(64), 1, 1)
+            }
+            Dispatch::Listed(offset) => {
+                let (_, work) = self.gi_work.expect("GI passes are recorded with the cache's work");
+                compute.dispatch_workgroups_indirect(work, offset)
+            }
         }
         span.end(&mut compute);
     }
@@ -451,6 +464,7 @@ pub fn view_frame(
             (&lights.bind_group, &[]),
             (gi_group, &[]),
         ],
+        gi_work: None,
     };
     // 1. G-buffer, GI cache entries touched; the image too unless ReSTIR shades it.
     recorder.dispatch(&primary::PRIMARY, primary_pipeline, size);
@@ -469,8 +483,8 @@ pub fn view_frame(
     frames.0.fetch_add(1, Ordering::Relaxed);
 }
 
-/// The world-level frame, once after every camera: the GI cache (refresh, updates, filters; the moving objects'
-/// table only while objects exist).
+/// The world-level frame, once after every camera: the GI cache (work lists, refresh, updates, filters; the
+/// moving objects' table only while objects exist).
 pub fn world_frame(
     pipelines: Option<Res<VoxelPipelines>>,
     pipeline_cache: Res<PipelineCache>,
@@ -483,6 +497,7 @@ pub fn world_frame(
         return;
     };
     let Some(gi_group) = cache.bind_group.as_ref().filter(|_| cache.enabled) else { return };
+    let Some(compact) = pipelines.get(&pipeline_cache, &[gi::COMPACT_PASS]) else { return };
     let Some(statics) = pipelines.get(&pipeline_cache, &gi::STATIC_PASSES) else { return };
     let Some(dynamics) = pipelines.get(&pipeline_cache, &gi::DYNAMIC_PASSES) else { return };
     let with_objects = objects.is_some_and(|o| o.count > 0);
@@ -491,11 +506,15 @@ pub fn world_frame(
         encoder: ctx.command_encoder(),
         diagnostics: diagnostics.as_deref(),
         groups: [(&world.bind_group, &[]), (&pipelines.no_view, &[]), (&lights.bind_group, &[]), (gi_group, &[])],
+        gi_work: Some((cache.slots(), cache.arguments())),
     };
     let no_view = Extent3d::default();
     let [refresh, update_static, filter_static] = &gi::STATIC_PASSES;
     let [update_dynamic, filter_dynamic] = &gi::DYNAMIC_PASSES;
-    // Refresh before update, updates before filters (a filter reads its neighbours' new values).
+    // The work lists first; refresh before update, updates before filters (a filter reads its neighbours' new
+    // values).
+    recorder.dispatch(&gi::COMPACT_PASS, compact[0], no_view);
+    cache.publish_work(recorder.encoder);
     recorder.dispatch(refresh, statics[0], no_view);
     recorder.dispatch(update_static, statics[1], no_view);
     if with_objects {

@@ -28,11 +28,11 @@ use bevy::render::{Render, RenderStartup, RenderSystems};
 use std::collections::VecDeque;
 use std::num::NonZeroU64;
 
-/// Entries in the static world's table and in the dynamic objects' table (powers of two).
-pub const STATIC_CAPACITY: u32 = 1 << 16;
+/// Entries in the moving objects' table (a power of two; the static world's is the `gi_table` setting).
 pub const DYNAMIC_CAPACITY: u32 = 1 << 12;
-/// GPU bytes per entry besides its rays: key, payload, blended and filtered radiance, direct light.
-pub const ENTRY_BYTES: u64 = GI_KEY_BYTES + size_of::<GiEntry>() as u64 + 3 * GI_RADIANCE_BYTES;
+/// GPU bytes per entry besides its rays: key, payload, blended and filtered radiance, direct light, its place in
+/// the work list.
+pub const ENTRY_BYTES: u64 = GI_KEY_BYTES + size_of::<GiEntry>() as u64 + 3 * GI_RADIANCE_BYTES + 4;
 /// Bytes per cached ray (face and distance packed in a u32).
 pub const RAY_BYTES: u64 = GI_RAY_BYTES;
 /// Edited bricks remembered for invalidation; older edits force a retrace of everything traced before them.
@@ -40,26 +40,39 @@ const EDIT_LOG: usize = 64;
 /// Frames numbering starts here so that "last seen at frame 0" (a fresh entry) is never recent.
 const FIRST_FRAME: u32 = 1000;
 
+/// The first GI pass, one thread per slot of both tables: ages the entries and lists those due this frame
+/// (`shaders/gi/compact.wgsl`), with the indirect dispatch sizes of the passes below.
+pub const COMPACT_PASS: VoxelPass = VoxelPass {
+    name: "glowbrick_gi_compact",
+    shader: "gi/compact.wgsl",
+    entry_point: "compact",
+    dispatch: Dispatch::Slots,
+};
+
+/// Where the static and the dynamic table's dispatch sizes lie in the work buffer (x, y, z, then the count).
+const WORK_STATIC: u64 = 0;
+const WORK_DYNAMIC: u64 = 16;
+
 /// The static world's passes (refresh, update, filter) and the moving objects' (update, filter), which run only
-/// while objects exist. One thread per table slot.
+/// while objects exist. One thread per listed entry.
 pub const STATIC_PASSES: [VoxelPass; 3] = [
     VoxelPass {
         name: "glowbrick_gi_refresh",
         shader: "gi/refresh.wgsl",
         entry_point: "refresh_static",
-        dispatch: Dispatch::Slots(STATIC_CAPACITY),
+        dispatch: Dispatch::Listed(WORK_STATIC),
     },
     VoxelPass {
         name: "glowbrick_gi_update",
         shader: "gi/update.wgsl",
         entry_point: "update_static",
-        dispatch: Dispatch::Slots(STATIC_CAPACITY),
+        dispatch: Dispatch::Listed(WORK_STATIC),
     },
     VoxelPass {
         name: "glowbrick_gi_filter",
         shader: "gi/filter.wgsl",
         entry_point: "filter_static",
-        dispatch: Dispatch::Slots(STATIC_CAPACITY),
+        dispatch: Dispatch::Listed(WORK_STATIC),
     },
 ];
 pub const DYNAMIC_PASSES: [VoxelPass; 2] = [
@@ -67,18 +80,19 @@ pub const DYNAMIC_PASSES: [VoxelPass; 2] = [
         name: "glowbrick_gi_dynamic_update",
         shader: "gi/update.wgsl",
         entry_point: "update_dynamic",
-        dispatch: Dispatch::Slots(DYNAMIC_CAPACITY),
+        dispatch: Dispatch::Listed(WORK_DYNAMIC),
     },
     VoxelPass {
         name: "glowbrick_gi_dynamic_filter",
         shader: "gi/filter.wgsl",
         entry_point: "filter_dynamic",
-        dispatch: Dispatch::Slots(DYNAMIC_CAPACITY),
+        dispatch: Dispatch::Listed(WORK_DYNAMIC),
     },
 ];
 
-/// GPU-time names of the static world's GI passes, and of the moving objects' ones.
-pub const GI_PASS_NAMES: [&str; 3] = [STATIC_PASSES[0].name, STATIC_PASSES[1].name, STATIC_PASSES[2].name];
+/// GPU-time names of the static world's GI passes (compaction first), and of the moving objects' ones.
+pub const GI_PASS_NAMES: [&str; 4] =
+    [COMPACT_PASS.name, STATIC_PASSES[0].name, STATIC_PASSES[1].name, STATIC_PASSES[2].name];
 pub const DYNAMIC_GI_PASS_NAMES: [&str; 2] = [DYNAMIC_PASSES[0].name, DYNAMIC_PASSES[1].name];
 
 /// Layout of group 3 (`shaders/gi/cache.wgsl`), shared by every voxel pass.
@@ -99,33 +113,47 @@ pub fn gi_bind_group_layout() -> BindGroupLayoutDescriptor {
                 storage_buffer_sized(false, None),
                 storage_buffer_read_only_sized(false, None),
                 storage_buffer_sized(false, None),
+                storage_buffer_sized(false, None),
+                storage_buffer_sized(false, None),
             ),
         ),
     )
 }
 
-/// What the table buffers were sized for: nothing (GI off) or K rays per entry.
+/// What the table buffers were sized for: nothing (GI off) or the static table's entries (the `gi_table` setting,
+/// a power of two) and K rays per entry; the dynamic table follows the static one in the same buffers.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Shape {
-    entries: u32,
+    static_entries: u32,
+    dynamic_entries: u32,
     rays: u32,
 }
 
 impl Shape {
     fn of(settings: &GiSettings) -> Shape {
         if settings.enabled {
-            Shape { entries: STATIC_CAPACITY + DYNAMIC_CAPACITY, rays: settings.rays }
+            Shape { static_entries: static_capacity(settings), dynamic_entries: DYNAMIC_CAPACITY, rays: settings.rays }
         } else {
-            // Bindings need a non-empty buffer; one entry and one ray cost 120 bytes.
-            Shape { entries: 1, rays: 1 }
+            // Bindings need a non-empty buffer: one entry, one ray and the work buffers cost 188 bytes.
+            Shape { static_entries: 1, dynamic_entries: 0, rays: 1 }
         }
+    }
+
+    fn entries(&self) -> u32 {
+        self.static_entries + self.dynamic_entries
     }
 }
 
-/// GPU bytes the cache holds for `settings` (0 with GI off, besides a 120-byte placeholder).
+/// The static table's slots for `settings`: the `gi_table` setting rounded up to a power of two (the probe
+/// sequence masks with it), at least 64 (a compaction workgroup lies in one table).
+pub fn static_capacity(settings: &GiSettings) -> u32 {
+    settings.table.clamp(64, 1 << 30).next_power_of_two()
+}
+
+/// GPU bytes the cache holds for `settings` (with GI off a 188-byte placeholder).
 pub fn cache_bytes(settings: &GiSettings) -> u64 {
     let shape = Shape::of(settings);
-    shape.entries as u64 * (ENTRY_BYTES + shape.rays as u64 * RAY_BYTES)
+    shape.entries() as u64 * (ENTRY_BYTES + shape.rays as u64 * RAY_BYTES) + 2 * WORK_BYTES
 }
 
 struct Tables {
@@ -135,19 +163,26 @@ struct Tables {
     filtered: Buffer,
     rays: Buffer,
     direct: Buffer,
+    /// This frame's work: dispatch sizes and counts (`gi_work`), and the listed slots (`gi_list`).
+    work: Buffer,
+    list: Buffer,
+    /// The work buffer's copy the listed passes take their dispatch sizes from (a buffer bound for writing
+    /// cannot also be a dispatch's indirect argument).
+    arguments: Buffer,
 }
 
 impl Tables {
     fn new(device: &RenderDevice, shape: Shape) -> Tables {
-        let storage = |label: &'static str, bytes: u64| {
+        let buffer = |label: &'static str, bytes: u64, usage: BufferUsages| {
             device.create_buffer(&BufferDescriptor {
                 label: Some(label),
                 size: bytes.max(16),
-                usage: BufferUsages::STORAGE | BufferUsages::COPY_DST,
+                usage: usage | BufferUsages::STORAGE | BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             })
         };
-        let n = shape.entries as u64;
+        let storage = |label: &'static str, bytes: u64| buffer(label, bytes, BufferUsages::empty());
+        let n = shape.entries() as u64;
         Tables {
             keys: storage("glowbrick_gi_keys", n * GI_KEY_BYTES),
             entries: storage("glowbrick_gi_entries", n * size_of::<GiEntry>() as u64),
@@ -155,9 +190,22 @@ impl Tables {
             filtered: storage("glowbrick_gi_filtered", n * GI_RADIANCE_BYTES),
             rays: storage("glowbrick_gi_rays", n * shape.rays as u64 * RAY_BYTES),
             direct: storage("glowbrick_gi_direct", n * GI_RADIANCE_BYTES),
+            work: buffer("glowbrick_gi_work", WORK_BYTES, BufferUsages::COPY_SRC),
+            list: storage("glowbrick_gi_list", n * 4),
+            arguments: device.create_buffer(&BufferDescriptor {
+                label: Some("glowbrick_gi_arguments"),
+                size: WORK_BYTES,
+                usage: BufferUsages::INDIRECT | BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
         }
     }
 }
+
+/// The work buffer: per table three dispatch sizes and a count.
+const WORK_BYTES: u64 = 32;
+/// What the work buffer holds before compaction: no workgroups (y = z = 1) and no entries listed.
+const EMPTY_WORK: [u32; 8] = [0, 1, 1, 0, 0, 1, 1, 0];
 
 /// The render world's GI cache: the tables, the edit log and this frame's bind group.
 #[derive(Resource)]
@@ -178,6 +226,23 @@ pub struct GiCache {
     pub bind_group: Option<BindGroup>,
     /// Whether GI runs this frame.
     pub enabled: bool,
+}
+
+impl GiCache {
+    /// Slots of both tables (the compaction pass's threads).
+    pub fn slots(&self) -> u32 {
+        self.shape.entries()
+    }
+
+    /// Copies the dispatch sizes the compaction pass wrote to where the listed passes read them.
+    pub fn publish_work(&self, encoder: &mut CommandEncoder) {
+        encoder.copy_buffer_to_buffer(&self.tables.work, 0, &self.tables.arguments, 0, WORK_BYTES);
+    }
+
+    /// The buffer the listed passes take their dispatch sizes from.
+    pub fn arguments(&self) -> &Buffer {
+        &self.tables.arguments
+    }
 }
 
 pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
@@ -305,12 +370,13 @@ pub fn prepare_gi(
         epoch: cache.epoch,
         lost_epoch: cache.lost_epoch,
         edit_count: cache.log.len() as u32,
-        static_capacity: if gi.enabled { STATIC_CAPACITY } else { 1 },
-        dynamic_capacity: if gi.enabled { DYNAMIC_CAPACITY } else { 0 },
+        static_capacity: shape.static_entries,
+        dynamic_capacity: shape.dynamic_entries,
         frame: cache.frame,
         _pad: 0,
     };
     queue.write_buffer(&cache.params, 0, bytemuck::bytes_of(&params));
+    queue.write_buffer(&cache.tables.work, 0, bytemuck::cast_slice(&EMPTY_WORK));
     if log_changed {
         let log: Vec<GiEdit> = cache.log.iter().copied().collect();
         queue.write_buffer(&cache.edits, 0, bytemuck::cast_slice(&log));
@@ -328,6 +394,8 @@ pub fn prepare_gi(
             t.rays.as_entire_binding(),
             cache.edits.as_entire_binding(),
             t.direct.as_entire_binding(),
+            t.work.as_entire_binding(),
+            t.list.as_entire_binding(),
         )),
     ));
 }

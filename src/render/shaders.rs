@@ -6,7 +6,7 @@ use bevy::prelude::*;
 use bevy::shader::Shader;
 
 /// Every shader file: its path under `shaders/` and its source. Libraries first (they only define imports).
-pub const SOURCES: [(&str, &str); 21] = [
+pub const SOURCES: [(&str, &str); 22] = [
     ("lib/constants.wgsl", include_str!("../../shaders/lib/constants.wgsl")),
     ("lib/random.wgsl", include_str!("../../shaders/lib/random.wgsl")),
     ("lib/guards.wgsl", include_str!("../../shaders/lib/guards.wgsl")),
@@ -23,6 +23,7 @@ pub const SOURCES: [(&str, &str); 21] = [
     ("restir/initial.wgsl", include_str!("../../shaders/restir/initial.wgsl")),
     ("restir/spatial.wgsl", include_str!("../../shaders/restir/spatial.wgsl")),
     ("restir/shade.wgsl", include_str!("../../shaders/restir/shade.wgsl")),
+    ("gi/compact.wgsl", include_str!("../../shaders/gi/compact.wgsl")),
     ("gi/refresh.wgsl", include_str!("../../shaders/gi/refresh.wgsl")),
     ("gi/update.wgsl", include_str!("../../shaders/gi/update.wgsl")),
     ("gi/filter.wgsl", include_str!("../../shaders/gi/filter.wgsl")),

@@ -235,11 +235,23 @@ pub struct GiSettings {
     pub bounces: bool,
     /// Keep each entry's static hits until an edit can reach them; off retraces every ray every frame.
     pub cache: bool,
+    /// Slots in the static world's table (rounded up to a power of two). A full table fails inserts, which the
+    /// `GiFull` counter, the bench and the HUD report.
+    pub table: u32,
 }
 
 impl Default for GiSettings {
     fn default() -> Self {
-        GiSettings { enabled: false, rays: 64, update_rays: 8, alpha: 0.03, filter: true, bounces: true, cache: true }
+        GiSettings {
+            enabled: false,
+            rays: 64,
+            update_rays: 8,
+            alpha: 0.03,
+            filter: true,
+            bounces: true,
+            cache: true,
+            table: GI_TABLE_DEFAULT,
+        }
     }
 }
 
@@ -250,6 +262,8 @@ pub const MAX_TAPS: u32 = 16;
 pub const GI_RAYS_RANGE: (u32, u32) = (4, 128);
 pub const GI_UPDATE_RAYS_RANGE: (u32, u32) = (1, 64);
 pub const GI_ALPHA_RANGE: (f32, f32) = (0.001, 1.0);
+pub const GI_TABLE_RANGE: (u32, u32) = (1 << 12, 1 << 22);
+pub const GI_TABLE_DEFAULT: u32 = 1 << 17;
 pub const CANDIDATES_RANGE: (u32, u32) = (1, 64);
 pub const TAPS_RANGE: (u32, u32) = (0, MAX_TAPS);
 pub const RADIUS_RANGE: (f32, f32) = (0.0, 100.0);

@@ -350,6 +350,19 @@ pub static SETTINGS: &[Setting] = &[
         },
     },
     Setting {
+        key: "gi_table",
+        section: Section::Gi,
+        about: "Slots in the GI cache's table (rounded up to a power of two; 372 bytes each at gi_rays=64). A full \
+                table leaves new faces without indirect light, counted as gi_full.",
+        field: &Range {
+            range: GI_TABLE_RANGE,
+            step: Step::Double,
+            unit: "",
+            get: |s| s.gi.table,
+            set: |s, v| s.gi.table = v,
+        },
+    },
+    Setting {
         key: "gi_filter",
         section: Section::Gi,
         about: "Average each entry with its same-orientation neighbours in a 3x3x3 block.",
