@@ -4,8 +4,8 @@
 
 #import glowbrick::world::materials
 #import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, primary_ray_dir, lit_view,
-    NOT_A_VOXEL}
-#import glowbrick::gi::cache::{gi_on, gi_touch_surface, gi_incoming}
+    pixel_footprint, NOT_A_VOXEL}
+#import glowbrick::gi::cache::{gi_on, gi_touch_surface, gi_incoming, camera_level}
 #import glowbrick::traversal::{trace_scene, face_normal, INF}
 #import glowbrick::lights::{scene, sky, background, direct_sample, disk_sample, sky_sample}
 #import glowbrick::random::{Rng, pcg}
@@ -26,7 +26,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         select(vec4(0.0), vec4(point, pack_surface(hit.face, hit.material, hit.object)), hit.found);
     // The GI cache keeps the entries the camera sees (and their interpolation neighbours) alive and updated.
     if gi_on() && hit.found {
-        gi_touch_surface(point, hit.face, hit.object);
+        gi_touch_surface(point, hit.face, hit.object, camera_level(pixel_footprint(point), hit.object));
     }
     // Voxel ReSTIR shades in its own passes when there is a light to sample; without one it is emission only.
     let full = scene.mode == LIGHTING_FULL;
@@ -73,7 +73,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                         }
                     }
                     if gi_on() {
-                        radiance += material.albedo.rgb * gi_incoming(point, hit.face, hit.object);
+                        radiance += material.albedo.rgb * gi_incoming(point, hit.face, hit.object, camera_level(pixel_footprint(point), hit.object));
                     }
                     colour = vec4(highlight(radiance * frame.exposure, world_voxel, hit.face, point, hit.distance), 1.0);
                     break;
@@ -95,7 +95,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 // the sky colour in the normal's direction.
                 var ambient = sky(normal) * 0.3;
                 if gi_on() {
-                    ambient = gi_incoming(point, hit.face, hit.object);
+                    ambient = gi_incoming(point, hit.face, hit.object, camera_level(pixel_footprint(point), hit.object));
                 }
                 let lit = scene.sun_radiance.rgb * sun + ambient;
                 let shaded = (material.albedo.rgb * lit + material.radiance.rgb) * frame.exposure;

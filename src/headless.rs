@@ -75,6 +75,7 @@ impl HeadlessRenderer {
         if w == 0 || h == 0 || w > MAX_IMAGE_EDGE || h > MAX_IMAGE_EDGE {
             return Err(format!("image size {w}x{h} must be within 1..={MAX_IMAGE_EDGE} on each side"));
         }
+        let saved_objects = world.objects.clone();
         let mut app = App::new();
         app.add_plugins(
             DefaultPlugins
@@ -101,6 +102,10 @@ impl HeadlessRenderer {
         }
         app.finish();
         app.cleanup();
+        // A saved world shows its moving objects where it was saved.
+        if let Some(saved) = saved_objects {
+            crate::dynamic::saved::spawn_saved(app.world_mut(), &saved)?;
+        }
         let frames = app.world().resource::<FramesRendered>().clone();
         Ok(HeadlessRenderer {
             app,

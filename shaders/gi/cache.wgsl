@@ -47,7 +47,9 @@ struct GiEntry {
     // cache follows the view instead of spreading through the world.
     last_seen: u32,
     hi: vec3<f32>,
-    _pad: u32,
+    // Level of detail: the entry stands for the same-orientation faces of a 2^level voxel cell (`voxel` is the
+    // face that inserted it, which its rays start from).
+    level: u32,
 }
 
 // Frames an entry may go unused before it stops being updated, and before its slot is freed.
@@ -93,8 +95,29 @@ fn listed_slot(work: u32, i: u32) -> u32 {
     return gi_list[select(0u, gi.static_capacity, work == WORK_DYNAMIC) + i];
 }
 
-fn key_hash(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
-    return pcg(pcg(pcg(pcg(u32(voxel.x)) ^ u32(voxel.y)) ^ u32(voxel.z)) ^ (face | (object << 3u)));
+// Level of detail (seed 002's adaptive cells): a cache ray that hits a face far from its entry reads (and may
+// insert) the entry of the coarse cell around the hit: a 2^level cube of voxels whose faces of one orientation
+// share a value. Level 0 within LOD_NEAR voxels, then one level more each time the distance doubles, up to
+// MAX_LEVEL, and never finer than the shooting entry's own level (a coarse entry does not breed fine ones). The
+// cameras read the level of their pixel footprint (camera_level).
+const MAX_LEVEL: u32 = 3u;
+const LOD_NEAR: f32 = 4.0;
+
+fn hit_level(distance: f32, shooter_level: u32) -> u32 {
+    var level = 0u;
+    if distance >= LOD_NEAR {
+        level = min(u32(log2(distance / LOD_NEAR)) + 1u, MAX_LEVEL);
+    }
+    return max(level, shooter_level);
+}
+
+// The cell a voxel lies in at `level` (an arithmetic shift: floor division for negative object coordinates).
+fn cell_of(voxel: vec3<i32>, level: u32) -> vec3<i32> {
+    return voxel >> vec3(level);
+}
+
+fn key_hash(cell: vec3<i32>, face: u32, object: u32, level: u32) -> u32 {
+    return pcg(pcg(pcg(pcg(u32(cell.x)) ^ u32(cell.y)) ^ u32(cell.z)) ^ (face | (level << 3u) | (object << 5u)));
 }
 
 // Key words besides checksums: an empty slot (ends a probe chain), a freed one (a tombstone: chains go on
@@ -104,8 +127,8 @@ const FREED_KEY: u32 = 0xFFFFFFFFu;
 const BUSY_KEY: u32 = 0xFFFFFFFEu;
 
 // A second, independent hash stored as the key (never one of the three words above).
-fn key_checksum(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
-    let h = pcg(u32(voxel.x) * 0x9E3779B9u ^ pcg(u32(voxel.y) * 0x85EBCA6Bu ^ pcg(u32(voxel.z) ^ (face << 24u) ^ (object << 27u))));
+fn key_checksum(cell: vec3<i32>, face: u32, object: u32, level: u32) -> u32 {
+    let h = pcg(u32(cell.x) * 0x9E3779B9u ^ pcg(u32(cell.y) * 0x85EBCA6Bu ^ pcg(u32(cell.z) ^ (level << 21u) ^ (face << 24u) ^ (object << 27u))));
     return clamp(h, 1u, BUSY_KEY - 1u);
 }
 
@@ -133,17 +156,18 @@ fn next_slot(slot: u32) -> u32 {
 
 const NOT_FOUND: u32 = 0xFFFFFFFFu;
 
-fn probe_slot(voxel: vec3<i32>, face: u32, object: u32, i: u32) -> u32 {
+fn probe_slot(cell: vec3<i32>, face: u32, object: u32, level: u32, i: u32) -> u32 {
     // Capacities are powers of two.
-    return table_base(object) + ((key_hash(voxel, face, object) + i) & (table_size(object) - 1u));
+    return table_base(object) + ((key_hash(cell, face, object, level) + i) & (table_size(object) - 1u));
 }
 
-// The slot of an entry, or NOT_FOUND. Freed and busy slots do not end the chain: an entry inserted past a slot
-// that was freed since must stay reachable.
-fn gi_find(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
-    let checksum = key_checksum(voxel, face, object);
+// The slot of the entry of `voxel`'s face at `level`, or NOT_FOUND. Freed and busy slots do not end the chain:
+// an entry inserted past a slot that was freed since must stay reachable.
+fn gi_find(voxel: vec3<i32>, face: u32, object: u32, level: u32) -> u32 {
+    let cell = cell_of(voxel, level);
+    let checksum = key_checksum(cell, face, object, level);
     for (var i = 0u; i < MAX_PROBES; i++) {
-        let slot = probe_slot(voxel, face, object, i);
+        let slot = probe_slot(cell, face, object, level, i);
         let key = atomicLoad(&gi_keys[slot]);
         if key == checksum {
             return slot;
@@ -158,13 +182,14 @@ fn gi_find(voxel: vec3<i32>, face: u32, object: u32) -> u32 {
 // Claims `slot` (empty or freed, as `expected`) for a new entry: marks it busy, writes the payload, then
 // publishes the key, so a reader never pairs the key with the previous occupant's payload. Returns the key word
 // the slot holds afterwards: `checksum` when this thread (or another, for the same entry) got it.
-fn claim(slot: u32, expected: u32, checksum: u32, voxel: vec3<i32>, face: u32, object: u32, seen: bool) -> u32 {
+fn claim(slot: u32, expected: u32, checksum: u32, voxel: vec3<i32>, face: u32, object: u32, level: u32, seen: bool) -> u32 {
     for (var attempt = 0u; attempt < 4u; attempt++) {
         let result = atomicCompareExchangeWeak(&gi_keys[slot], expected, BUSY_KEY);
         if result.exchanged {
             gi_entries[slot].voxel = voxel;
             gi_entries[slot].face = face;
             gi_entries[slot].object = object;
+            gi_entries[slot].level = level;
             gi_entries[slot].traced_epoch = NEVER_TRACED;
             gi_entries[slot].samples = 0u;
             gi_entries[slot].last_used = gi.frame;
@@ -186,11 +211,12 @@ fn claim(slot: u32, expected: u32, checksum: u32, voxel: vec3<i32>, face: u32, o
 // the chain's first freed slot once the chain is known not to hold it (the table does not fill with tombstones),
 // else the empty slot that ends the chain. NOT_FOUND when the probe window is full (counted) or when another
 // thread took the slot first (the entry has no value this frame either way; the next frame inserts it).
-fn gi_touch(voxel: vec3<i32>, face: u32, object: u32, seen: bool) -> u32 {
-    let checksum = key_checksum(voxel, face, object);
+fn gi_touch(voxel: vec3<i32>, face: u32, object: u32, level: u32, seen: bool) -> u32 {
+    let cell = cell_of(voxel, level);
+    let checksum = key_checksum(cell, face, object, level);
     var freed = NOT_FOUND;
     for (var i = 0u; i < MAX_PROBES; i++) {
-        let slot = probe_slot(voxel, face, object, i);
+        let slot = probe_slot(cell, face, object, level, i);
         let key = atomicLoad(&gi_keys[slot]);
         if key == checksum {
             // Every toucher writes the same values: a benign race, and skipped when already set.
@@ -208,13 +234,13 @@ fn gi_touch(voxel: vec3<i32>, face: u32, object: u32, seen: bool) -> u32 {
         if key == EMPTY_KEY {
             let reuse = freed != NOT_FOUND;
             let chosen = select(slot, freed, reuse);
-            if claim(chosen, select(EMPTY_KEY, FREED_KEY, reuse), checksum, voxel, face, object, seen) == checksum {
+            if claim(chosen, select(EMPTY_KEY, FREED_KEY, reuse), checksum, voxel, face, object, level, seen) == checksum {
                 return chosen;
             }
             return NOT_FOUND;
         }
     }
-    if freed != NOT_FOUND && claim(freed, FREED_KEY, checksum, voxel, face, object, seen) == checksum {
+    if freed != NOT_FOUND && claim(freed, FREED_KEY, checksum, voxel, face, object, level, seen) == checksum {
         return freed;
     }
     atomicAdd(&counters[COUNT_GI_FULL], 1u);
@@ -245,12 +271,26 @@ struct Bilinear {
     weight: vec2<f32>,
 }
 
-fn bilinear(point: vec3<f32>, voxel: vec3<i32>, face: u32) -> Bilinear {
+// At `level` the neighbours are cells: the steps are 2^level voxels, the weights measured across the cell.
+fn bilinear(point: vec3<f32>, voxel: vec3<i32>, face: u32, level: u32) -> Bilinear {
     let t = tangent_axes(face);
-    let local = point - vec3<f32>(voxel) - vec3(0.5);
+    let size = 1 << level;
+    let local = (point - vec3<f32>(cell_of(voxel, level) * size)) / f32(size) - vec3(0.5);
     let fu = clamp(local[t.x], -0.5, 0.5);
     let fv = clamp(local[t.y], -0.5, 0.5);
-    return Bilinear(unit(t.x, select(1, -1, fu < 0.0)), unit(t.y, select(1, -1, fv < 0.0)), vec2(abs(fu), abs(fv)));
+    return Bilinear(unit(t.x, select(size, -size, fu < 0.0)), unit(t.y, select(size, -size, fv < 0.0)), vec2(abs(fu), abs(fv)));
+}
+
+// The level a camera reads a surface at, from its pixel footprint (voxels across one pixel there): cells at
+// least CELL_PIXELS pixels wide, so a far or low-resolution view keeps few entries. Moving objects stay at 0.
+const CELL_PIXELS: f32 = 2.0;
+
+fn camera_level(voxels_per_pixel: f32, object: u32) -> u32 {
+    let cells = voxels_per_pixel * CELL_PIXELS;
+    if object != 0u || !(cells >= 2.0) {
+        return 0u;
+    }
+    return min(u32(log2(cells)), MAX_LEVEL);
 }
 
 // Whether (local voxel, face) is a surface of moving object `index`: solid, with the object's air in front.
@@ -273,28 +313,29 @@ fn entry_frame_point(point: vec3<f32>, object: u32) -> vec4<f32> {
 }
 
 // Inserts (or refreshes) the entries a pixel seeing `point` on `face` (of the static world, or of object
-// `object`) reads: its own face and the three in-plane neighbours it interpolates with.
-fn gi_touch_surface(point: vec3<f32>, face: u32, object: u32) {
+// `object`) reads at `level` (camera_level): its own face's and the three in-plane neighbours it interpolates
+// with (at a coarse level, the neighbouring cells, through the voxel of the same plane in each).
+fn gi_touch_surface(point: vec3<f32>, face: u32, object: u32, level: u32) {
     let p = entry_frame_point(point, object);
     if p.w == 0.0 {
         return;
     }
     let voxel = vec3<i32>(floor(p.xyz - face_normal(face) * 0.5));
-    gi_touch(voxel, face, object, true);
-    let b = bilinear(p.xyz, voxel, face);
+    gi_touch(voxel, face, object, level, true);
+    let b = bilinear(p.xyz, voxel, face, level);
     let index = object_index(object);
     for (var i = 1u; i < 4u; i++) {
         let neighbour = voxel + select(vec3(0), b.step_u, (i & 1u) != 0u) + select(vec3(0), b.step_v, (i & 2u) != 0u);
         let surface = select(is_object_surface(index, neighbour, face), is_surface(neighbour, face), object == 0u);
         if surface {
-            gi_touch(neighbour, face, object, true);
+            gi_touch(neighbour, face, object, level, true);
         }
     }
 }
 
 // An entry's shading value, or `fallback` when it does not exist or has no value yet (padding).
-fn filtered_or(voxel: vec3<i32>, face: u32, object: u32, fallback: vec3<f32>) -> vec3<f32> {
-    let slot = gi_find(voxel, face, object);
+fn filtered_or(voxel: vec3<i32>, face: u32, object: u32, level: u32, fallback: vec3<f32>) -> vec3<f32> {
+    let slot = gi_find(voxel, face, object, level);
     if slot == NOT_FOUND || gi_entries[slot].samples == 0u {
         return fallback;
     }
@@ -312,19 +353,19 @@ fn gi_on() -> bool {
 }
 
 // Incoming indirect radiance (irradiance / pi) at `point` on `face` (of the static world, or of object
-// `object`): bilinear over the face's entry and its three in-plane neighbours of the same orientation in the same
-// table; a missing neighbour repeats the face's own value. Static surfaces never read a moving object's entries.
-fn gi_incoming(point: vec3<f32>, face: u32, object: u32) -> vec3<f32> {
+// `object`) read at `level` (camera_level): bilinear over the face's entry (or cell's) and its three in-plane
+// neighbours of the same orientation in the same table; a missing neighbour repeats the face's own value. Static surfaces never read a moving object's entries.
+fn gi_incoming(point: vec3<f32>, face: u32, object: u32, level: u32) -> vec3<f32> {
     let p = entry_frame_point(point, object);
     if p.w == 0.0 {
         return vec3(0.0);
     }
     let voxel = vec3<i32>(floor(p.xyz - face_normal(face) * 0.5));
-    let own = filtered_or(voxel, face, object, vec3(0.0));
-    let b = bilinear(p.xyz, voxel, face);
-    let u = filtered_or(voxel + b.step_u, face, object, own);
-    let v = filtered_or(voxel + b.step_v, face, object, own);
-    let uv = filtered_or(voxel + b.step_u + b.step_v, face, object, own);
+    let own = filtered_or(voxel, face, object, level, vec3(0.0));
+    let b = bilinear(p.xyz, voxel, face, level);
+    let u = filtered_or(voxel + b.step_u, face, object, level, own);
+    let v = filtered_or(voxel + b.step_v, face, object, level, own);
+    let uv = filtered_or(voxel + b.step_u + b.step_v, face, object, level, own);
     return mix(mix(own, u, b.weight.x), mix(v, uv, b.weight.x), b.weight.y);
 }
 

@@ -7,7 +7,7 @@
 #import glowbrick::world::{object_index, object_count}
 #import glowbrick::counters::counters
 #import glowbrick::constants::{COUNT_GI_LIVE, COUNT_GI_EVICTED, COUNT_GI_UPDATED}
-#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_work, gi_list, used_within, is_live_key, next_slot,
+#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_work, gi_list, used_within, is_live_key, is_surface, next_slot,
     UPDATE_AGE, MAX_AGE, FREED_KEY, EMPTY_KEY, WORK_STATIC, WORK_DYNAMIC, WORK_COUNT}
 
 var<workgroup> due_in_group: atomic<u32>;
@@ -33,7 +33,11 @@ fn age_entry(slot: u32) -> bool {
     let e = gi_entries[slot];
     // Only a moving object's entry looks its object up (a scan of the object list).
     let gone = e.object != 0u && object_index(e.object) == object_count();
-    if !used_within(e.last_used, MAX_AGE) || gone {
+    // A coarse entry stays in use while any face of its cell is hit, but its rays start from the face that
+    // inserted it: once an edit removes that face, free it (the next hit inserts it again from a face that
+    // exists). A fine entry whose face went is simply no longer touched.
+    let lost_face = e.level > 0u && !is_surface(e.voxel, e.face);
+    if !used_within(e.last_used, MAX_AGE) || gone || lost_face {
         // A tombstone, not an empty slot: entries inserted further along the chain stay reachable.
         atomicStore(&gi_keys[slot], FREED_KEY);
         gi_entries[slot].samples = 0u;

@@ -9,7 +9,7 @@
 #import glowbrick::random::{Rng, rng_next, pcg}
 #import glowbrick::guards::finite3
 #import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET, GI_RESTART}
-#import glowbrick::gi::cache::{gi, gi_direct, tangent_axes, slot_seed, GiEntry}
+#import glowbrick::gi::cache::{gi, gi_direct, tangent_axes, slot_seed, cell_of, is_surface, GiEntry}
 
 // The blend of an entry's direct estimate: young entries average evenly, then an exponential blend over about
 // 10 frames (faster than the indirect light's alpha: direct light is the bounce's source, so its lag adds up).
@@ -44,11 +44,26 @@ fn update_direct(slot: u32, e: GiEntry) {
     var rng = Rng(pcg(slot_seed(slot) ^ pcg(gi.frame ^ 0x2545F491u)));
     let n = face_normal(e.face);
     let t = tangent_axes(e.face);
+    // A coarse entry averages its cell: a uniform voxel of the cell in the inserting face's plane, when that
+    // voxel's face is a surface too (else the inserting face itself).
+    var voxel = e.voxel;
+    var albedo = materials[id].albedo.rgb;
+    if e.level > 0u {
+        let size = 1u << e.level;
+        var other = cell_of(e.voxel, e.level) << vec3(e.level);
+        other[e.face / 2u] = e.voxel[e.face / 2u];
+        other[t.x] += i32(min(u32(rng_next(&rng) * f32(size)), size - 1u));
+        other[t.y] += i32(min(u32(rng_next(&rng) * f32(size)), size - 1u));
+        if is_surface(other, e.face) {
+            voxel = other;
+            albedo = materials[voxel_at(other)].albedo.rgb;
+        }
+    }
     // Inside the face by a hair: a point exactly on a neighbour's plane could start its shadow ray in that voxel.
-    var point = vec3<f32>(e.voxel) + vec3(0.5) + n * 0.5;
+    var point = vec3<f32>(voxel) + vec3(0.5) + n * 0.5;
     point[t.x] += (rng_next(&rng) - 0.5) * 0.98;
     point[t.y] += (rng_next(&rng) - 0.5) * 0.98;
-    var estimate = direct_at(point, n, materials[id].albedo.rgb, &rng);
+    var estimate = direct_at(point, n, albedo, &rng);
     if !finite3(estimate) {
         estimate = vec3(0.0);
     }

@@ -1,9 +1,9 @@
 // GI cache filter, one thread per entry due this frame (listed by compact.wgsl): the value shading reads is the
-// mean of the entry and its neighbours of the same face orientation in the 3x3x3 block around its voxel (filter
-// on), or the entry's own value (off).
+// mean of the entry and its neighbours of the same face orientation and level in the 3x3x3 block of cells
+// around it (filter on), or the entry's own value (off).
 // Same orientation keeps the two sides of a one-voxel wall apart: the far side faces the other way.
 
-#import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_find, listed_slot, NOT_FOUND, WORK_STATIC,
+#import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_find, cell_of, listed_slot, NOT_FOUND, WORK_STATIC,
     WORK_DYNAMIC}
 #import glowbrick::constants::GI_FILTER
 
@@ -13,13 +13,15 @@ fn filter_entry(slot: u32) {
         return;
     }
     var filtered = gi_irradiance[slot].rgb;
-    if (gi.flags & GI_FILTER) != 0u {
+    // A coarse entry is a cell's average already: a 3x3x3 block of cells would blur light across 3 x 2^level
+    // voxels (the window room's bias grew from +1.2% to +2.7% with it).
+    if (gi.flags & GI_FILTER) != 0u && e.level == 0u {
         var sum = vec3(0.0);
         var count = 0.0;
         // One loop over the 27 offsets, the entry itself included.
         for (var i = 0; i < 27; i++) {
             let offset = vec3(i % 3, (i / 3) % 3, i / 9) - vec3(1);
-            let neighbour = gi_find(e.voxel + offset, e.face, e.object);
+            let neighbour = gi_find((cell_of(e.voxel, e.level) + offset) << vec3(e.level), e.face, e.object, e.level);
             if neighbour != NOT_FOUND && gi_entries[neighbour].samples > 0u {
                 sum += gi_irradiance[neighbour].rgb;
                 count += 1.0;

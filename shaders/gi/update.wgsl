@@ -14,7 +14,7 @@
 #import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, COUNT_GI_BORROWED,
     COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
 #import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_touch, gi_find,
-    listed_slot, used_within, slot_seed, ray_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
+    listed_slot, hit_level, used_within, slot_seed, ray_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
     WORK_STATIC, WORK_DYNAMIC}
 #import glowbrick::gi::direct::direct_at
 
@@ -22,7 +22,7 @@
 // cached indirect light (last frame's filtered value: stable while this pass writes), and in sun-and-sky mode
 // its emission. With emitter lighting the emission is left out: the shading passes' light sampling already
 // brings every emitter's direct light to the pixel, and counting it again here would double it.
-fn hit_radiance(point: vec3<f32>, face: u32, seen: bool, fallback: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+fn hit_radiance(point: vec3<f32>, face: u32, level: u32, seen: bool, fallback: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
     let n = face_normal(face);
     let voxel = vec3<i32>(floor(point - n * 0.5));
     let id = voxel_at(voxel);
@@ -33,12 +33,13 @@ fn hit_radiance(point: vec3<f32>, face: u32, seen: bool, fallback: vec3<f32>, rn
     let m = materials[id];
     let bounces = (gi.flags & GI_BOUNCES) != 0u;
     // Entries the camera sees bring the entries their rays hit into the cache (with bounces on); others only look
-    // up. The hit face's entry holds its direct light (face average, refresh.wgsl).
+    // up. The hit face's entry, at the level of detail of the hit's distance, holds its direct light (the face's
+    // or cell's average, refresh.wgsl).
     var slot = NOT_FOUND;
     if seen && bounces {
-        slot = gi_touch(voxel, face, 0u, false);
+        slot = gi_touch(voxel, face, 0u, level, false);
     } else {
-        slot = gi_find(voxel, face, 0u);
+        slot = gi_find(voxel, face, 0u, level);
     }
     var radiance = vec3(0.0);
     if slot != NOT_FOUND && gi_direct[slot].w > 0.0 {
@@ -132,7 +133,7 @@ fn update_entry(slot: u32) {
         if object.found {
             sum += object_hit_radiance(origin + dir * object.distance, object.face, object.material, own, &rng);
         } else if found {
-            sum += hit_radiance(origin + dir * distance, face, seen, own, &rng);
+            sum += hit_radiance(origin + dir * distance, face, hit_level(distance, e.level), seen, own, &rng);
         } else {
             sum += miss_radiance(dir);
         }

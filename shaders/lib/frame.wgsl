@@ -99,6 +99,12 @@ fn primary_ray_dir(pixel: vec2<u32>, size: vec2<f32>) -> vec3<f32> {
     return normalize(p.xyz / p.w - view.world_position);
 }
 
+// Voxels across one pixel at `point` (at the view's centre; the GI cache picks its level of detail from it).
+fn pixel_footprint(point: vec3<f32>) -> f32 {
+    // clip_from_view[1][1] is 1 / tan(half the vertical field of view).
+    return distance(point, view.world_position) * 2.0 / (view.clip_from_view[1][1] * view.viewport.w);
+}
+
 fn pixel_index(pixel: vec2<u32>) -> u32 {
     return pixel.x + u32(view.viewport.z) * pixel.y;
 }

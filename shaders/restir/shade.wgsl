@@ -6,12 +6,12 @@
 
 #import glowbrick::world::materials
 #import glowbrick::frame::{frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output,
-    primary_ray_dir}
+    primary_ray_dir, pixel_footprint}
 #import glowbrick::constants::{DEBUG_RESERVOIR, LIGHTING_FULL}
 #import glowbrick::guards::finite
 #import glowbrick::restir::common::{reservoirs_final, validated, shading, unshadowed, reservoir_visible, pixel_rng, NO_LIGHT}
 #import glowbrick::lights::{lights, scene, background, disk_sample, sky_sample}
-#import glowbrick::gi::cache::{gi_on, gi_incoming}
+#import glowbrick::gi::cache::{gi_on, gi_incoming, camera_level}
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -59,7 +59,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     if gi_on() {
-        radiance += materials[surface.material].albedo.rgb * gi_incoming(x.point, surface.face, surface.object);
+        radiance += materials[surface.material].albedo.rgb * gi_incoming(x.point, surface.face, surface.object, camera_level(pixel_footprint(x.point), surface.object));
     }
     let depth = distance(view.world_position, x.point);
     write_output(id.xy, vec4(highlight(radiance * frame.exposure, surface_voxel(surface), surface.face, x.point, depth), 1.0));

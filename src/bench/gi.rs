@@ -148,6 +148,14 @@ fn ms(v: Option<f64>) -> String {
 
 /// Runs the GI bench at the config's size, writes `gi.md` into `out` and returns its text.
 pub fn run_gi_bench(config: &BenchConfig, out: &Path) -> Result<String, String> {
+    // `--gi --game-sizes` runs the game-size section alone.
+    if config.only.iter().any(|s| s == "game-sizes") {
+        let text = format!("# GI cache at game sizes\n{}", super::gi_scale::markdown(&super::gi_scale::measure_all()?));
+        std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+        let path = out.join("gi-scale.md");
+        std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
+        return Ok(text);
+    }
     let mut rows = Vec::new();
     let mut curves: Vec<CurvePoint> = Vec::new();
     let mut edit_costs = Vec::new();
@@ -181,6 +189,7 @@ pub fn run_gi_bench(config: &BenchConfig, out: &Path) -> Result<String, String> 
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     plot::write_plot(&[], &curves, &out.join("gi-plot.svg"))?;
     let mut text = markdown(&rows, &edit_costs, config);
+    text += &super::gi_scale::markdown(&super::gi_scale::measure_all()?);
     text += &format!(
         "\n## Convergence with and without the cache\n\nA still camera accumulating frames from a cold cache \
          (`accumulate=on`), error against the {REFERENCE_BOUNCES}-bounce reference after about 1, 2, 4, ... {} \

@@ -15,6 +15,7 @@ pub mod convergence;
 pub mod daylight;
 pub mod denoise;
 pub mod gi;
+pub mod gi_scale;
 pub mod plot;
 pub mod thesis;
 

@@ -41,6 +41,10 @@ pub struct BenchArgs {
     /// adds, flicker, reaction to a lamp switched off and on, cost at 320x180 and 1280x720; writes denoise.md.
     #[arg(long)]
     denoise: bool,
+    /// With --gi: only its section at game sizes (320x180 and 1280x720: frame with and without the cache, GPU
+    /// ms per pass, the table's load); writes gi-scale.md.
+    #[arg(long, requires = "gi")]
+    game_sizes: bool,
     /// With --thesis: image size as a fraction of the thesis' 1600x1024.
     #[arg(long, default_value_t = 0.2, requires = "thesis", conflicts_with_all = ["gi", "daylight", "denoise", "scenes", "quick", "settings", "camera"])]
     scale: f32,
@@ -64,7 +68,7 @@ enum BenchMode {
     /// The thesis protocol: thesis.md.
     Thesis { scale: f32, spp: u32 },
     /// The GI cache bench: gi.md.
-    Gi { spp: u32 },
+    Gi { spp: u32, game_sizes: bool },
     /// The game's lighting at three times of day: daylight.md.
     Daylight { spp: u32 },
     /// The denoiser: denoise.md.
@@ -82,12 +86,13 @@ impl BenchArgs {
             BenchMode::Thesis { scale, spp } => {
                 on_gpu(|| run_thesis_bench(scale, spp, &out)).map(|text| println!("{text}"))
             }
-            BenchMode::Gi { spp } => {
+            BenchMode::Gi { spp, game_sizes } => {
                 let config = BenchConfig {
                     width: 128,
                     height: 72,
                     reference_spp: spp,
                     curve_frames: 128,
+                    only: if game_sizes { vec!["game-sizes".into()] } else { Vec::new() },
                     ..BenchConfig::full()
                 };
                 on_gpu(|| run_gi_bench(&config, &out)).map(|text| println!("{text}"))
@@ -108,7 +113,7 @@ impl BenchArgs {
         if self.thesis {
             BenchMode::Thesis { scale: self.scale, spp: self.spp }
         } else if self.gi {
-            BenchMode::Gi { spp: self.spp }
+            BenchMode::Gi { spp: self.spp, game_sizes: self.game_sizes }
         } else if self.daylight {
             BenchMode::Daylight { spp: self.spp }
         } else if self.denoise {

@@ -5,10 +5,11 @@
 //! world through the GI cache only.
 //!
 //! Objects translate but never rotate: their faces stay axis-aligned, so the G-buffer's face encoding, ReSTIR's
-//! face tests and the per-face GI entries hold for them unchanged. They are not saved with the world and do not
-//! collide with the player.
+//! face tests and the per-face GI entries hold for them unchanged. A world file saves them (`saved`,
+//! `world::objects`); they do not collide with the player.
 
 pub mod model;
+pub mod saved;
 
 pub use model::VoxelModel;
 
@@ -179,5 +180,52 @@ pub struct DynamicObjectsPlugin;
 impl Plugin for DynamicObjectsPlugin {
     fn build(&self, app: &mut App) {
         app.init_resource::<ObjectClock>().add_systems(Update, animate_objects);
+    }
+}
+
+/// An object's voxels where they are now (its model at its minimum corner), for the CPU's collision and
+/// crosshair tests. Objects only translate, so a point's model voxel is `floor(point - min)`.
+#[derive(Clone, Copy, Debug)]
+pub struct PlacedModel<'a> {
+    pub model: &'a VoxelModel,
+    pub min: Vec3,
+}
+
+impl PlacedModel<'_> {
+    fn solid_at(&self, local: IVec3) -> bool {
+        local.cmpge(IVec3::ZERO).all() && self.model.get(local.x as u32, local.y as u32, local.z as u32) != 0
+    }
+
+    /// Whether a solid voxel of the object overlaps the open box `(lo, hi)` (world coordinates).
+    pub fn overlaps_box(&self, lo: Vec3, hi: Vec3) -> bool {
+        let a = (lo - self.min + 1e-4).floor().as_ivec3().max(IVec3::ZERO);
+        let b = (hi - self.min - 1e-4).floor().as_ivec3().min(self.model.size.as_ivec3() - 1);
+        (a.z..=b.z).any(|z| (a.y..=b.y).any(|y| (a.x..=b.x).any(|x| self.solid_at(IVec3::new(x, y, z)))))
+    }
+
+    /// Distance along the ray `origin + t * dir` (dir normalised) to the object's first solid voxel within
+    /// `max_distance`: the entry into its box, then one voxel at a time (a model is at most 16^3 voxels).
+    pub fn trace(&self, origin: Vec3, dir: Vec3, max_distance: f32) -> Option<f32> {
+        let size = self.model.size.as_vec3();
+        let inverse = dir.recip();
+        let t0 = (self.min - origin) * inverse;
+        let t1 = (self.min + size - origin) * inverse;
+        let enter = t0.min(t1).max_element().max(0.0);
+        let exit = t0.max(t1).min_element().min(max_distance);
+        if !(enter <= exit) {
+            return None;
+        }
+        // March the ray through the box in 1/32-voxel steps (at most ~900 for a 16^3 model, one ray a frame):
+        // it can only miss a voxel's corner clipped by less than a step, which a crosshair cannot tell apart.
+        let step = 1.0 / 32.0;
+        let mut t = enter;
+        while t <= exit {
+            let local = (origin + dir * (t + 1e-4) - self.min).floor().as_ivec3();
+            if self.solid_at(local) {
+                return Some(t);
+            }
+            t += step;
+        }
+        None
     }
 }

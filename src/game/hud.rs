@@ -2,7 +2,7 @@
 //! settings that apply (as `--set` pairs), a status
 //! line for saves and errors, a one-line hint, and a help panel toggled with F1.
 
-use super::interaction::{Brush, Hotbar, Target};
+use super::interaction::{Brush, Hotbar, Target, TargetObject};
 use super::player::Player;
 use crate::lights::LightPool;
 use crate::world::VoxelWorld;
@@ -190,6 +190,8 @@ fn update_texts(
     hotbar: Res<Hotbar>,
     brush: Res<Brush>,
     target: Res<Target>,
+    target_object: Res<TargetObject>,
+    objects: Query<&crate::dynamic::DynamicObject>,
     world: Res<VoxelWorld>,
     pool: Res<LightPool>,
     settings: Res<crate::settings::RenderSettings>,
@@ -209,7 +211,11 @@ fn update_texts(
         Brush::Box { first_corner: None } => "box (click first corner)".to_string(),
         Brush::Box { first_corner: Some(c) } => format!("box from {} {} {} (click second corner)", c.x, c.y, c.z),
     };
-    let target = target.0.map_or("-".to_string(), |h| format!("{} {} {}", h.voxel.x, h.voxel.y, h.voxel.z));
+    let target = match (target.0, target_object.0.and_then(|(e, d)| Some((objects.get(e).ok()?, d)))) {
+        (_, Some((object, distance))) => format!("a moving {} at {distance:.1}", object.model.name),
+        (Some(h), None) => format!("{} {} {}", h.voxel.x, h.voxel.y, h.voxel.z),
+        (None, None) => "-".to_string(),
+    };
     let (voxel_lights, brick_lights) = pool.counts();
     if let Ok(mut t) = texts.p0().single_mut() {
         t.0 = format!(

@@ -6,6 +6,7 @@
 //! clears (left) the box between the two corners.
 
 use super::player::{Player, body_box};
+use crate::dynamic::{DynamicObject, PlacedModel};
 use crate::render::Highlight;
 use crate::world::events::{ApplyEdits, EditRequest};
 use crate::world::{Edit, Hit, Palette, Ray, Voxel, VoxelWorld, trace};
@@ -81,6 +82,7 @@ pub struct InteractionPlugin;
 impl Plugin for InteractionPlugin {
     fn build(&self, app: &mut App) {
         app.init_resource::<Target>()
+            .init_resource::<TargetObject>()
             .init_resource::<Brush>()
             .init_resource::<Highlight>()
             .init_resource::<HotbarWorld>()
@@ -110,9 +112,55 @@ fn refresh_hotbar(world: Res<VoxelWorld>, mut hotbar: ResMut<Hotbar>, mut drawn_
     }
 }
 
-/// Traces the crosshair ray (the camera's forward axis) on the CPU.
-pub fn update_target(world: Res<VoxelWorld>, camera: Query<&Transform, With<Player>>, mut target: ResMut<Target>) {
-    target.0 = camera.single().ok().and_then(|t| trace(&world.grid, &Ray::new(t.translation, *t.forward()), REACH));
+/// The moving object under the crosshair when it is nearer than any voxel: its entity and distance. Clicks do
+/// not reach through it (Target is then empty), and the HUD names it.
+#[derive(Resource, Clone, Copy, Debug, Default)]
+pub struct TargetObject(pub Option<(Entity, f32)>);
+
+/// What a crosshair ray from `origin` along `dir` meets first within reach: a voxel, or object `i` of `objects`
+/// at a distance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Aim {
+    Voxel(Hit),
+    Object(usize, f32),
+    Nothing,
+}
+
+pub fn aim(world: &VoxelWorld, objects: &[PlacedModel], origin: Vec3, dir: Vec3) -> Aim {
+    let ray = Ray::new(origin, dir);
+    let voxel = trace(&world.grid, &ray, REACH);
+    let reach = voxel.map_or(REACH, |h| h.distance);
+    let nearest = objects
+        .iter()
+        .enumerate()
+        .filter_map(|(i, o)| o.trace(ray.origin, ray.dir, reach).map(|t| (i, t)))
+        .min_by(|a, b| a.1.total_cmp(&b.1));
+    match (nearest, voxel) {
+        (Some((i, t)), _) => Aim::Object(i, t),
+        (None, Some(hit)) => Aim::Voxel(hit),
+        (None, None) => Aim::Nothing,
+    }
+}
+
+/// Traces the crosshair ray (the camera's forward axis) on the CPU, against the voxels and the moving objects.
+pub fn update_target(
+    world: Res<VoxelWorld>,
+    camera: Query<&Transform, With<Player>>,
+    objects: Query<(Entity, &DynamicObject, &Transform), Without<Player>>,
+    mut target: ResMut<Target>,
+    mut target_object: ResMut<TargetObject>,
+) {
+    let Ok(t) = camera.single() else {
+        (target.0, target_object.0) = (None, None);
+        return;
+    };
+    let (entities, placed): (Vec<Entity>, Vec<PlacedModel>) =
+        objects.iter().map(|(e, o, t)| (e, PlacedModel { model: &o.model, min: t.translation })).unzip();
+    (target.0, target_object.0) = match aim(&world, &placed, t.translation, *t.forward()) {
+        Aim::Voxel(hit) => (Some(hit), None),
+        Aim::Object(i, distance) => (None, Some((entities[i], distance))),
+        Aim::Nothing => (None, None),
+    };
 }
 
 /// The voxel a place action fills: the air cell in front of the targeted face.

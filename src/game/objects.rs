@@ -32,16 +32,28 @@ pub fn spawn_default_objects(
     Ok(())
 }
 
+/// The world's saved objects, or (for a world saved before objects were) the default ones.
 fn spawn_at_start(
     mut commands: Commands,
     mut clock: ResMut<ObjectClock>,
     mut world: ResMut<VoxelWorld>,
     mut status: ResMut<StatusLine>,
 ) {
+    if let Some(saved) = world.objects.clone() {
+        commands.queue(move |app_world: &mut World| spawn_saved_or_report(app_world, &saved));
+        return;
+    }
     let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
     let centre = Vec3::from(view.origin) + Vec3::from(view.direction).normalize_or_zero() * 14.0;
     if let Err(e) = spawn_default_objects(&mut commands, &mut clock, &mut world, centre) {
         status.show(e);
+    }
+}
+
+/// Spawns saved objects; a failure (a model whose materials no longer fit the palette) shows on the status line.
+pub fn spawn_saved_or_report(app_world: &mut World, saved: &[crate::world::objects::SavedObject]) {
+    if let Err(e) = crate::dynamic::saved::spawn_saved(app_world, saved) {
+        app_world.resource_mut::<StatusLine>().show(format!("objects not restored: {e}"));
     }
 }
 

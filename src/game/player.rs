@@ -1,6 +1,7 @@
-//! The player: a camera that flies (WASD, mouse, Space / Shift) or walks with gravity and voxel collision
-//! (toggle with F). Click captures the mouse, Esc releases it; Ctrl moves faster.
+//! The player: a camera that flies (WASD, mouse, Space / Shift) or walks with gravity and collision with voxels
+//! and moving objects (toggle with F). Click captures the mouse, Esc releases it; Ctrl moves faster.
 
+use crate::dynamic::{DynamicObject, PlacedModel};
 use crate::world::{CameraView, VoxelWorld};
 use bevy::input::mouse::AccumulatedMouseMotion;
 use bevy::prelude::*;
@@ -70,6 +71,17 @@ pub fn box_hits_solid(world: &VoxelWorld, lo: Vec3, hi: Vec3) -> bool {
 /// Moves a walking eye by `delta`, one axis at a time in small steps, stopping an axis at the first solid
 /// voxel. Returns the new eye position and which axes were blocked.
 pub fn move_with_collision(world: &VoxelWorld, eye: Vec3, delta: Vec3) -> (Vec3, BVec3) {
+    move_among_objects(world, &[], eye, delta)
+}
+
+/// `move_with_collision` that moving objects block too. An object that already overlaps the body (it moved into
+/// the player) does not, so the player can step out of it rather than stick.
+pub fn move_among_objects(world: &VoxelWorld, objects: &[PlacedModel], eye: Vec3, delta: Vec3) -> (Vec3, BVec3) {
+    let (lo, hi) = body_box(eye, true);
+    let solid: Vec<PlacedModel> = objects.iter().copied().filter(|o| !o.overlaps_box(lo, hi)).collect();
+    let box_hits_solid = |world: &VoxelWorld, lo: Vec3, hi: Vec3| {
+        box_hits_solid(world, lo, hi) || solid.iter().any(|o| o.overlaps_box(lo, hi))
+    };
     let mut eye = eye;
     let mut blocked = BVec3::FALSE;
     let steps = (delta.abs().max_element() / 0.25).ceil().max(1.0) as usize;
@@ -140,6 +152,7 @@ fn steer_player(
     cursor: Single<&CursorOptions, With<PrimaryWindow>>,
     world: Res<VoxelWorld>,
     mut camera: Single<(&mut Transform, &mut Player)>,
+    objects: Query<(&DynamicObject, &Transform), Without<Player>>,
 ) {
     let (transform, player) = &mut *camera;
     if cursor.grab_mode != CursorGrabMode::None {
@@ -163,7 +176,9 @@ fn steer_player(
         }
         player.fall_speed -= GRAVITY * dt;
         let delta = (horizontal + Vec3::Y * player.fall_speed) * dt;
-        let (eye, blocked) = move_with_collision(&world, transform.translation, delta);
+        let placed: Vec<PlacedModel> =
+            objects.iter().map(|(o, t)| PlacedModel { model: &o.model, min: t.translation }).collect();
+        let (eye, blocked) = move_among_objects(&world, &placed, transform.translation, delta);
         player.on_ground = blocked.y && player.fall_speed < 0.0;
         if blocked.y {
             player.fall_speed = 0.0;

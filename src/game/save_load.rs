@@ -1,10 +1,12 @@
-//! Saving and loading in game: F5 saves the world (with the player's camera as its first view and the time of
-//! day) to the save
-//! path with an atomic write, keeping one `.bak` of the previous save; F9 loads the save path. A failed load
-//! leaves the current world as it is and says why on the HUD.
+//! Saving and loading in game: F5 saves the world (with the player's camera as its first view, the time of day
+//! and the moving objects at their phase) to the save path with an atomic write, keeping one `.bak` of the
+//! previous save; F9 loads the save path (its objects replace the live ones; a file saved before objects were
+//! keeps them). A failed load leaves the current world as it is and says why on the HUD.
 
 use super::hud::StatusLine;
 use super::player::Player;
+use crate::dynamic::DynamicObject;
+use crate::dynamic::saved::saved_objects;
 use crate::world::format::{save_world, write_atomically};
 use crate::world::source::load_path;
 use crate::world::{CameraView, VoxelWorld};
@@ -75,6 +77,7 @@ fn save_or_load(
     mut camera: Query<(&mut Transform, &mut Player, &Projection)>,
     mut status: ResMut<StatusLine>,
     mut settings: Option<ResMut<crate::settings::RenderSettings>>,
+    objects: Query<(Entity, &DynamicObject)>,
 ) {
     let Some(mut world) = world else { return };
     for action in actions.read() {
@@ -91,6 +94,7 @@ fn save_or_load(
                 if let Some(settings) = &settings {
                     world.time_of_day = Some(settings.time);
                 }
+                world.objects = Some(saved_objects(objects.iter().map(|(_, o)| o)));
                 match save_with_backup(&world, &path.0) {
                     Ok(()) => status.show(format!("saved {}", path.0.display())),
                     Err(e) => status.show(format!("could not save {}: {e}", path.0.display())),
@@ -106,7 +110,14 @@ fn save_or_load(
                         settings.time = hours;
                     }
                     status.show(format!("loaded {}", path.0.display()));
+                    let saved = loaded.objects.clone();
                     commands.insert_resource(loaded);
+                    if let Some(saved) = saved {
+                        objects.iter().for_each(|(entity, _)| commands.entity(entity).despawn());
+                        commands.queue(move |app_world: &mut World| {
+                            super::objects::spawn_saved_or_report(app_world, &saved)
+                        });
+                    }
                 }
                 Err(e) => status.show(format!("load failed, world unchanged: {e}")),
             },

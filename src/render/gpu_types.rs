@@ -140,7 +140,8 @@ pub struct GiEntry {
     pub lo: [f32; 3],
     pub last_seen: u32,
     pub hi: [f32; 3],
-    pub _pad: u32,
+    /// Level of detail: the entry covers a 2^level voxel cell.
+    pub level: u32,
 }
 
 /// One edit-log record (two `vec4<i32>` in `gi_edits`): an edited brick's box and the epoch of the edit.

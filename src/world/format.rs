@@ -8,6 +8,7 @@
 //!     palette: [(name: "stone", albedo: (0.45, 0.45, 0.47), emission: (0, 0, 0), strength: 0)],
 //!     views: [(name: "overview", origin: (-16, 46, -16), direction: (0.6, -0.5, 0.6), fov_deg: 60)],
 //!     time_of_day: Some(17.5),
+//!     objects: Some([(model: "lantern", motion: Drift(radius: 5.0, period: 12.0), anchor: (30, 12, 30), age: 3.5)]),
 //!     bricks: [
 //!         (at: (0, 0, 0), fill: Uniform(1)),
 //!         (at: (1, 0, 0), fill: Runs([(64, 1), (448, 0)])),
@@ -68,6 +69,9 @@ pub struct WorldFile {
     /// Hours, 0-24; absent in files written before the time of day was saved.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_of_day: Option<f32>,
+    /// Moving objects (`world::objects`); absent in files written before objects were saved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub objects: Option<Vec<super::objects::SavedObject>>,
     pub bricks: Vec<BrickRecord>,
 }
 
@@ -137,6 +141,7 @@ impl WorldFile {
             palette: world.palette.clone(),
             views: world.views.clone(),
             time_of_day: world.time_of_day,
+            objects: world.objects.clone(),
             bricks,
         }
     }
@@ -155,9 +160,13 @@ impl WorldFile {
         if let Some(hours) = self.time_of_day.filter(|h| !(h.is_finite() && (0.0..=24.0).contains(h))) {
             return Err(fail(format!("time_of_day {hours} must be within 0..24 hours")));
         }
+        if let Some(objects) = &self.objects {
+            super::objects::check_objects(objects, UVec3::new(sx, sy, sz)).map_err(fail)?;
+        }
         let mut world = VoxelWorld::new(UVec3::new(sx, sy, sz), self.palette);
         world.views = self.views;
         world.time_of_day = self.time_of_day;
+        world.objects = self.objects;
         let dims = world.grid.brick_dims();
         let ids = world.palette.id_count();
         let mut seen = vec![false; (dims.x * dims.y * dims.z) as usize];

@@ -7,6 +7,7 @@ pub mod font;
 pub mod format;
 pub mod grid;
 pub mod import;
+pub mod objects;
 pub mod palette;
 pub mod scene;
 pub mod source;
@@ -72,6 +73,9 @@ pub struct VoxelWorld {
     /// The time of day the world was saved at, in hours (0-24); `None` in files from before it was saved, which
     /// then show the settings' time.
     pub time_of_day: Option<f32>,
+    /// The moving objects the world was saved with; `None` in files from before objects were saved, which then
+    /// get the game's default objects.
+    pub objects: Option<Vec<objects::SavedObject>>,
     /// Whether homogeneous emissive bricks become one brick light (the default) or 512 voxel lights; the thesis
     /// measures its cornell box both ways. Not saved: a rule of the light pool, set by the bench.
     pub brick_lights: bool,
@@ -90,6 +94,7 @@ impl VoxelWorld {
             palette,
             views: Vec::new(),
             time_of_day: None,
+            objects: None,
             brick_lights: true,
             instance,
         }

@@ -10,6 +10,7 @@ mod layers;
 mod light_pool;
 mod reference_converges;
 mod save_survives_kill;
+mod saved_objects;
 mod shaders_validate;
 mod traversal_matches_brute_force;
 mod world_edits;

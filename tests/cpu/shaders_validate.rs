@@ -16,6 +16,7 @@ const VIEW: &str = "#define_import_path bevy_render::view
 struct View {
     clip_from_world: mat4x4<f32>,
     world_from_clip: mat4x4<f32>,
+    clip_from_view: mat4x4<f32>,
     world_position: vec3<f32>,
     viewport: vec4<f32>,
 }

@@ -21,6 +21,7 @@ mod denoise;
 mod extreme_scenes;
 mod gi;
 mod nee_converges;
+mod objects;
 mod primary_matches_cpu;
 mod restir;
 mod stress;
@@ -72,6 +73,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             gpu_nee_converges_to_the_cpu_reference_on_the_cornell_box,
             gpu_nee_converges_to_the_cpu_reference_on_the_letters,
         ],
+        objects: [a_saved_world_shows_its_moving_objects_where_they_were],
         primary_matches_cpu: [gpu_primary_rays_match_cpu_traversal, lit_render_is_finite_and_shows_emission],
         restir: [
             a_removed_light_is_never_shaded,

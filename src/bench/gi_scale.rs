@@ -1,0 +1,137 @@
+//! The GI cache at the sizes a game renders (`glowbrick bench --gi`, section "Cost at game sizes", or alone with
+//! `bench --gi --game-sizes`): with Voxel ReSTIR lighting the emitters (the thesis protocol), a frame with `gi=on` against
+//! the same frame with `gi=off`, per-pass GPU times, the entries the table holds, its load and the inserts that
+//! found it full. The cache runs at the game's settings (alpha 0.03, K = 64, the default table).
+
+use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::render::gi::{GI_PASS_NAMES, static_capacity};
+use crate::render::gpu_types::GpuCounter;
+use crate::render::primary::PRIMARY_PASS_NAME;
+use crate::render::restir;
+use crate::settings::RenderSettings;
+use crate::world::scene::load_scene;
+use std::time::Instant;
+
+/// Scenes (and views) measured, and the sizes.
+const SCENES: &[(&str, &str)] = &[("window-room", "inside"), ("cornell", "front"), ("apartments", "")];
+pub const SIZES: &[(u32, u32)] = &[(320, 180), (1280, 720)];
+/// Frames before timing (the cache fills and settles its work), frames timed.
+const WARM_FRAMES: u32 = 24;
+const TIMED_FRAMES: u32 = 16;
+
+pub struct ScaleRow {
+    pub scene: &'static str,
+    pub size: (u32, u32),
+    /// Wall-clock ms per frame without and with the cache.
+    pub frame_off_ms: f64,
+    pub frame_on_ms: f64,
+    /// GPU ms with the cache on: primary + ReSTIR (the direct-light frame), and each GI pass (lists, refresh,
+    /// update, filter).
+    pub direct_ms: f64,
+    pub gi_ms: [Option<f64>; 4],
+    pub live: u32,
+    pub full: u32,
+    pub table: u32,
+}
+
+impl ScaleRow {
+    fn gi_total_ms(&self) -> f64 {
+        self.gi_ms.iter().flatten().sum()
+    }
+}
+
+/// Wall-clock ms per frame over TIMED_FRAMES after WARM_FRAMES, and the renderer for its counters and timings.
+fn timed(scene: &str, view: &str, size: (u32, u32), gi: bool) -> Result<(f64, HeadlessRenderer), String> {
+    let world = load_scene(scene).map_err(|e| e.to_string())?;
+    let view = world.view((!view.is_empty()).then_some(view)).cloned().unwrap_or_else(|| world.overview());
+    let pairs = ["lighting=emitters".to_string(), format!("gi={}", if gi { "on" } else { "off" })];
+    let settings = RenderSettings::default().with_pairs(&pairs)?;
+    let options = HeadlessOptions { width: size.0, height: size.1, settings, ..Default::default() };
+    let mut r = HeadlessRenderer::new(world, &view, &options)?;
+    r.render(WARM_FRAMES)?;
+    let start = Instant::now();
+    for _ in 0..TIMED_FRAMES {
+        r.step();
+    }
+    Ok((start.elapsed().as_secs_f64() * 1000.0 / TIMED_FRAMES as f64, r))
+}
+
+pub fn measure(scene: &'static str, view: &str, size: (u32, u32)) -> Result<ScaleRow, String> {
+    let (frame_off_ms, _) = timed(scene, view, size, false)?;
+    let (frame_on_ms, mut r) = timed(scene, view, size, true)?;
+    let direct_ms = std::iter::once(PRIMARY_PASS_NAME)
+        .chain(restir::PASSES.iter().map(|p| p.name))
+        .filter_map(|n| r.gpu_pass_ms(n))
+        .sum();
+    let counters = r.counters()?;
+    Ok(ScaleRow {
+        scene,
+        size,
+        frame_off_ms,
+        frame_on_ms,
+        direct_ms,
+        gi_ms: GI_PASS_NAMES.map(|n| r.gpu_pass_ms(n)),
+        live: counters[GpuCounter::GiLive as usize],
+        full: counters[GpuCounter::GiFull as usize],
+        table: static_capacity(&RenderSettings::default().gi),
+    })
+}
+
+/// Every scene at every size.
+pub fn measure_all() -> Result<Vec<ScaleRow>, String> {
+    let mut rows = Vec::new();
+    for &size in SIZES {
+        for &(scene, view) in SCENES {
+            let row = measure(scene, view, size)?;
+            eprintln!(
+                "gi scale: {scene} {}x{}: {:.0} -> {:.0} ms/frame, GI passes {:.1} ms against direct {:.1} ms, {} \
+                 live, {} full",
+                size.0,
+                size.1,
+                row.frame_off_ms,
+                row.frame_on_ms,
+                row.gi_total_ms(),
+                row.direct_ms,
+                row.live,
+                row.full
+            );
+            rows.push(row);
+        }
+    }
+    Ok(rows)
+}
+
+pub fn markdown(rows: &[ScaleRow]) -> String {
+    let ms = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.1}"));
+    let mut text = format!(
+        "\n## Cost at game sizes\n\nVoxel ReSTIR lighting the emitters (`lighting=emitters`), the cache at the game's \
+         settings (K = 64, 8 rays re-shaded per entry, alpha 0.03), {WARM_FRAMES} frames to warm up, {TIMED_FRAMES} \
+         timed. Frame ms is wall clock (gi=off, gi=on); the pass columns are GPU timestamps with gi=on; direct = \
+         primary + ReSTIR's three passes. Load = live entries / static table slots; full = inserts that found their \
+         probe window full in the last frame.\n\n\
+         | scene | size | frame ms, gi off | frame ms, gi on | on / off | direct ms | lists ms | refresh ms | update \
+         ms | filter ms | GI / direct | live entries | load | full |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+    );
+    for r in rows {
+        text += &format!(
+            "| {} | {}x{} | {:.1} | {:.1} | {:.2} | {:.1} | {} | {} | {} | {} | {:.2} | {} | {:.2} | {} |\n",
+            r.scene,
+            r.size.0,
+            r.size.1,
+            r.frame_off_ms,
+            r.frame_on_ms,
+            r.frame_on_ms / r.frame_off_ms.max(1e-9),
+            r.direct_ms,
+            ms(r.gi_ms[0]),
+            ms(r.gi_ms[1]),
+            ms(r.gi_ms[2]),
+            ms(r.gi_ms[3]),
+            r.gi_total_ms() / r.direct_ms.max(1e-9),
+            r.live,
+            r.live as f64 / r.table as f64,
+            r.full
+        );
+    }
+    text
+}
