@@ -212,7 +212,8 @@ impl PlacedModel<'_> {
         let t1 = (self.min + size - origin) * inverse;
         let enter = t0.min(t1).max_element().max(0.0);
         let exit = t0.max(t1).min_element().min(max_distance);
-        if !(enter <= exit) {
+        // Also refuses NaN bounds (a ray along a face of the box).
+        if enter.partial_cmp(&exit).is_none_or(|order| order.is_gt()) {
             return None;
         }
         // March the ray through the box in 1/32-voxel steps (at most ~900 for a 16^3 model, one ray a frame):

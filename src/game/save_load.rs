@@ -69,6 +69,7 @@ pub fn player_view(transform: &Transform, fov_deg: f32) -> CameraView {
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn save_or_load(
     mut actions: MessageReader<SaveAction>,
     mut commands: Commands,
