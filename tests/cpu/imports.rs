@@ -154,3 +154,34 @@ fn truncated_or_corrupt_files_are_one_clear_error() {
         assert!(err.starts_with(&path.display().to_string()) && !err.contains('\n'), "{name}: {err}");
     }
 }
+
+#[test]
+fn a_magicavoxel_scene_imports_as_laid_out_with_its_emissive_material() {
+    use bevy::math::IVec3;
+    use glowbrick::world::import::vox::{EMIT_STRENGTH, vox_world};
+    let file = parse_vox(&crate::vox_scene::scene_graph_vox()).unwrap();
+    assert_eq!(file.models.len(), 2);
+    assert_eq!(file.placed.len(), 2, "both shapes are placed: {:?}", file.placed);
+    assert_eq!(file.emissive, vec![(2, 2.0 * EMIT_STRENGTH)]);
+    let world = vox_world(&file).unwrap();
+    // MagicaVoxel z-up: the slab lies at our y = 0, 6 x 6 in x and z; the cube's corner is at MagicaVoxel
+    // (2, 2, 4), ours (2, 4, 2), 2 voxels on a side.
+    assert_eq!(world.grid.size().to_array(), [6, 6, 6]);
+    for (p, solid) in [
+        (IVec3::new(0, 0, 0), true),
+        (IVec3::new(5, 0, 5), true),
+        (IVec3::new(2, 4, 2), true),
+        (IVec3::new(3, 5, 3), true),
+        (IVec3::new(2, 3, 2), false),
+        (IVec3::new(4, 4, 4), false),
+    ] {
+        assert_eq!(world.grid.get(p) != 0, solid, "{p}");
+    }
+    let lamp = world.palette.get(world.grid.get(IVec3::new(2, 4, 2))).unwrap().clone();
+    assert!(lamp.is_emissive() && lamp.strength == 2.0 * EMIT_STRENGTH, "{lamp:?}");
+    assert!(!world.palette.get(world.grid.get(IVec3::ZERO)).unwrap().is_emissive());
+    let s = world.summary();
+    assert_eq!((s.voxels, s.emitters), (44, 8), "{s}");
+    assert_eq!(LightPool::from_world(&world).len() as u64, s.voxel_lights + s.brick_lights);
+    assert!(s.voxel_lights + s.brick_lights > 0, "the lamp joins the light pool: {s}");
+}

@@ -13,6 +13,8 @@ mod save_survives_kill;
 mod saved_objects;
 mod shaders_validate;
 mod traversal_matches_brute_force;
+#[path = "../shared/vox_scene.rs"]
+mod vox_scene;
 mod world_edits;
 mod world_files;
 mod world_upload;

@@ -25,6 +25,8 @@ mod objects;
 mod primary_matches_cpu;
 mod restir;
 mod stress;
+#[path = "../shared/vox_scene.rs"]
+mod vox_scene;
 mod world_after_edits;
 
 use libtest_mimic::{Arguments, Completion, Failed, Trial};
@@ -73,7 +75,10 @@ fn tests() -> Vec<(&'static str, fn())> {
             gpu_nee_converges_to_the_cpu_reference_on_the_cornell_box,
             gpu_nee_converges_to_the_cpu_reference_on_the_letters,
         ],
-        objects: [a_saved_world_shows_its_moving_objects_where_they_were],
+        objects: [
+            a_magicavoxel_lamp_lights_its_scene_under_restir,
+            a_saved_world_shows_its_moving_objects_where_they_were,
+        ],
         primary_matches_cpu: [gpu_primary_rays_match_cpu_traversal, lit_render_is_finite_and_shows_emission],
         restir: [
             a_removed_light_is_never_shaded,
