@@ -130,9 +130,17 @@ struct Shape {
 }
 
 impl Shape {
-    fn of(settings: &GiSettings) -> Shape {
+    /// The shape for `settings` on a device whose storage bindings hold at most `max_binding` bytes: the static
+    /// table halves (down to 4,096 slots) until its rays buffer, the largest, fits (`gi_table` at 262,144 with
+    /// `gi_rays=128` needs 136 MB; lavapipe binds 128 MiB).
+    fn of(settings: &GiSettings, max_binding: u64) -> Shape {
         if settings.enabled {
-            Shape { static_entries: static_capacity(settings), dynamic_entries: DYNAMIC_CAPACITY, rays: settings.rays }
+            let bytes = |entries: u32| (entries + DYNAMIC_CAPACITY) as u64 * settings.rays as u64 * RAY_BYTES;
+            let mut static_entries = static_capacity(settings);
+            while bytes(static_entries) > max_binding && static_entries > 4096 {
+                static_entries /= 2;
+            }
+            Shape { static_entries, dynamic_entries: DYNAMIC_CAPACITY, rays: settings.rays }
         } else {
             // Bindings need a non-empty buffer: one entry, one ray and the work buffers cost 188 bytes.
             Shape { static_entries: 1, dynamic_entries: 0, rays: 1 }
@@ -150,9 +158,10 @@ pub fn static_capacity(settings: &GiSettings) -> u32 {
     settings.table.clamp(64, 1 << 30).next_power_of_two()
 }
 
-/// GPU bytes the cache holds for `settings` (with GI off a 188-byte placeholder).
+/// GPU bytes the cache holds for `settings` (with GI off a 188-byte placeholder), on a device that binds
+/// buffers of any size (a smaller limit halves the table: `Shape::of`).
 pub fn cache_bytes(settings: &GiSettings) -> u64 {
-    let shape = Shape::of(settings);
+    let shape = Shape::of(settings, u64::MAX);
     shape.entries() as u64 * (ENTRY_BYTES + shape.rays as u64 * RAY_BYTES) + 2 * WORK_BYTES
 }
 
@@ -246,7 +255,7 @@ impl GiCache {
 }
 
 pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
-    let shape = Shape::of(&GiSettings::default());
+    let shape = Shape::of(&GiSettings::default(), u64::MAX);
     let params = device.create_buffer(&BufferDescriptor {
         label: Some("glowbrick_gi_params"),
         size: size_of::<GiParams>() as u64,
@@ -345,7 +354,17 @@ pub fn prepare_gi(
     cache.lighting = lighting;
     let restart = cache.restart_frames > 0;
     cache.restart_frames = cache.restart_frames.saturating_sub(1);
-    let shape = Shape::of(&gi);
+    let max_binding = device.limits().max_storage_buffer_binding_size;
+    let shape = Shape::of(&gi, max_binding);
+    if shape.static_entries < static_capacity(&gi) && shape != cache.shape {
+        warn!(
+            "gi_table={} with gi_rays={} needs more than this GPU binds in one buffer ({max_binding} bytes): the GI \
+             table holds {} slots",
+            static_capacity(&gi),
+            gi.rays,
+            shape.static_entries
+        );
+    }
     if shape != cache.shape || gpu_world.as_ref().is_some_and(|w| w.replaced) {
         cache.reset(&device, shape);
     }
@@ -410,4 +429,21 @@ pub fn add(render_app: &mut SubApp) {
         .insert_resource(GiLayout(gi_bind_group_layout()))
         .add_systems(RenderStartup, init_gi_cache)
         .add_systems(Render, prepare_gi.after(SceneUploaded).in_set(RenderSystems::PrepareResources));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A table whose rays would not fit one binding halves until they do; one that fits keeps its setting.
+    #[test]
+    fn the_table_shrinks_to_what_the_device_binds() {
+        let settings = |rays: u32| GiSettings { enabled: true, rays, ..GiSettings::default() };
+        let lavapipe = 128 << 20;
+        assert_eq!(Shape::of(&settings(64), lavapipe).static_entries, 1 << 18);
+        let shrunk = Shape::of(&settings(128), lavapipe);
+        assert_eq!(shrunk.static_entries, 1 << 17);
+        assert!((shrunk.entries() as u64) * 128 * RAY_BYTES <= lavapipe);
+        assert_eq!(Shape::of(&settings(128), 1 << 10).static_entries, 4096, "never below 4,096 slots");
+    }
 }
