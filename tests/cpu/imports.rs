@@ -185,3 +185,21 @@ fn a_magicavoxel_scene_imports_as_laid_out_with_its_emissive_material() {
     assert_eq!(LightPool::from_world(&world).len() as u64, s.voxel_lights + s.brick_lights);
     assert!(s.voxel_lights + s.brick_lights > 0, "the lamp joins the light pool: {s}");
 }
+
+#[test]
+fn a_hostile_scene_graph_is_one_error_line() {
+    // Fuzz finding (seed 7, 1,000,000 inputs): a translation holding a line break was quoted raw.
+    let good = crate::vox_scene::scene_graph_vox();
+    let at = good.windows(5).position(|w| w == b"3 3 5").unwrap();
+    let mut bad = good.clone();
+    bad[at..at + 5].copy_from_slice(b"3 3\n\x04");
+    let e = parse_vox(&bad).unwrap_err();
+    assert!(e.contains("translation '3 3\\n\\u{4}' is not three integers") && !e.contains('\n'), "{e}");
+    // A shape naming a model the file does not hold.
+    let shape = good.windows(4).rposition(|w| w == b"nSHP").unwrap();
+    let mut missing = good.clone();
+    // The model id is the last word before the shape's empty model dictionary: id, dict(0), count 1, model, dict(0).
+    missing[shape + 12 + 4 + 4 + 4..shape + 12 + 4 + 4 + 8].copy_from_slice(&9i32.to_le_bytes());
+    let e = parse_vox(&missing).unwrap_err();
+    assert!(e.contains("a shape names model 9; the file holds 2"), "{e}");
+}

@@ -10,7 +10,7 @@
 
 use super::BrickBuilder;
 use crate::colour::srgb_to_linear;
-use crate::world::format::LoadError;
+use crate::world::format::{LoadError, one_line};
 use crate::world::grid::MAX_WORLD_EDGE;
 use crate::world::{Material, Palette, VoxelWorld};
 use bevy::math::{IVec3, UVec3};
@@ -123,7 +123,8 @@ fn parse_node(id: &[u8], b: &mut Cursor) -> Result<(i32, Node), String> {
                 if let Some(t) = lookup(&frame, "_t") {
                     let parts: Vec<i32> = t.split_whitespace().filter_map(|p| p.parse().ok()).collect();
                     if parts.len() != 3 || parts.iter().any(|p| p.unsigned_abs() > 1 << 20) {
-                        return Err(format!("node {node_id}: translation '{t}' is not three integers"));
+                        // Quoted escaped: the file's text may hold line breaks (found by the fuzzer).
+                        return Err(format!("node {node_id}: translation '{}' is not three integers", one_line(t)));
                     }
                     translation = [parts[0], parts[1], parts[2]];
                 }
