@@ -34,6 +34,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if restir && scene.light_count > 0u && (lit_view() || frame.debug_view == DEBUG_RESERVOIR) {
         return;
     }
+    if frame.debug_view == DEBUG_RESERVOIR {
+        // No ReSTIR pass ran (no lights, or another mode): every reservoir is empty, W = M = w_sum = 0, none reset.
+        // (The shaded colour's alpha of 1 here read as "reset for a non-finite field" to the soak.)
+        write_output(id.xy, vec4(0.0));
+        return;
+    }
     let nee = scene.mode == LIGHTING_NEE || restir;
     var colour = vec4(0.0);
     if !hit.found {

@@ -6,7 +6,8 @@
 //!
 //! Objects translate but never rotate: their faces stay axis-aligned, so the G-buffer's face encoding, ReSTIR's
 //! face tests and the per-face GI entries hold for them unchanged. A world file saves them (`saved`,
-//! `world::objects`); they do not collide with the player.
+//! `world::objects`); the player collides with them and aims at them (`PlacedModel`), and the CPU reference draws
+//! them at their saved phase (`reference::objects`).
 
 pub mod model;
 pub mod saved;
@@ -160,18 +161,22 @@ pub fn builtin_model(name: &str, palette: &crate::world::Palette) -> Result<Voxe
 /// A built-in model for this world: materials its legend names that the world's palette lacks are added from
 /// the default palette first (they then save with the world like any material).
 pub fn model_for_world(name: &str, world: &mut crate::world::VoxelWorld) -> Result<VoxelModel, String> {
-    if let Err(first) = builtin_model(name, &world.palette) {
+    model_for_palette(name, &mut world.palette)
+}
+
+/// `model_for_world` on a palette alone: the CPU reference resolves saved objects in a copy of the world's
+/// palette, adding the same materials in the same order, so its ids match the renderer's.
+pub fn model_for_palette(name: &str, palette: &mut crate::world::Palette) -> Result<VoxelModel, String> {
+    if let Err(first) = builtin_model(name, palette) {
         let defaults = crate::world::Palette::default_blocks();
         let (_, text) = BUILTIN_MODELS.iter().find(|(n, _)| *n == name).ok_or(first)?;
         for material in defaults.materials.iter().filter(|m| text.contains(&format!("\"{}\"", m.name))) {
-            if world.palette.id_of(&material.name).is_none()
-                && world.palette.id_count() < crate::world::palette::MAX_MATERIALS
-            {
-                world.palette.push(material.clone());
+            if palette.id_of(&material.name).is_none() && palette.id_count() < crate::world::palette::MAX_MATERIALS {
+                palette.push(material.clone());
             }
         }
     }
-    builtin_model(name, &world.palette)
+    builtin_model(name, palette)
 }
 
 /// Object clock and motion (the GPU upload of objects is `render::scene::objects`).

@@ -14,10 +14,14 @@
 //!   sun's (or moon's) disk, by one shadow ray to a uniform direction of its cone at every vertex, and the sky,
 //!   reached by the cosine-sampled ray that leaves each vertex (with `bounces` 0 too: that ray is the sky's
 //!   direct light); a primary miss sees the sky and the disk. Each light is counted by one strategy only.
+//! - Moving objects a world saves are drawn where they are at their saved phase (`objects`): they block camera,
+//!   shadow and bounce rays, and their emissive voxels, which are not in the light pool, are found by the
+//!   cosine-sampled rays.
 //! - Deterministic: each (pixel, sample) has its own random stream, whatever the thread schedule (rayon rows).
 
 pub mod flip;
 pub mod metrics;
+pub mod objects;
 pub mod sampling;
 
 use crate::colour::luminance;
@@ -26,9 +30,10 @@ use crate::lights::daylight::Daylight;
 use crate::lights::{AliasTable, Light, LightPool};
 use crate::progress::Progress;
 use crate::world::traversal::RAY_OFFSET;
-use crate::world::{CameraView, Ray, VoxelWorld, trace};
+use crate::world::{CameraView, Hit, Ray, VoxelWorld, trace};
 use crate::world::{camera_ray, view_transform, world_from_clip};
 use bevy::math::{UVec2, Vec3};
+use objects::ReferenceObjects;
 use rayon::prelude::*;
 use sampling::{Pcg, cosine_direction, light_contains, sample_light_point};
 use std::time::{Duration, Instant};
@@ -93,6 +98,8 @@ pub struct SurfaceHit {
     pub normal: Vec3,
     pub albedo: [f32; 3],
     pub emission: Vec3,
+    /// On a moving object: its emission is not in the light pool, so a bounce ray that finds it counts it.
+    pub on_object: bool,
 }
 
 /// A light candidate for resampling: where on which light, and its unshadowed contribution (without albedo / pi).
@@ -109,6 +116,7 @@ pub struct Scene<'a> {
     pub world: &'a VoxelWorld,
     pub pool: &'a LightPool,
     pub alias: &'a AliasTable,
+    pub objects: &'a ReferenceObjects,
 }
 
 impl Scene<'_> {
@@ -144,8 +152,8 @@ impl Scene<'_> {
         let Some(chosen) = chosen else { return Vec3::ZERO };
         *rays += 1;
         let origin = p + n * RAY_OFFSET;
-        let hit = trace(&self.world.grid, &Ray::new(origin, chosen.point - origin), chosen.distance + 1.0);
-        if !hit.is_some_and(|h| light_contains(chosen.light, h.voxel)) {
+        let hit = self.first_hit(&Ray::new(origin, chosen.point - origin), chosen.distance + 1.0);
+        if !hit.is_some_and(|(h, on_object)| !on_object && light_contains(chosen.light, h.voxel)) {
             return Vec3::ZERO;
         }
         // f / p_hat x (sum of weights / M): the RIS estimator's unbiased contribution weight.
@@ -177,15 +185,25 @@ impl Scene<'_> {
         Some((candidate, pick_pdf * point.pdf_area))
     }
 
+    /// The first voxel the ray meets, of the world or of a moving object (`true`).
+    fn first_hit(&self, ray: &Ray, max_distance: f32) -> Option<(Hit, bool)> {
+        let world = trace(&self.world.grid, ray, max_distance);
+        match self.objects.trace(ray, world.map_or(max_distance, |h| h.distance)) {
+            Some(object) => Some((object, true)),
+            None => world.map(|h| (h, false)),
+        }
+    }
+
     /// What the ray hits, or `None` for a miss (black: no sky in the reference).
     pub fn surface(&self, ray: &Ray) -> Option<SurfaceHit> {
-        let hit = trace(&self.world.grid, ray, f32::INFINITY)?;
-        let material = self.world.palette.get(hit.material)?;
+        let (hit, on_object) = self.first_hit(ray, f32::INFINITY)?;
+        let material = self.objects.material(self.world, hit.material)?;
         Some(SurfaceHit {
             position: ray.at(hit.distance),
             normal: hit.face.normal().as_vec3(),
             albedo: material.albedo,
             emission: Vec3::from(material.radiance()),
+            on_object,
         })
     }
 
@@ -207,7 +225,7 @@ impl Scene<'_> {
             return Vec3::ZERO;
         }
         *rays += 1;
-        if trace(&self.world.grid, &Ray::new(p + n * RAY_OFFSET, dir), f32::INFINITY).is_some() {
+        if self.first_hit(&Ray::new(p + n * RAY_OFFSET, dir), f32::INFINITY).is_some() {
             return Vec3::ZERO;
         }
         Vec3::from(albedo) * day.disk * cos_surface
@@ -224,8 +242,9 @@ impl Scene<'_> {
                 radiance += throughput * self.disk_sample(day, p, n, albedo, rng, rays);
             }
             let last = bounce == options.bounces;
-            // Without a sky the last vertex's ray could only find emitters, which next-event estimation counts.
-            if last && options.daylight.is_none() {
+            // Without a sky (or a glowing object) the last vertex's ray could only find emitters that next-event
+            // estimation counts.
+            if last && options.daylight.is_none() && !self.objects.emissive() {
                 break;
             }
             // Cosine sampling cancels cos / pi against the pdf: the throughput picks up the albedo.
@@ -239,8 +258,15 @@ impl Scene<'_> {
                     }
                     break;
                 }
-                Some(next) if !last => (p, n, albedo) = (next.position, next.normal, next.albedo),
-                Some(_) => break,
+                Some(next) => {
+                    if next.on_object {
+                        radiance += throughput * next.emission;
+                    }
+                    if last {
+                        break;
+                    }
+                    (p, n, albedo) = (next.position, next.normal, next.albedo);
+                }
             }
         }
         radiance
@@ -270,7 +296,8 @@ pub fn render_reference(
     let start = Instant::now();
     let mut pool = LightPool::from_world(world);
     let alias = pool.alias().clone();
-    let scene = Scene { world, pool: &pool, alias: &alias };
+    let objects = ReferenceObjects::of(world)?;
+    let scene = Scene { world, pool: &pool, alias: &alias, objects: &objects };
     let transform = view_transform(view);
     let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
     // Camera hits once per pixel: every sample of a pixel shades the same point. A miss sees the background.

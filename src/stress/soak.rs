@@ -51,6 +51,8 @@ pub struct StressReport {
     pub settings_changes: u32,
     pub nonfinite_pixels: u64,
     pub reservoir_reads: u32,
+    /// Reads taken while the world held no light (every lamp broken or buried): no ReSTIR pass ran.
+    pub reads_without_lights: u32,
     pub nonfinite_reservoirs: u64,
     /// Reads with any non-finite reservoir, and the first: (frame, the settings then, pixels).
     pub bad_reservoir_reads: u32,
@@ -129,8 +131,13 @@ impl fmt::Display for StressReport {
         )?;
         writeln!(
             f,
-            "reservoirs: {} reads, non-finite {}, max M {:.0}, W in [{:.3e}, {:.3e}]",
-            self.reservoir_reads, self.nonfinite_reservoirs, self.max_m, self.min_w, self.max_w
+            "reservoirs: {} reads ({} with no light in the world), non-finite {}, max M {:.0}, W in [{:.3e}, {:.3e}]",
+            self.reservoir_reads,
+            self.reads_without_lights,
+            self.nonfinite_reservoirs,
+            self.max_m,
+            self.min_w,
+            self.max_w
         )?;
         if let Some((frame, settings, pixels)) = &self.first_bad_read {
             writeln!(
@@ -268,6 +275,8 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
         let image = renderer.render(1)?;
         if debug == DebugView::Reservoir {
             report.reservoir_reads += 1;
+            let pool = renderer.app_mut().world().get_resource::<crate::lights::LightPool>();
+            report.reads_without_lights += pool.is_some_and(|p| p.is_empty()) as u32;
             let before = report.nonfinite_reservoirs;
             for p in &image.pixels {
                 let [w, m, w_sum, bad] = *p;

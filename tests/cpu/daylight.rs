@@ -38,7 +38,13 @@ fn uniform_sky(sky: f32, disk: f32) -> Daylight {
 }
 
 fn floor_hit(x: f32, z: f32) -> SurfaceHit {
-    SurfaceHit { position: Vec3::new(x, 1.0, z), normal: Vec3::Y, albedo: [ALBEDO; 3], emission: Vec3::ZERO }
+    SurfaceHit {
+        position: Vec3::new(x, 1.0, z),
+        normal: Vec3::Y,
+        albedo: [ALBEDO; 3],
+        emission: Vec3::ZERO,
+        on_object: false,
+    }
 }
 
 #[test]
@@ -46,8 +52,8 @@ fn an_open_floor_reflects_exactly_the_sky_and_the_disk() {
     let (bare, world) = (bare_floor(), open_floor());
     let pool = LightPool::from_world(&world);
     let alias = AliasTable::default();
-    let open = Scene { world: &bare, pool: &pool, alias: &alias };
-    let scene = Scene { world: &world, pool: &pool, alias: &alias };
+    let open = Scene { world: &bare, pool: &pool, alias: &alias, objects: &Default::default() };
+    let scene = Scene { world: &world, pool: &pool, alias: &alias, objects: &Default::default() };
     let options = ReferenceOptions { daylight: Some(uniform_sky(0.5, 2.0)), bounces: 0, ..Default::default() };
     // In the open, every cosine ray leaves the world and the disk is unoccluded: each sample is exact,
     // albedo x (sky + disk x cos), with cos within the disk's tiny cone of 1.

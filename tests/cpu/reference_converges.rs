@@ -30,7 +30,7 @@ fn one_emissive_brick_matches_the_analytic_form_factor() {
     let mut pool = LightPool::from_world(&world);
     assert_eq!(pool.counts(), (0, 1));
     let alias = pool.alias().clone();
-    let scene = Scene { world: &world, pool: &pool, alias: &alias };
+    let scene = Scene { world: &world, pool: &pool, alias: &alias, objects: &Default::default() };
     // Straight below the centre of the brick's bottom face (y = 40), on the floor's top (y = 1): only that 8 x 8
     // face sees the point, 39 voxels up. Four corner rectangles of 4 x 4.
     let p = Vec3::new(28.0, 1.0, 28.0);

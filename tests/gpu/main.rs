@@ -78,6 +78,7 @@ fn tests() -> Vec<(&'static str, fn())> {
         objects: [
             a_magicavoxel_lamp_lights_its_scene_under_restir,
             a_saved_world_shows_its_moving_objects_where_they_were,
+            with_an_object_in_view_restir_converges_to_the_reference,
         ],
         primary_matches_cpu: [gpu_primary_rays_match_cpu_traversal, lit_render_is_finite_and_shows_emission],
         restir: [
@@ -86,6 +87,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             temporal_reuse_does_not_cross_a_face_normal_flip,
             unbiased_restir_converges_to_the_reference_on_the_cornell_box,
             unbiased_restir_converges_to_the_reference_on_the_letters,
+            the_reservoir_view_of_a_world_without_lights_shows_empty_reservoirs,
             without_lights_no_restir_pass_runs,
         ],
         stress: [quick_stress_run_finds_no_non_finite_value_and_no_drift],

@@ -92,3 +92,51 @@ pub fn a_magicavoxel_lamp_lights_its_scene_under_restir() {
     assert!(with_lamp > 0.01, "the lamp lights the slab: {with_lamp}");
     assert!(lit_image.non_finite_pixels() == 0);
 }
+
+/// A lamp over the stage's floor, and a still block saved with the world hanging between them.
+fn shadowed_stage() -> (VoxelWorld, CameraView) {
+    use glowbrick::world::objects::{SavedMotion, SavedObject};
+    let (mut world, _) = stage();
+    let lamp = world.palette.id_of("lamp-warm").unwrap();
+    world.apply(Edit::FillBox { min: IVec3::new(15, 14, 15), max: IVec3::new(16, 14, 16), material: lamp }).unwrap();
+    let block = SavedObject { model: "block".into(), motion: SavedMotion::Still, anchor: (14.0, 6.0, 14.0), age: 0.0 };
+    world.objects = Some(vec![block]);
+    // Above the floor, looking down at the block and its shadow from the side (the lamp out of view).
+    let view =
+        CameraView { name: "shadow".into(), origin: [16.0, 11.0, 3.0], direction: [0.0, -0.6, 1.0], fov_deg: 60.0 };
+    (world, view)
+}
+
+/// The CPU reference draws saved objects (they block its camera and shadow rays), so an image with a moving
+/// object in view is checked against ground truth like the static world: accumulated Voxel ReSTIR (unbiased
+/// reuse) on a block's shadow. Compared over the pixels whose primary hit the CPU grid traversal agrees on (the
+/// block's own pixels are left out there, its shadow on the floor is in), and separately the mean over every pixel.
+pub fn with_an_object_in_view_restir_converges_to_the_reference() {
+    use glowbrick::reference::metrics::compare;
+    use glowbrick::reference::{ReferenceOptions, render_reference};
+    let (world, view) = shadowed_stage();
+    let (w, h) = (96, 64);
+    let options = ReferenceOptions { width: w, height: h, spp: 2048, bounces: 0, seed: 7, ..Default::default() };
+    let truth = render_reference(&world, &view, &options).unwrap().image;
+    let mut bare = world.clone();
+    bare.objects = None;
+    let unshadowed = render_reference(&bare, &view, &options).unwrap().image;
+    let pairs = ["lighting=restir", "reuse=unbiased", "accumulate=on", "radius=8", "gi=off"];
+    let gpu = common::renderer_with(&world, &view, w, h, &pairs).render(256).unwrap();
+    let keep = common::comparable_pixels(&world, &view, w, h);
+    let shade = compare(&common::masked(&gpu, &keep), &common::masked(&truth, &keep)).unwrap();
+    let mean = common::masked(&truth, &keep).mean_luminance();
+    let whole = gpu.mean_luminance() / truth.mean_luminance() - 1.0;
+    // The block shadows the floor: without it the reference is brighter where the camera looks.
+    let shadow = 1.0 - truth.mean_luminance() / unshadowed.mean_luminance();
+    eprintln!(
+        "object in view: {shade} (bias {:+.2}% of the mean {mean:.4}); whole image {:+.2}%; the block's shadow takes {:.1}% of the light",
+        100.0 * shade.bias / mean,
+        100.0 * whole,
+        100.0 * shadow
+    );
+    assert!(shadow > 0.05, "the reference sees the block's shadow: {shadow}");
+    assert!(shade.bias.abs() < 0.025 * mean, "bias {} of mean {mean}", shade.bias);
+    assert!(shade.relmse < 0.02, "relMSE {}", shade.relmse);
+    assert!(whole.abs() < 0.03, "whole image {whole}");
+}
