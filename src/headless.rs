@@ -227,6 +227,49 @@ impl HeadlessRenderer {
         self.until_captured(|_| Some(readback))
     }
 
+    /// Renders `frames` frames, each after `before(k, renderer)` sets frame k up (a camera on a path, objects
+    /// where they are), and returns every one of them. One readback stays on the target: frame k's copy arrives
+    /// while frame k + 1 renders, so unlike `render_next` in a loop no frame renders twice (a measurement of
+    /// motion sees every step once).
+    pub fn render_sequence(
+        &mut self,
+        frames: u32,
+        mut before: impl FnMut(u32, &mut Self),
+    ) -> Result<Vec<LinearImage>, String> {
+        check_frames(frames)?;
+        let images: Arc<Mutex<Vec<Vec<u8>>>> = Arc::default();
+        let sink = images.clone();
+        let readback = self
+            .app
+            .world_mut()
+            .spawn(Readback::texture(self.target.clone()))
+            .observe(move |event: On<ReadbackComplete>| {
+                if let Ok(mut all) = sink.lock() {
+                    all.push(event.data.clone());
+                }
+            })
+            .id();
+        let start = Instant::now();
+        let mut frame = 0;
+        // The last frames' copies arrive while later frames render (with the last frame's set-up).
+        while images.lock().map_err(|_| "readback lock poisoned")?.len() < frames as usize {
+            if frame < frames {
+                before(frame, self);
+                frame += 1;
+            }
+            self.step();
+            if let Some(error) = crate::render::frame::pipeline_error(self.app.sub_app(RenderApp).world()) {
+                return Err(error);
+            }
+            if start.elapsed() > self.timeout {
+                return Err(format!("timed out after {:?} in a sequence of {frames} frames", self.timeout));
+            }
+        }
+        self.app.world_mut().despawn(readback);
+        let all = images.lock().map_err(|_| "readback lock poisoned")?;
+        all.iter().take(frames as usize).map(|bytes| decode_rgba32f(bytes, self.width, self.height)).collect()
+    }
+
     /// Asks for the render target of the next frame rendered.
     fn spawn_readback(&mut self) -> Entity {
         let sink = self.captured.clone();

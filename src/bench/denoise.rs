@@ -1,8 +1,10 @@
 //! The denoiser bench (`glowbrick bench --denoise`): one real-time frame of the game's lighting (`lighting=full`
 //! with the GI cache) raw and denoised against a converged reference on four scenes; what the filter does to
 //! the mean once frames accumulate; how much a still view flickers; how many frames a lamp switched off or on
-//! takes to show; and what the passes cost at 320x180 and 1280x720. Writes `denoise.md`.
+//! takes to show; what the passes cost at 320x180 and 1280x720; and ghosting under motion (`motion`). Writes
+//! `denoise.md` (with `--motion` only the last, `denoise-motion.md`).
 
+use super::motion::{motion_markdown, run_motion};
 use super::{BenchConfig, Reference, cached_reference_of, reference_noise_of};
 use crate::colour::luminance;
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
@@ -175,6 +177,16 @@ fn cost(size: (u32, u32)) -> Result<CostRow, String> {
 /// Runs the bench at the config's size, writes `denoise.md` into `out` and returns its text.
 pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    if config.only.iter().any(|o| o == "motion") {
+        let text = format!(
+            "# The denoiser under motion
+{}",
+            motion_markdown(&run_motion(config)?)
+        );
+        let path = out.join("denoise-motion.md");
+        std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
+        return Ok(text);
+    }
     let mut rows = Vec::new();
     for (scene, view) in SCENES {
         let row = measure_scene(scene, view, config)?;
@@ -184,7 +196,8 @@ pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, Str
     let reaction = reaction(config)?;
     eprintln!("denoise bench: lamp off {:?} frames, on {:?} frames", reaction.0, reaction.1);
     let costs = [cost((320, 180))?, cost((1280, 720))?];
-    let text = markdown(&rows, reaction, &costs, config);
+    let motion = run_motion(config)?;
+    let text = markdown(&rows, reaction, &costs, config) + &motion_markdown(&motion);
     let path = out.join("denoise.md");
     std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(text)

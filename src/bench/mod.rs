@@ -16,6 +16,7 @@ pub mod daylight;
 pub mod denoise;
 pub mod gi;
 pub mod gi_scale;
+pub mod motion;
 pub mod plot;
 pub mod thesis;
 

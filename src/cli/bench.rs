@@ -41,6 +41,10 @@ pub struct BenchArgs {
     /// adds, flicker, reaction to a lamp switched off and on, cost at 320x180 and 1280x720; writes denoise.md.
     #[arg(long)]
     denoise: bool,
+    /// With --denoise: only its section on ghosting under motion (a camera path and a sliding block, every
+    /// frame against its own reference); writes denoise-motion.md.
+    #[arg(long, requires = "denoise")]
+    motion: bool,
     /// With --gi: only its section at game sizes (320x180 and 1280x720: frame with and without the cache, GPU
     /// ms per pass, the table's load); writes gi-scale.md.
     #[arg(long, requires = "gi")]
@@ -71,8 +75,8 @@ enum BenchMode {
     Gi { spp: u32, game_sizes: bool },
     /// The game's lighting at three times of day: daylight.md.
     Daylight { spp: u32 },
-    /// The denoiser: denoise.md.
-    Denoise { spp: u32 },
+    /// The denoiser: denoise.md (or its motion section alone).
+    Denoise { spp: u32, motion: bool },
 }
 
 impl BenchArgs {
@@ -101,8 +105,9 @@ impl BenchArgs {
                 let config = BenchConfig { width: 160, height: 90, reference_spp: spp, ..BenchConfig::full() };
                 on_gpu(|| run_daylight_bench(&config, &out)).map(|text| println!("{text}"))
             }
-            BenchMode::Denoise { spp } => {
-                let config = BenchConfig { width: 160, height: 90, reference_spp: spp, ..BenchConfig::full() };
+            BenchMode::Denoise { spp, motion } => {
+                let only = if motion { vec!["motion".into()] } else { Vec::new() };
+                let config = BenchConfig { width: 160, height: 90, reference_spp: spp, only, ..BenchConfig::full() };
                 on_gpu(|| run_denoise_bench(&config, &out)).map(|text| println!("{text}"))
             }
         }
@@ -117,7 +122,7 @@ impl BenchArgs {
         } else if self.daylight {
             BenchMode::Daylight { spp: self.spp }
         } else if self.denoise {
-            BenchMode::Denoise { spp: self.spp }
+            BenchMode::Denoise { spp: self.spp, motion: self.motion }
         } else {
             BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }
         }

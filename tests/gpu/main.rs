@@ -80,7 +80,11 @@ fn tests() -> Vec<(&'static str, fn())> {
             a_saved_world_shows_its_moving_objects_where_they_were,
             with_an_object_in_view_restir_converges_to_the_reference,
         ],
-        primary_matches_cpu: [gpu_primary_rays_match_cpu_traversal, lit_render_is_finite_and_shows_emission],
+        primary_matches_cpu: [
+            a_rendered_sequence_returns_each_frame_with_its_own_camera,
+            gpu_primary_rays_match_cpu_traversal,
+            lit_render_is_finite_and_shows_emission,
+        ],
         restir: [
             a_removed_light_is_never_shaded,
             point_lights_give_hard_shadows_and_area_lights_converge,

@@ -65,3 +65,29 @@ pub fn lit_render_is_finite_and_shows_emission() {
     }
     assert!(lamp_pixels > 0, "the view should see the lamp");
 }
+
+/// `render_sequence` returns every frame of a path once, in order, each with its own set-up: a camera walking
+/// towards a wall half a voxel a frame sees it nearer by exactly that much in each frame's depth view.
+pub fn a_rendered_sequence_returns_each_frame_with_its_own_camera() {
+    use glowbrick::world::palette::{Material, Palette};
+    let mut palette = Palette::new(vec![]);
+    let white = palette.push(Material::solid("white", [0.8; 3]));
+    let mut world = VoxelWorld::new(UVec3::splat(16), palette);
+    world.grid.fill_box(bevy::math::IVec3::new(0, 0, 15), bevy::math::IVec3::new(16, 16, 16), white).unwrap();
+    let at = |k: u32| CameraView {
+        name: "walk".into(),
+        origin: [8.0, 8.0, 2.0 + 0.5 * k as f32],
+        direction: [0.0, 0.0, 1.0],
+        fov_deg: 60.0,
+    };
+    let mut renderer = common::renderer_with(&world, &at(0), 32, 32, &["debug=depth"]);
+    renderer.render(2).unwrap();
+    let frames = renderer.render_sequence(6, |k, r| r.set_view(&at(k))).unwrap();
+    let depths: Vec<f32> = frames.iter().map(|f| f.pixel(16, 16)[0]).collect();
+    eprintln!("depth at the centre, frame by frame: {depths:?}");
+    assert_eq!(frames.len(), 6);
+    for (k, depth) in depths.iter().enumerate() {
+        let expected = 15.0 - (2.0 + 0.5 * k as f32);
+        assert!((depth - expected).abs() < 0.02, "frame {k}: depth {depth}, expected {expected} ({depths:?})");
+    }
+}

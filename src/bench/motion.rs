@@ -1,0 +1,248 @@
+//! Ghosting under motion (`glowbrick bench --denoise`, and alone with `--motion`): a scripted camera path inside
+//! the cornell box while a block slides across the view, raw and denoised, every frame against its own CPU
+//! reference (the block where that frame has it: the reference draws saved objects). Direct light only
+//! (`lighting=restir gi=off`, references without bounces): a converged per-frame reference with bounces costs
+//! minutes a frame on 2 cores.
+//!
+//! Besides the whole frame, the **trail**: pixels the block covered (seen from this frame's camera) in one of the
+//! previous frames but not now. A ghost is history that still shows the block there; its signed error is the
+//! ghost's strength.
+
+use super::BenchConfig;
+use crate::dynamic::{DynamicObject, Motion, ObjectClock, model_for_world, spawn_object_in};
+use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::image_io::LinearImage;
+use crate::reference::metrics::{Metrics, compare};
+use crate::reference::objects::ReferenceObjects;
+use crate::reference::{ReferenceOptions, render_reference};
+use crate::settings::RenderSettings;
+use crate::world::objects::{SavedMotion, SavedObject};
+use crate::world::scene::load_scene;
+use crate::world::{CameraView, VoxelWorld, camera_ray, trace, view_transform, world_from_clip};
+use bevy::math::{UVec2, Vec3};
+use std::sync::Arc;
+
+/// Frames before the path starts (camera and block still), frames along it, frames a trail remembers.
+const SETTLE_FRAMES: u32 = 24;
+const PATH_FRAMES: u32 = 32;
+const TRAIL_FRAMES: u32 = 8;
+/// The block's motion: back and forth along x, 24 voxels each way in 1 s; one frame is 1/60 s of it.
+const ANCHOR: Vec3 = Vec3::new(54.0, 58.0, 34.0);
+const SLIDE: Vec3 = Vec3::new(24.0, 0.0, 0.0);
+const PERIOD: f32 = 2.0;
+const FRAME_SECONDS: f32 = 1.0 / 60.0;
+const LIGHTING: [&str; 2] = ["lighting=restir", "gi=off"];
+
+/// One frame of the path: raw and denoised against its reference, over the whole frame and over the trail.
+pub struct MotionFrame {
+    pub frame: u32,
+    pub raw: Metrics,
+    pub denoised: Metrics,
+    pub trail_pixels: usize,
+    pub raw_trail: Option<Metrics>,
+    pub denoised_trail: Option<Metrics>,
+}
+
+/// The whole path, and the last still frame before it as the baseline.
+pub struct MotionRun {
+    pub size: (u32, u32),
+    pub spp: u32,
+    pub still_raw: Metrics,
+    pub still_denoised: Metrics,
+    pub frames: Vec<MotionFrame>,
+    /// MAE between two references of the first path frame with different seeds.
+    pub reference_noise: f64,
+    pub mean: f64,
+}
+
+/// The camera of path frame `k` (frames before the path: `k` = 0): a strafe along +x of 0.25 voxels and a turn
+/// of 0.3 degrees a frame.
+fn camera(base: &CameraView, k: u32) -> CameraView {
+    let yaw = (0.3f32 * k as f32).to_radians();
+    let d = Vec3::from(base.direction);
+    let direction = Vec3::new(d.x * yaw.cos() + d.z * yaw.sin(), d.y, d.z * yaw.cos() - d.x * yaw.sin());
+    let origin = Vec3::from(base.origin) + Vec3::X * 0.25 * k as f32;
+    CameraView { name: format!("path-{k}"), origin: origin.to_array(), direction: direction.to_array(), ..base.clone() }
+}
+
+fn block_age(k: u32) -> f32 {
+    k as f32 * FRAME_SECONDS
+}
+
+/// The world as the reference sees it at path frame `k`: the block saved at that frame's phase.
+fn world_at(world: &VoxelWorld, k: u32) -> VoxelWorld {
+    let mut w = world.clone();
+    let motion = SavedMotion::Slide { offset: SLIDE.into(), period: PERIOD };
+    w.objects = Some(vec![SavedObject { model: "block".into(), motion, anchor: ANCHOR.into(), age: block_age(k) }]);
+    w
+}
+
+/// The rendered sequence of one setting: settle frames, then the path. Returns the last still frame and the path.
+fn render_path(
+    world: &VoxelWorld,
+    base: &CameraView,
+    size: (u32, u32),
+    denoise: &str,
+) -> Result<(LinearImage, Vec<LinearImage>), String> {
+    let pairs: Vec<String> = LIGHTING.iter().chain(&[denoise]).map(|p| p.to_string()).collect();
+    let settings = RenderSettings::default().with_pairs(&pairs)?;
+    let options = HeadlessOptions { width: size.0, height: size.1, settings, ..Default::default() };
+    let mut world = world.clone();
+    let block = Arc::new(model_for_world("block", &mut world)?);
+    let mut r = HeadlessRenderer::new(world, base, &options)?;
+    // The bench sets each frame's phase itself.
+    r.app_mut().world_mut().resource_mut::<ObjectClock>().step = 0.0;
+    spawn_object_in(r.app_mut().world_mut(), block, Motion::Slide { offset: SLIDE, period: PERIOD }, ANCHOR)?;
+    let mut frames = r.render_sequence(SETTLE_FRAMES + PATH_FRAMES, |n, r| {
+        let k = n.saturating_sub(SETTLE_FRAMES);
+        r.set_view(&camera(base, k));
+        let app = r.app_mut().world_mut();
+        let mut objects = app.query::<&mut DynamicObject>();
+        for mut object in objects.iter_mut(app) {
+            object.age = block_age(k);
+        }
+    })?;
+    let path = frames.split_off(SETTLE_FRAMES as usize);
+    Ok((frames.pop().ok_or("no settle frame")?, path))
+}
+
+/// Pixels of `view` where the block at path frame `k - j` (j = 1..TRAIL_FRAMES) was in front of the world, and
+/// the block at frame `k` is not.
+fn trail(world: &VoxelWorld, view: &CameraView, size: (u32, u32), k: u32) -> Result<Vec<bool>, String> {
+    let (w, h) = size;
+    let transform = view_transform(view);
+    let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
+    let blocks: Vec<ReferenceObjects> = (k.saturating_sub(TRAIL_FRAMES)..=k)
+        .map(|f| ReferenceObjects::of(&world_at(world, f)))
+        .collect::<Result<_, _>>()?;
+    let (now, before) = blocks.split_last().ok_or("no frames")?;
+    Ok((0..w * h)
+        .map(|i| {
+            let ray = camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h);
+            let limit = trace(&world.grid, &ray, f32::INFINITY).map_or(f32::INFINITY, |hit| hit.distance);
+            now.trace(&ray, limit).is_none() && before.iter().any(|b| b.trace(&ray, limit).is_some())
+        })
+        .collect())
+}
+
+fn masked(image: &LinearImage, keep: &[bool]) -> LinearImage {
+    let pixels: Vec<[f32; 4]> = image.pixels.iter().zip(keep).filter(|(_, k)| **k).map(|(p, _)| *p).collect();
+    LinearImage { width: pixels.len() as u32, height: 1, pixels }
+}
+
+/// Runs the path raw and denoised at the config's size and compares every frame with its reference.
+pub fn run_motion(config: &BenchConfig) -> Result<MotionRun, String> {
+    let world = load_scene("cornell").map_err(|e| e.to_string())?;
+    let base = world.view(Some("inside")).cloned().ok_or("cornell: no view 'inside'")?;
+    let size = (config.width, config.height);
+    let (still_raw, raw) = render_path(&world, &base, size, "denoise=off")?;
+    let (still_denoised, denoised) = render_path(&world, &base, size, "denoise=on")?;
+    let options = |seed| ReferenceOptions {
+        width: size.0,
+        height: size.1,
+        spp: config.reference_spp,
+        bounces: 0,
+        seed,
+        ..Default::default()
+    };
+    let reference = |k: u32, seed: u64| -> Result<LinearImage, String> {
+        Ok(render_reference(&world_at(&world, k), &camera(&base, k), &options(seed))?.image)
+    };
+    let still_truth = reference(0, 1)?;
+    let reference_noise = compare(&reference(0, 2)?, &still_truth)?.mae;
+    let mut frames = Vec::new();
+    for k in 0..PATH_FRAMES {
+        let truth = if k == 0 { still_truth.clone() } else { reference(k, 1)? };
+        let keep = trail(&world, &camera(&base, k), size, k)?;
+        let trail_pixels = keep.iter().filter(|k| **k).count();
+        let on_trail = |image: &LinearImage| -> Result<Option<Metrics>, String> {
+            if trail_pixels == 0 {
+                return Ok(None);
+            }
+            compare(&masked(image, &keep), &masked(&truth, &keep)).map(Some)
+        };
+        let (r, d) = (&raw[k as usize], &denoised[k as usize]);
+        frames.push(MotionFrame {
+            frame: k,
+            raw: compare(r, &truth)?,
+            denoised: compare(d, &truth)?,
+            trail_pixels,
+            raw_trail: on_trail(r)?,
+            denoised_trail: on_trail(d)?,
+        });
+        eprintln!("motion bench: frame {k}: raw {} / denoised {}", frames[k as usize].raw, frames[k as usize].denoised);
+    }
+    Ok(MotionRun {
+        size,
+        spp: config.reference_spp,
+        still_raw: compare(&still_raw, &still_truth)?,
+        still_denoised: compare(&still_denoised, &still_truth)?,
+        frames,
+        reference_noise,
+        mean: still_truth.mean_luminance(),
+    })
+}
+
+fn mean_of(frames: &[MotionFrame], f: impl Fn(&MotionFrame) -> Option<f64>) -> f64 {
+    let values: Vec<f64> = frames.iter().filter_map(f).collect();
+    values.iter().sum::<f64>() / values.len().max(1) as f64
+}
+
+/// The markdown section.
+pub fn motion_markdown(run: &MotionRun) -> String {
+    let f = &run.frames;
+    let mut text = format!(
+        "\n## Ghosting under motion\n\ncornell `inside`, {}x{}, `lighting=restir gi=off` (direct light: a \
+         converged reference with bounces for every frame of a path would take minutes a frame). {SETTLE_FRAMES} \
+         still frames, then {PATH_FRAMES} frames in which the camera strafes 0.25 voxels and turns 0.3 degrees a \
+         frame while a 3-voxel block slides 0.4 voxels a frame across the view. Every frame against its own \
+         {}-spp reference with the block where that frame has it (reference noise, MAE between two seeds: \
+         {:.5}; mean luminance {:.4}). **Trail**: pixels the block covered in one of the {TRAIL_FRAMES} frames \
+         before, seen from this frame's camera, and not now; its bias is a ghost's strength.\n\n\
+         | | raw relMSE | denoised relMSE | raw / denoised | raw MAE | denoised MAE |\n|---|---|---|---|---|---|\n",
+        run.size.0, run.size.1, run.spp, run.reference_noise, run.mean
+    );
+    text += &format!(
+        "| last still frame | {:.4} | {:.4} | {:.1}x | {:.5} | {:.5} |\n",
+        run.still_raw.relmse,
+        run.still_denoised.relmse,
+        run.still_raw.relmse / run.still_denoised.relmse.max(1e-12),
+        run.still_raw.mae,
+        run.still_denoised.mae
+    );
+    let (raw, den) = (mean_of(f, |m| Some(m.raw.relmse)), mean_of(f, |m| Some(m.denoised.relmse)));
+    text += &format!(
+        "| path, mean of {} frames | {raw:.4} | {den:.4} | {:.1}x | {:.5} | {:.5} |\n",
+        f.len(),
+        raw / den.max(1e-12),
+        mean_of(f, |m| Some(m.raw.mae)),
+        mean_of(f, |m| Some(m.denoised.mae))
+    );
+    text += &format!(
+        "| path, trail pixels (mean {:.0} a frame) | {:.4} | {:.4} | {:.1}x | {:.5} | {:.5} |\n",
+        mean_of(f, |m| Some(m.trail_pixels as f64)),
+        mean_of(f, |m| m.raw_trail.map(|t| t.relmse)),
+        mean_of(f, |m| m.denoised_trail.map(|t| t.relmse)),
+        mean_of(f, |m| m.raw_trail.map(|t| t.relmse)) / mean_of(f, |m| m.denoised_trail.map(|t| t.relmse)).max(1e-12),
+        mean_of(f, |m| m.raw_trail.map(|t| t.mae)),
+        mean_of(f, |m| m.denoised_trail.map(|t| t.mae))
+    );
+    text += "\nFrame by frame (every fourth): bias is the signed mean error, over the frame and over the trail.\n\n\
+             | frame | raw relMSE | denoised relMSE | raw bias | denoised bias | trail pixels | trail bias raw | \
+             trail bias denoised |\n|---|---|---|---|---|---|---|---|\n";
+    let bias = |m: Option<Metrics>| m.map_or("-".to_string(), |m| format!("{:+.5}", m.bias));
+    for m in f.iter().filter(|m| m.frame % 4 == 0 || m.frame + 1 == PATH_FRAMES) {
+        text += &format!(
+            "| {} | {:.4} | {:.4} | {:+.5} | {:+.5} | {} | {} | {} |\n",
+            m.frame,
+            m.raw.relmse,
+            m.denoised.relmse,
+            m.raw.bias,
+            m.denoised.bias,
+            m.trail_pixels,
+            bias(m.raw_trail),
+            bias(m.denoised_trail)
+        );
+    }
+    text
+}
