@@ -6,7 +6,7 @@
 // bring the sky (lighting=full and the sun-only look).
 
 #import glowbrick::world::{materials, voxel_at, objects, object_index, object_count}
-#import glowbrick::traversal::{trace, trace_objects, trace_scene, face_normal, INF}
+#import glowbrick::traversal::{Hit, trace, trace_objects, trace_scene, face_normal, INF}
 #import glowbrick::lights::{scene, sky}
 #import glowbrick::random::{Rng, pcg}
 #import glowbrick::guards::finite3
@@ -69,14 +69,28 @@ fn hit_radiance(point: vec3<f32>, face: u32, level: u32, seen: bool, fallback: v
 
 // Light arriving along a ray that hit a moving object's voxel: its emission (objects' emitters are not in the
 // light pool, so this is the only way their light reaches other surfaces), its direct light, and with bounces
-// on, the shooting entry's own indirect light as an estimate of the object's (static entries never read a moving
-// object's entries: the split).
-fn object_hit_radiance(point: vec3<f32>, face: u32, material: u32, fallback: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
-    let n = face_normal(face);
-    let m = materials[material];
+// on, the indirect light of the object's face: its entry in the moving objects' table (a lantern's frame, lit
+// by its own core, passes that light on), touched by entries the camera sees as static hits are; the shooting
+// entry's own where it has none yet (counted). Static entries read it and never cache it: their cached hits stay
+// static (the split).
+fn object_hit_radiance(hit: Hit, point: vec3<f32>, seen: bool, fallback: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+    let n = face_normal(hit.face);
+    let m = materials[hit.material];
     var radiance = m.radiance.rgb + direct_at(point, n, m.albedo.rgb, rng);
     if (gi.flags & GI_BOUNCES) != 0u {
-        radiance += m.albedo.rgb * fallback;
+        var slot = NOT_FOUND;
+        if seen {
+            slot = gi_touch(hit.voxel, hit.face, hit.object, 0u, false);
+        } else {
+            slot = gi_find(hit.voxel, hit.face, hit.object, 0u);
+        }
+        var incoming = fallback;
+        if slot != NOT_FOUND && gi_entries[slot].samples > 0u {
+            incoming = gi_filtered[slot].rgb;
+        } else {
+            borrowed++;
+        }
+        radiance += m.albedo.rgb * incoming;
     }
     return radiance;
 }
@@ -131,7 +145,7 @@ fn update_entry(slot: u32) {
         // A moving object in front of the static hit replaces it for this frame.
         let object = trace_objects(origin, dir, select(INF, distance, found));
         if object.found {
-            sum += object_hit_radiance(origin + dir * object.distance, object.face, object.material, own, &rng);
+            sum += object_hit_radiance(object, origin + dir * object.distance, seen, own, &rng);
         } else if found {
             sum += hit_radiance(origin + dir * distance, face, hit_level(distance, e.level), seen, own, &rng);
         } else {

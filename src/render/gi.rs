@@ -16,6 +16,7 @@ use super::gpu_types::{
 };
 use super::scene::SceneUploaded;
 use super::scene::lights::GpuLights;
+use super::scene::objects::GpuObjects;
 use super::scene::world::GpuWorld;
 use crate::settings::{GiSettings, RenderSettings};
 use bevy::prelude::*;
@@ -238,6 +239,11 @@ pub struct GiCache {
 }
 
 impl GiCache {
+    /// Frames left in which the entries restart their blends after a change of light (0 in a still scene).
+    pub fn restart_frames_left(&self) -> u32 {
+        self.restart_frames
+    }
+
     /// Slots of both tables (the compaction pass's threads).
     pub fn slots(&self) -> u32 {
         self.shape.entries()
@@ -328,6 +334,7 @@ pub fn prepare_gi(
     settings: Option<Res<RenderSettings>>,
     gpu_world: Option<Res<GpuWorld>>,
     gpu_lights: Option<Res<GpuLights>>,
+    gpu_objects: Option<Res<GpuObjects>>,
     layout: Res<GiLayout>,
     pipeline_cache: Res<PipelineCache>,
     device: Res<RenderDevice>,
@@ -348,7 +355,9 @@ pub fn prepare_gi(
     // read last frame's values, which still hold the old light, and one restart would average that into the
     // next 1 / alpha frames.
     let lighting = Some((settings.lighting, settings.time.to_bits(), settings.sun, settings.shadows));
-    if gpu_lights.as_ref().is_some_and(|l| l.changed) || cache.lighting != lighting {
+    // A moving object that appears or goes is a change of light too (a lantern's core is in no light pool).
+    let objects_came_or_went = gpu_objects.as_ref().is_some_and(|o| o.set_changed);
+    if gpu_lights.as_ref().is_some_and(|l| l.changed) || objects_came_or_went || cache.lighting != lighting {
         cache.restart_frames = RESTART_FRAMES;
     }
     cache.lighting = lighting;

@@ -69,6 +69,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             the_gi_cache_converges_to_the_path_traced_reference_in_the_window_room,
             two_cameras_update_the_cache_once_per_frame,
             freeing_entries_keeps_the_rest_of_their_probe_chains_reachable,
+            the_cache_restarts_its_blends_only_when_the_light_changes,
             with_gi_off_no_gi_pass_runs,
         ],
         nee_converges: [
@@ -78,6 +79,7 @@ fn tests() -> Vec<(&'static str, fn())> {
         objects: [
             a_magicavoxel_lamp_lights_its_scene_under_restir,
             a_saved_world_shows_its_moving_objects_where_they_were,
+            a_lanterns_light_reaches_the_floor_through_the_gi_cache,
             with_an_object_in_view_restir_converges_to_the_reference,
         ],
         primary_matches_cpu: [

@@ -60,6 +60,8 @@ pub struct GpuObjects {
     pub count: u32,
     /// Whether any object moved, appeared or went this frame (restarts accumulation).
     pub changed: bool,
+    /// Whether an object appeared or went this frame (a change of light: the GI cache restarts its blends).
+    pub set_changed: bool,
     last_objects: Vec<GpuObject>,
     last_voxels: Option<Arc<Vec<u32>>>,
 }
@@ -78,6 +80,7 @@ fn init_gpu_objects(mut commands: Commands, device: Res<RenderDevice>) {
         voxels: buffer("glowbrick_object_voxels", VOXEL_CAPACITY * 4),
         count: 0,
         changed: false,
+        set_changed: false,
         last_objects: Vec::new(),
         last_voxels: None,
     });
@@ -96,6 +99,7 @@ pub fn prepare_gpu_objects(
     if gpu.changed && !upload.objects.is_empty() {
         queue.write_buffer(&gpu.objects, 0, bytemuck::cast_slice(&upload.objects));
     }
+    gpu.set_changed = !upload.objects.iter().map(|o| o.id).eq(gpu.last_objects.iter().map(|o| o.id));
     if gpu.last_voxels.as_ref().is_none_or(|v| !Arc::ptr_eq(v, &upload.voxels)) && !upload.voxels.is_empty() {
         let n = upload.voxels.len().min(VOXEL_CAPACITY);
         queue.write_buffer(&gpu.voxels, 0, bytemuck::cast_slice(&upload.voxels[..n]));
