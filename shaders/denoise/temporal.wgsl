@@ -1,7 +1,7 @@
 // Denoiser pass 1 (render::denoise): demodulate this frame's noisy light, blend it into the history reprojected
 // from last frame, and estimate its luminance variance for the wavelet passes.
 
-#import glowbrick::world::materials
+#import glowbrick::world::{materials, object_motion}
 #import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, noisy, history, prev_history, wavelet, unpack_surface,
     pixel_index, previous_pixel, luminance, Surface}
 #import glowbrick::constants::DENOISE_HISTORY
@@ -57,16 +57,17 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 
     // Last frame's history where the same surface was seen: same face axis and sign, same object, depth within
-    // 10% (as ReSTIR's temporal reuse).
+    // 10% (as ReSTIR's temporal reuse). A moving object's point is where it was last frame (its motion vector).
     var length = 0.0;
     var previous = vec3(0.0);
     var moments = vec2(0.0);
     if (frame.denoise & DENOISE_HISTORY) != 0u {
-        let p = previous_pixel(s.point, size);
+        let then = s.point - object_motion(s.object);
+        let p = previous_pixel(then, size);
         if p.z == 1 {
             let pi = u32(p.x) + size.x * u32(p.y);
             let ps = unpack_surface(prev_gbuffer[pi]);
-            let depth_now = distance(frame.prev_camera.xyz, s.point);
+            let depth_now = distance(frame.prev_camera.xyz, then);
             let depth_then = distance(frame.prev_camera.xyz, ps.point);
             if ps.found && ps.face == s.face && ps.object == s.object && abs(depth_now - depth_then) <= 0.1 * depth_now {
                 let h = prev_history[2u * pi];

@@ -33,6 +33,9 @@ struct Object {
     size: vec3<u32>,
     // First voxel in object_voxels; x fastest, then y, then z.
     offset: u32,
+    // min last frame: where its surfaces were (the denoiser's motion vectors).
+    previous_min: vec3<f32>,
+    _pad: u32,
 }
 
 @group(0) @binding(4) var<storage, read> objects: array<Object>;
@@ -60,6 +63,18 @@ fn object_index(id: u32) -> u32 {
         }
     }
     return count;
+}
+
+// How far moving object `id` moved since last frame (0 for the static world, or an object that is gone).
+fn object_motion(id: u32) -> vec3<f32> {
+    if id == 0u {
+        return vec3(0.0);
+    }
+    let i = object_index(id);
+    if i >= object_count() {
+        return vec3(0.0);
+    }
+    return objects[i].min - objects[i].previous_min;
 }
 
 fn brick_cell(brick: vec3<i32>) -> u32 {

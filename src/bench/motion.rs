@@ -39,8 +39,14 @@ pub struct MotionFrame {
     pub raw: Metrics,
     pub denoised: Metrics,
     pub trail_pixels: usize,
+    /// The reference's mean luminance over the trail.
+    pub trail_mean: f64,
     pub raw_trail: Option<Metrics>,
     pub denoised_trail: Option<Metrics>,
+    /// The block itself (its pixels now): the denoiser follows it by its motion vector.
+    pub block_pixels: usize,
+    pub raw_block: Option<Metrics>,
+    pub denoised_block: Option<Metrics>,
 }
 
 /// The whole path, and the last still frame before it as the baseline.
@@ -106,9 +112,9 @@ fn render_path(
     Ok((frames.pop().ok_or("no settle frame")?, path))
 }
 
-/// Pixels of `view` where the block at path frame `k - j` (j = 1..TRAIL_FRAMES) was in front of the world, and
-/// the block at frame `k` is not.
-fn trail(world: &VoxelWorld, view: &CameraView, size: (u32, u32), k: u32) -> Result<Vec<bool>, String> {
+/// Two masks of `view` at path frame `k`: the block's pixels now, and its trail (where the block of frame
+/// `k - j`, j = 1..TRAIL_FRAMES, was in front of the world and the block of frame `k` is not).
+fn block_masks(world: &VoxelWorld, view: &CameraView, size: (u32, u32), k: u32) -> Result<[Vec<bool>; 2], String> {
     let (w, h) = size;
     let transform = view_transform(view);
     let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
@@ -116,13 +122,15 @@ fn trail(world: &VoxelWorld, view: &CameraView, size: (u32, u32), k: u32) -> Res
         .map(|f| ReferenceObjects::of(&world_at(world, f)))
         .collect::<Result<_, _>>()?;
     let (now, before) = blocks.split_last().ok_or("no frames")?;
-    Ok((0..w * h)
-        .map(|i| {
-            let ray = camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h);
-            let limit = trace(&world.grid, &ray, f32::INFINITY).map_or(f32::INFINITY, |hit| hit.distance);
-            now.trace(&ray, limit).is_none() && before.iter().any(|b| b.trace(&ray, limit).is_some())
-        })
-        .collect())
+    let (mut on_block, mut trail) = (Vec::new(), Vec::new());
+    for i in 0..w * h {
+        let ray = camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h);
+        let limit = trace(&world.grid, &ray, f32::INFINITY).map_or(f32::INFINITY, |hit| hit.distance);
+        let seen = now.trace(&ray, limit).is_some();
+        on_block.push(seen);
+        trail.push(!seen && before.iter().any(|b| b.trace(&ray, limit).is_some()));
+    }
+    Ok([on_block, trail])
 }
 
 fn masked(image: &LinearImage, keep: &[bool]) -> LinearImage {
@@ -153,22 +161,27 @@ pub fn run_motion(config: &BenchConfig) -> Result<MotionRun, String> {
     let mut frames = Vec::new();
     for k in 0..PATH_FRAMES {
         let truth = if k == 0 { still_truth.clone() } else { reference(k, 1)? };
-        let keep = trail(&world, &camera(&base, k), size, k)?;
+        let [block, keep] = block_masks(&world, &camera(&base, k), size, k)?;
         let trail_pixels = keep.iter().filter(|k| **k).count();
-        let on_trail = |image: &LinearImage| -> Result<Option<Metrics>, String> {
-            if trail_pixels == 0 {
+        let over = |image: &LinearImage, mask: &[bool]| -> Result<Option<Metrics>, String> {
+            if !mask.contains(&true) {
                 return Ok(None);
             }
-            compare(&masked(image, &keep), &masked(&truth, &keep)).map(Some)
+            compare(&masked(image, mask), &masked(&truth, mask)).map(Some)
         };
+        let on_trail = |image: &LinearImage| over(image, &keep);
         let (r, d) = (&raw[k as usize], &denoised[k as usize]);
         frames.push(MotionFrame {
             frame: k,
             raw: compare(r, &truth)?,
             denoised: compare(d, &truth)?,
             trail_pixels,
+            trail_mean: if trail_pixels == 0 { 0.0 } else { masked(&truth, &keep).mean_luminance() },
             raw_trail: on_trail(r)?,
             denoised_trail: on_trail(d)?,
+            block_pixels: block.iter().filter(|b| **b).count(),
+            raw_block: over(r, &block)?,
+            denoised_block: over(d, &block)?,
         });
         eprintln!("motion bench: frame {k}: raw {} / denoised {}", frames[k as usize].raw, frames[k as usize].denoised);
     }
@@ -186,6 +199,11 @@ pub fn run_motion(config: &BenchConfig) -> Result<MotionRun, String> {
 fn mean_of(frames: &[MotionFrame], f: impl Fn(&MotionFrame) -> Option<f64>) -> f64 {
     let values: Vec<f64> = frames.iter().filter_map(f).collect();
     values.iter().sum::<f64>() / values.len().max(1) as f64
+}
+
+/// The value of largest magnitude (signed).
+fn largest(frames: &[MotionFrame], f: impl Fn(&MotionFrame) -> Option<f64>) -> f64 {
+    frames.iter().filter_map(f).fold(0.0, |a, b| if b.abs() > a.abs() { b } else { a })
 }
 
 /// The markdown section.
@@ -226,6 +244,25 @@ pub fn motion_markdown(run: &MotionRun) -> String {
         mean_of(f, |m| m.raw_trail.map(|t| t.relmse)) / mean_of(f, |m| m.denoised_trail.map(|t| t.relmse)).max(1e-12),
         mean_of(f, |m| m.raw_trail.map(|t| t.mae)),
         mean_of(f, |m| m.denoised_trail.map(|t| t.mae))
+    );
+    text += &format!(
+        "| path, the block's pixels (mean {:.0} a frame) | {:.4} | {:.4} | {:.1}x | {:.5} | {:.5} |\n",
+        mean_of(f, |m| Some(m.block_pixels as f64)),
+        mean_of(f, |m| m.raw_block.map(|t| t.relmse)),
+        mean_of(f, |m| m.denoised_block.map(|t| t.relmse)),
+        mean_of(f, |m| m.raw_block.map(|t| t.relmse)) / mean_of(f, |m| m.denoised_block.map(|t| t.relmse)).max(1e-12),
+        mean_of(f, |m| m.raw_block.map(|t| t.mae)),
+        mean_of(f, |m| m.denoised_block.map(|t| t.mae))
+    );
+    let trail_mean = mean_of(f, |m| (m.trail_pixels > 0).then_some(m.trail_mean));
+    let trail_bias = |pick: fn(&MotionFrame) -> Option<Metrics>| mean_of(f, |m| pick(m).map(|t| t.bias));
+    text += &format!(
+        "\nOver the trail (reference mean {trail_mean:.4}), the mean signed error of the frames: raw {:+.2}%, \
+         denoised {:+.2}% of it; the largest in one frame: raw {:+.2}%, denoised {:+.2}%.\n",
+        100.0 * trail_bias(|m| m.raw_trail) / trail_mean.max(1e-12),
+        100.0 * trail_bias(|m| m.denoised_trail) / trail_mean.max(1e-12),
+        100.0 * largest(f, |m| m.raw_trail.map(|t| t.bias / m.trail_mean.max(1e-12))),
+        100.0 * largest(f, |m| m.denoised_trail.map(|t| t.bias / m.trail_mean.max(1e-12)))
     );
     text += "\nFrame by frame (every fourth): bias is the signed mean error, over the frame and over the trail.\n\n\
              | frame | raw relMSE | denoised relMSE | raw bias | denoised bias | trail pixels | trail bias raw | \

@@ -151,6 +151,12 @@ impl Shape {
     fn entries(&self) -> u32 {
         self.static_entries + self.dynamic_entries
     }
+
+    /// Whether the device's binding limit cut the static table below the `gi_table` asked for (never with GI
+    /// off, whose placeholder holds one slot whatever the setting).
+    fn halved(&self, settings: &GiSettings) -> bool {
+        settings.enabled && self.static_entries < static_capacity(settings)
+    }
 }
 
 /// The static table's slots for `settings`: the `gi_table` setting rounded up to a power of two (the probe
@@ -365,7 +371,7 @@ pub fn prepare_gi(
     cache.restart_frames = cache.restart_frames.saturating_sub(1);
     let max_binding = device.limits().max_storage_buffer_binding_size;
     let shape = Shape::of(&gi, max_binding);
-    if shape.static_entries < static_capacity(&gi) && shape != cache.shape {
+    if shape.halved(&gi) && shape != cache.shape {
         warn!(
             "gi_table={} with gi_rays={} needs more than this GPU binds in one buffer ({max_binding} bytes): the GI \
              table holds {} slots",
@@ -454,5 +460,9 @@ mod tests {
         assert_eq!(shrunk.static_entries, 1 << 17);
         assert!((shrunk.entries() as u64) * 128 * RAY_BYTES <= lavapipe);
         assert_eq!(Shape::of(&settings(128), 1 << 10).static_entries, 4096, "never below 4,096 slots");
+        assert!(shrunk.halved(&settings(128)) && !Shape::of(&settings(64), lavapipe).halved(&settings(64)));
+        // GI off holds a one-slot placeholder: not a table cut to fit (the soak warned "holds 1 slots").
+        let off = GiSettings { enabled: false, ..GiSettings::default() };
+        assert!(!Shape::of(&off, lavapipe).halved(&off));
     }
 }

@@ -40,6 +40,9 @@ pub struct GpuObject {
     pub size: [u32; 3],
     /// First voxel in `object_voxels`.
     pub offset: u32,
+    /// `min` last frame (the same for an object that just appeared): the denoiser reprojects its pixels by it.
+    pub previous_min: [f32; 3],
+    pub _pad: u32,
 }
 
 /// One light slot (`Light` in `shaders/lib/lights.wgsl`); `size == 0` marks a free slot.
@@ -174,7 +177,7 @@ pub const GI_RAY_BYTES: u64 = 4;
 // The shaders read these structs at exactly these sizes (WGSL alignment rules included).
 const _: () = assert!(size_of::<WorldInfo>() == 32);
 const _: () = assert!(size_of::<GpuMaterial>() == 32);
-const _: () = assert!(size_of::<GpuObject>() == 32);
+const _: () = assert!(size_of::<GpuObject>() == 48);
 const _: () = assert!(size_of::<GpuLight>() == 32);
 const _: () = assert!(size_of::<crate::lights::AliasEntry>() == 16);
 const _: () = assert!(size_of::<SceneLighting>() == 80);

@@ -33,6 +33,7 @@ pub fn stage_objects(mut upload: ResMut<ObjectsUpload>, objects: Query<(&Dynamic
     let repack = ids != upload.packed_ids;
     let mut voxels = Vec::new();
     let mut offset = 0u32;
+    let previous = std::mem::take(&mut upload.objects);
     upload.objects = list
         .iter()
         .map(|(object, transform)| {
@@ -40,8 +41,9 @@ pub fn stage_objects(mut upload: ResMut<ObjectsUpload>, objects: Query<(&Dynamic
             if repack {
                 voxels.extend(m.voxels.iter().map(|&v| v as u32));
             }
-            let gpu =
-                GpuObject { min: transform.translation.to_array(), id: object.id, size: m.size.to_array(), offset };
+            let min = transform.translation.to_array();
+            let previous_min = previous.iter().find(|p| p.id == object.id).map_or(min, |p| p.min);
+            let gpu = GpuObject { min, id: object.id, size: m.size.to_array(), offset, previous_min, _pad: 0 };
             offset += m.voxels.len() as u32;
             gpu
         })
