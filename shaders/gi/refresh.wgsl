@@ -84,6 +84,11 @@ fn refresh(slot: u32, e: GiEntry, origin: vec3<f32>) -> u32 {
     gi_entries[slot].lo = lo - vec3(1.0);
     gi_entries[slot].hi = hi + vec3(1.0);
     gi_entries[slot].traced_epoch = gi.epoch;
+    // An edit reached it without changing its hits: the light at them may have changed all the same. One sample
+    // keeps its value for readers and marks it for the edit restart (update.wgsl, GI_EDIT_RESTART).
+    if traced == 0u && e.samples > 1u {
+        gi_entries[slot].samples = 1u;
+    }
     if traced > 0u {
         atomicAdd(&counters[COUNT_GI_RETRACED], 1u);
         atomicAdd(&counters[COUNT_GI_RAYS_TRACED], traced);

@@ -11,7 +11,7 @@
 #import glowbrick::random::{Rng, pcg}
 #import glowbrick::guards::finite3
 #import glowbrick::counters::counters
-#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, COUNT_GI_BORROWED,
+#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, COUNT_GI_BORROWED,
     COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
 #import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_touch, gi_find,
     listed_slot, hit_level, used_within, slot_seed, ray_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
@@ -118,7 +118,10 @@ fn update_entry(slot: u32) {
     let samples = e.samples;
     // After a change of light the blend starts over from this frame's estimate (the samples count stays for
     // the readers: the entry still has a value).
-    let age = select(samples, 0u, (gi.flags & GI_RESTART) != 0u);
+    // After an edit, the entries it reached (marked with one sample by refresh.wgsl, as are new ones) do the same
+    // for a few frames, while the new light travels the bounces.
+    let edit_restart = (gi.flags & GI_EDIT_RESTART) != 0u && samples <= 1u;
+    let age = select(samples, 0u, (gi.flags & GI_RESTART) != 0u || edit_restart);
     let seen = used_within(e.last_seen, 1u) && !dynamic;
     let own = select(vec3(0.0), gi_filtered[slot].rgb, samples > 0u);
     let seed = slot_seed(slot);

@@ -46,6 +46,7 @@ const GI_FILTER: u32 = #{GI_FILTER}u;
 const GI_BOUNCES: u32 = #{GI_BOUNCES}u;
 const GI_CACHE: u32 = #{GI_CACHE}u;
 const GI_RESTART: u32 = #{GI_RESTART}u;
+const GI_EDIT_RESTART: u32 = #{GI_EDIT_RESTART}u;
 
 // The G-buffer's packed hit: bit 0 hit, then the face, the material and the moving object's id.
 const GBUFFER_FACE_SHIFT: u32 = #{GBUFFER_FACE_SHIFT}u;

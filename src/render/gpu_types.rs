@@ -254,6 +254,10 @@ pub const GI_CACHE: u32 = 4;
 /// `GiParams::flags`: the light changed this frame (a lamp placed or removed, the time of day, the lighting
 /// mode): entries replace their blended light with this frame's estimate and average evenly from there.
 pub const GI_RESTART: u32 = 8;
+/// `GiParams::flags`: the world was edited in the last few frames: entries an edit reached (refresh.wgsl marks
+/// them with one sample) take this frame's estimate alone, so their average starts once the new light has
+/// travelled the bounces, not with the frames in between.
+pub const GI_EDIT_RESTART: u32 = 16;
 
 /// The G-buffer's packed hit: bit 0 hit, bits 1-3 face, bits 4-19 material, bits 20-31 the moving object's id.
 pub const GBUFFER_FACE_SHIFT: u32 = 1;
@@ -316,6 +320,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("GI_BOUNCES", U32(GI_BOUNCES)),
         ("GI_CACHE", U32(GI_CACHE)),
         ("GI_RESTART", U32(GI_RESTART)),
+        ("GI_EDIT_RESTART", U32(GI_EDIT_RESTART)),
         // The G-buffer's packed hit.
         ("GBUFFER_FACE_SHIFT", U32(GBUFFER_FACE_SHIFT)),
         ("GBUFFER_MATERIAL_SHIFT", U32(GBUFFER_MATERIAL_SHIFT)),

@@ -334,3 +334,43 @@ pub fn the_cache_restarts_its_blends_only_when_the_light_changes() {
     r.render(6).unwrap();
     assert_eq!(left(&mut r), 0, "a moving lantern restarts them once, not every frame it moves");
 }
+
+/// Issue 16's measure of how fast the cache follows an edit: the camera settled on the dark side of a wall, a
+/// doorway opens, and frame by frame the indirect light it sees is compared with a fresh renderer's of the opened
+/// world. The indirect light of a frame is exact: a twin renderer with the cache off runs the same script, and
+/// next-event estimation draws the same numbers in both (seeded by pixel and frame), so their difference is the
+/// cache's light alone. Bound: within 5% by frame 30.
+pub fn an_opened_doorway_lights_the_far_side_within_thirty_frames() {
+    let (world, _) = walled_floor();
+    let beyond =
+        CameraView { name: "beyond".into(), origin: [50.0, 12.0, 8.0], direction: [-1.0, -0.9, 0.0], fov_deg: 60.0 };
+    let mut opened = world.clone();
+    opened.grid.fill_box(IVec3::new(20, 1, 5), IVec3::new(21, 6, 11), 0).unwrap();
+    let fresh = |gi: &str| converged(&mut renderer(&opened, &beyond, &["lighting=nee", gi]), 64, 128).mean_luminance();
+    let truth = fresh("gi=on") - fresh("gi=off");
+    let hole = Edit::FillBox { min: IVec3::new(20, 1, 5), max: IVec3::new(20, 5, 10), material: 0 };
+    let after_opening = |gi: &str| -> Vec<f64> {
+        let mut r = renderer(&world, &beyond, &["lighting=nee", gi]);
+        r.render(64).unwrap();
+        r.app_mut().world_mut().write_message(EditRequest::player(hole.clone()));
+        r.render_sequence(64, |_, _| {}).unwrap().iter().map(|f| f.mean_luminance()).collect()
+    };
+    let (on, off) = (after_opening("gi=on"), after_opening("gi=off"));
+    let indirect: Vec<f64> = on.iter().zip(&off).map(|(a, b)| a - b).collect();
+    let within = indirect.iter().position(|m| (m - truth).abs() <= 0.05 * truth).map_or(99, |k| k + 1);
+    let share = |k: usize| 100.0 * indirect[k] / truth;
+    eprintln!(
+        "doorway: indirect light of a fresh renderer {truth:.5} (direct {:.5}); after the edit, its share at frames 1, \
+         2, 3, 4, 8, 16, 30, 64: {:.0}, {:.0}, {:.0}, {:.0}, {:.0}, {:.0}, {:.0}, {:.0}%; within 5% from frame {within}",
+        fresh("gi=off"),
+        share(0),
+        share(1),
+        share(2),
+        share(3),
+        share(7),
+        share(15),
+        share(29),
+        share(63)
+    );
+    assert!(within <= 30, "the indirect light beyond a new doorway is within 5% by frame {within}");
+}
