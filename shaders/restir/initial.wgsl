@@ -3,6 +3,7 @@
 
 #import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index, previous_pixel}
 #import glowbrick::constants::RESTIR_TEMPORAL
+#import glowbrick::world::object_motion
 #import glowbrick::random::{Rng, rng_next}
 #import glowbrick::restir::common::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
     shading, sample_candidate, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, own_sample_rays, pixel_rng}
@@ -43,14 +44,21 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 
     if (frame.restir_flags & RESTIR_TEMPORAL) != 0u && frame.prev_camera.w > 0.0 {
-        let prev_pixel = previous_pixel(x.point, size);
+        // A moving object's surface has no temporal reuse: the reuse would weigh the old sample at the object's
+        // old place against this frame's geometry (the objects buffer holds only where objects are now), and
+        // following the object so brightened a sliding block by 160%; without the object test, reuse across its
+        // edges by 17% (the motion bench, docs/bench/denoise.md). Its candidates and spatial reuse remain.
+        let moving = any(object_motion(surface.object) != vec3(0.0));
+        let prev_pixel = select(previous_pixel(x.point, size), vec3(-1), moving);
         if prev_pixel.z == 1 {
             let prev_index = u32(prev_pixel.x) + size.x * u32(prev_pixel.y);
             let prev_surface = unpack_surface(prev_gbuffer[prev_index]);
-            // Same face orientation (axis and sign) and depth within 10% seen from last frame's camera.
+            // The same object (or the static world), face orientation (axis and sign) and depth within 10% seen
+            // from last frame's camera.
             let depth_now = distance(frame.prev_camera.xyz, x.point);
             let depth_then = distance(frame.prev_camera.xyz, prev_surface.point);
-            if prev_surface.found && prev_surface.face == surface.face && abs(depth_now - depth_then) <= 0.1 * depth_now {
+            let same = prev_surface.found && prev_surface.face == surface.face && prev_surface.object == surface.object;
+            if same && abs(depth_now - depth_then) <= 0.1 * depth_now {
                 var prev = validated(reservoirs_final[prev_index]);
                 prev.m = min(prev.m, HISTORY_CAP * m_init);
                 let current = r;

@@ -45,6 +45,7 @@ pub struct MotionFrame {
     pub denoised_trail: Option<Metrics>,
     /// The block itself (its pixels now): the denoiser follows it by its motion vector.
     pub block_pixels: usize,
+    pub block_mean: f64,
     pub raw_block: Option<Metrics>,
     pub denoised_block: Option<Metrics>,
 }
@@ -180,6 +181,7 @@ pub fn run_motion(config: &BenchConfig) -> Result<MotionRun, String> {
             raw_trail: on_trail(r)?,
             denoised_trail: on_trail(d)?,
             block_pixels: block.iter().filter(|b| **b).count(),
+            block_mean: if block.contains(&true) { masked(&truth, &block).mean_luminance() } else { 0.0 },
             raw_block: over(r, &block)?,
             denoised_block: over(d, &block)?,
         });
@@ -253,6 +255,13 @@ pub fn motion_markdown(run: &MotionRun) -> String {
         mean_of(f, |m| m.raw_block.map(|t| t.relmse)) / mean_of(f, |m| m.denoised_block.map(|t| t.relmse)).max(1e-12),
         mean_of(f, |m| m.raw_block.map(|t| t.mae)),
         mean_of(f, |m| m.denoised_block.map(|t| t.mae))
+    );
+    let block_mean = mean_of(f, |m| (m.block_pixels > 0).then_some(m.block_mean));
+    text += &format!(
+        "\nOn the block (reference mean {block_mean:.4}), the mean signed error of the frames: raw {:+.2}%, denoised \
+         {:+.2}% of it.\n",
+        100.0 * mean_of(f, |m| m.raw_block.map(|t| t.bias)) / block_mean.max(1e-12),
+        100.0 * mean_of(f, |m| m.denoised_block.map(|t| t.bias)) / block_mean.max(1e-12)
     );
     let trail_mean = mean_of(f, |m| (m.trail_pixels > 0).then_some(m.trail_mean));
     let trail_bias = |pick: fn(&MotionFrame) -> Option<Metrics>| mean_of(f, |m| pick(m).map(|t| t.bias));

@@ -51,6 +51,8 @@ fn tests() -> Vec<(&'static str, fn())> {
         denoise: [
             a_denoised_frame_is_closer_to_the_reference_and_adds_little_bias,
             a_lamp_switched_off_leaves_no_ghost,
+            a_moving_object_keeps_its_history,
+            a_sliding_block_is_neither_brightened_nor_smeared,
             with_the_denoiser_off_none_of_its_passes_runs,
         ],
         extreme_scenes: [

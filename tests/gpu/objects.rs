@@ -135,6 +135,15 @@ pub fn with_an_object_in_view_restir_converges_to_the_reference() {
         100.0 * whole,
         100.0 * shadow
     );
+    // The block's own pixels, which the mask above leaves out.
+    let on_block = block_pixels(&world, &view, w, h);
+    let block = compare(&common::masked(&gpu, &on_block), &common::masked(&truth, &on_block)).unwrap();
+    let block_mean = common::masked(&truth, &on_block).mean_luminance();
+    eprintln!(
+        "the block's {} pixels: {block} (bias {:+.2}% of the mean {block_mean:.4})",
+        on_block.iter().filter(|b| **b).count(),
+        100.0 * block.bias / block_mean
+    );
     assert!(shadow > 0.05, "the reference sees the block's shadow: {shadow}");
     assert!(shade.bias.abs() < 0.025 * mean, "bias {} of mean {mean}", shade.bias);
     assert!(shade.relmse < 0.02, "relMSE {}", shade.relmse);
@@ -202,4 +211,20 @@ pub fn a_lanterns_light_reaches_the_floor_through_the_gi_cache() {
     assert!(dark < 1e-6, "no light before the lantern: {dark}");
     assert!(half <= 4, "half the lantern's light shows by frame {half}");
     assert!((settled / truth - 1.0).abs() < 0.15, "settled {settled} vs reference {truth}");
+}
+
+/// Pixels whose camera ray meets one of the world's saved objects before the world.
+fn block_pixels(world: &VoxelWorld, view: &CameraView, w: u32, h: u32) -> Vec<bool> {
+    use glowbrick::reference::objects::ReferenceObjects;
+    use glowbrick::world::{camera_ray, trace, view_transform, world_from_clip};
+    let objects = ReferenceObjects::of(world).unwrap();
+    let transform = view_transform(view);
+    let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
+    (0..w * h)
+        .map(|i| {
+            let ray = camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h);
+            let limit = trace(&world.grid, &ray, f32::INFINITY).map_or(f32::INFINITY, |hit| hit.distance);
+            objects.trace(&ray, limit).is_some()
+        })
+        .collect()
 }
