@@ -18,6 +18,16 @@
     WORK_STATIC, WORK_DYNAMIC}
 #import glowbrick::gi::direct::direct_at
 
+// The indirect light a hit face's entry holds (last frame's filtered value), or `fallback` (the shooting entry's
+// own) where it has none yet or no room in a full table: counted as borrowed.
+fn incoming_at(slot: u32, fallback: vec3<f32>) -> vec3<f32> {
+    if slot != NOT_FOUND && gi_entries[slot].samples > 0u {
+        return gi_filtered[slot].rgb;
+    }
+    borrowed++;
+    return fallback;
+}
+
 // Light arriving along a ray that hit (voxel, face) at `point`: the hit face's direct light, with bounces on its
 // cached indirect light (last frame's filtered value: stable while this pass writes), and in sun-and-sky mode
 // its emission. With emitter lighting the emission is left out: the shading passes' light sampling already
@@ -56,13 +66,7 @@ fn hit_radiance(point: vec3<f32>, face: u32, level: u32, seen: bool, fallback: v
         // A hit face without a value yet (or no room for it in a full table) borrows the shooting entry's own
         // indirect light: nearby surfaces of a room see similar indirect light, and leaving it out would
         // darken every later bounce.
-        var incoming = fallback;
-        if slot != NOT_FOUND && gi_entries[slot].samples > 0u {
-            incoming = gi_filtered[slot].rgb;
-        } else {
-            borrowed++;
-        }
-        radiance += m.albedo.rgb * incoming;
+        radiance += m.albedo.rgb * incoming_at(slot, fallback);
     }
     return radiance;
 }
@@ -84,13 +88,7 @@ fn object_hit_radiance(hit: Hit, point: vec3<f32>, seen: bool, fallback: vec3<f3
         } else {
             slot = gi_find(hit.voxel, hit.face, hit.object, 0u);
         }
-        var incoming = fallback;
-        if slot != NOT_FOUND && gi_entries[slot].samples > 0u {
-            incoming = gi_filtered[slot].rgb;
-        } else {
-            borrowed++;
-        }
-        radiance += m.albedo.rgb * incoming;
+        radiance += m.albedo.rgb * incoming_at(slot, fallback);
     }
     return radiance;
 }

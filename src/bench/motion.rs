@@ -208,6 +208,25 @@ fn largest(frames: &[MotionFrame], f: impl Fn(&MotionFrame) -> Option<f64>) -> f
     frames.iter().filter_map(f).fold(0.0, |a, b| if b.abs() > a.abs() { b } else { a })
 }
 
+/// A table row over one region of every frame (pixels, raw and denoised metrics there), averaged over the path.
+fn region_row(
+    f: &[MotionFrame],
+    name: &str,
+    region: impl Fn(&MotionFrame) -> (usize, Option<Metrics>, Option<Metrics>),
+) -> String {
+    let pixels = mean_of(f, |m| Some(region(m).0 as f64));
+    let raw = |pick: fn(Metrics) -> f64| mean_of(f, |m| region(m).1.map(pick));
+    let denoised = |pick: fn(Metrics) -> f64| mean_of(f, |m| region(m).2.map(pick));
+    format!(
+        "| path, {name} (mean {pixels:.0} a frame) | {:.4} | {:.4} | {:.1}x | {:.5} | {:.5} |\n",
+        raw(|t| t.relmse),
+        denoised(|t| t.relmse),
+        raw(|t| t.relmse) / denoised(|t| t.relmse).max(1e-12),
+        raw(|t| t.mae),
+        denoised(|t| t.mae)
+    )
+}
+
 /// The markdown section.
 pub fn motion_markdown(run: &MotionRun) -> String {
     let f = &run.frames;
@@ -238,24 +257,8 @@ pub fn motion_markdown(run: &MotionRun) -> String {
         mean_of(f, |m| Some(m.raw.mae)),
         mean_of(f, |m| Some(m.denoised.mae))
     );
-    text += &format!(
-        "| path, trail pixels (mean {:.0} a frame) | {:.4} | {:.4} | {:.1}x | {:.5} | {:.5} |\n",
-        mean_of(f, |m| Some(m.trail_pixels as f64)),
-        mean_of(f, |m| m.raw_trail.map(|t| t.relmse)),
-        mean_of(f, |m| m.denoised_trail.map(|t| t.relmse)),
-        mean_of(f, |m| m.raw_trail.map(|t| t.relmse)) / mean_of(f, |m| m.denoised_trail.map(|t| t.relmse)).max(1e-12),
-        mean_of(f, |m| m.raw_trail.map(|t| t.mae)),
-        mean_of(f, |m| m.denoised_trail.map(|t| t.mae))
-    );
-    text += &format!(
-        "| path, the block's pixels (mean {:.0} a frame) | {:.4} | {:.4} | {:.1}x | {:.5} | {:.5} |\n",
-        mean_of(f, |m| Some(m.block_pixels as f64)),
-        mean_of(f, |m| m.raw_block.map(|t| t.relmse)),
-        mean_of(f, |m| m.denoised_block.map(|t| t.relmse)),
-        mean_of(f, |m| m.raw_block.map(|t| t.relmse)) / mean_of(f, |m| m.denoised_block.map(|t| t.relmse)).max(1e-12),
-        mean_of(f, |m| m.raw_block.map(|t| t.mae)),
-        mean_of(f, |m| m.denoised_block.map(|t| t.mae))
-    );
+    text += &region_row(f, "trail pixels", |m| (m.trail_pixels, m.raw_trail, m.denoised_trail));
+    text += &region_row(f, "the block's pixels", |m| (m.block_pixels, m.raw_block, m.denoised_block));
     let block_mean = mean_of(f, |m| (m.block_pixels > 0).then_some(m.block_mean));
     text += &format!(
         "\nOn the block (reference mean {block_mean:.4}), the mean signed error of the frames: raw {:+.2}%, denoised \

@@ -167,13 +167,19 @@ pub fn point_lights_give_hard_shadows_and_area_lights_converge() {
     assert!(point_dark > 4 * area_dark.max(1), "point lights cut hard shadows: {point_dark} vs {area_dark} pixels");
 }
 
-pub fn without_lights_no_restir_pass_runs() {
+/// A white floor without a light, the lamp material to place on it, and a camera looking down.
+fn bare_floor() -> (VoxelWorld, u16, CameraView) {
     let mut palette = Palette::new(vec![]);
     let white = palette.push(Material::solid("white", [0.8, 0.8, 0.8]));
     let lamp = palette.push(Material::emissive("lamp", [0.9; 3], [1.0; 3], 5.0));
     let mut world = VoxelWorld::new(UVec3::splat(16), palette);
     world.grid.fill_box(IVec3::ZERO, IVec3::new(16, 1, 16), white).unwrap();
     let top = view("top", [8.0, 12.0, 8.0], [0.1, -1.0, 0.1]);
+    (world, lamp, top)
+}
+
+pub fn without_lights_no_restir_pass_runs() {
+    let (world, lamp, top) = bare_floor();
     let mut renderer = restir(&world, &top, &["lighting=restir"]);
     let image = renderer.render(4).unwrap();
     assert!(image.pixels.iter().all(|p| p[0] == 0.0), "no light, no sky in this mode: black");
@@ -199,12 +205,7 @@ pub fn without_lights_no_restir_pass_runs() {
 /// primary pass used to shade with alpha 1 there, which the soak counted as reservoirs reset for a non-finite field
 /// (its 10,000-frame run "found" 118,926 of them after frame 3,000). Without lights the view shows empty reservoirs.
 pub fn the_reservoir_view_of_a_world_without_lights_shows_empty_reservoirs() {
-    let mut palette = Palette::new(vec![]);
-    let white = palette.push(Material::solid("white", [0.8, 0.8, 0.8]));
-    let lamp = palette.push(Material::emissive("lamp", [0.9; 3], [1.0; 3], 5.0));
-    let mut world = VoxelWorld::new(UVec3::splat(16), palette);
-    world.grid.fill_box(IVec3::ZERO, IVec3::new(16, 1, 16), white).unwrap();
-    let top = view("top", [8.0, 12.0, 8.0], [0.1, -1.0, 0.1]);
+    let (world, lamp, top) = bare_floor();
     let mut renderer = restir(&world, &top, &["lighting=restir", "gi=on", "debug=reservoir"]);
     let empty = renderer.render(2).unwrap();
     assert!(empty.pixels.iter().all(|p| *p == [0.0; 4]), "no light: every reservoir empty, none reset");
