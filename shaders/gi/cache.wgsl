@@ -35,7 +35,7 @@ struct GiEntry {
     face: u32,
     // Frame it was last needed (seen by the camera, or hit by another entry's ray).
     last_used: u32,
-    // Edit epoch its static hits were traced at; NEVER_TRACED before the first trace.
+    // Edit epoch its static hits were traced at; NEVER_TRACED before the first trace, LOST_FACE to be freed.
     traced_epoch: u32,
     // Frames blended so far (sets the blend weight of young entries); 0 = no value yet.
     samples: u32,
@@ -57,6 +57,8 @@ const UPDATE_AGE: u32 = 16u;
 const MAX_AGE: u32 = 240u;
 
 const NEVER_TRACED: u32 = 0xFFFFFFFFu;
+// A coarse entry whose inserting face an edit removed (refresh.wgsl): the next compaction frees it.
+const LOST_FACE: u32 = 0xFFFFFFFEu;
 const MAX_PROBES: u32 = 16u;
 // A cached hit: bits 0-2 the face hit (MISS_FACE: left the world), bits 3-31 the distance in 1/256 voxels.
 const MISS_FACE: u32 = 7u;

@@ -1,14 +1,15 @@
 // GI cache work lists, one thread per slot of both tables, first of the GI passes: ages each entry (frees one
-// unused for MAX_AGE frames or whose moving object is gone; clears a tombstone that ends its chain) and appends
-// every entry due this frame to its table's list. The refresh, update and filter passes then run one thread per
-// listed entry by indirect dispatch, so their SIMD lanes all hold work (a live entry is 12-26% of the slots, at
-// hash-random places). Counts are summed per workgroup and added to memory once per workgroup.
+// unused for MAX_AGE frames, whose moving object is gone or whose face was lost; clears a tombstone that ends its
+// chain) and appends every entry due this frame to its table's list. The refresh, update and filter passes then
+// run one thread per listed entry by indirect dispatch, so their SIMD lanes all hold work (a live entry is 12-26%
+// of the slots, at hash-random places). Counts are summed per workgroup and added to memory once per workgroup.
 
 #import glowbrick::world::{object_index, object_count}
 #import glowbrick::counters::counters
-#import glowbrick::constants::{COUNT_GI_LIVE, COUNT_GI_EVICTED, COUNT_GI_UPDATED}
-#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_work, gi_list, used_within, is_live_key, is_surface, next_slot,
-    UPDATE_AGE, MAX_AGE, FREED_KEY, EMPTY_KEY, WORK_STATIC, WORK_DYNAMIC, WORK_COUNT}
+#import glowbrick::constants::{COUNT_GI_LIVE, COUNT_GI_EVICTED, COUNT_GI_UPDATED,
+    COUNT_GI_FREED_TOTAL}
+#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_work, gi_list, used_within, is_live_key, next_slot,
+    UPDATE_AGE, MAX_AGE, LOST_FACE, FREED_KEY, EMPTY_KEY, WORK_STATIC, WORK_DYNAMIC, WORK_COUNT}
 
 var<workgroup> due_in_group: atomic<u32>;
 var<workgroup> live_in_group: atomic<u32>;
@@ -33,10 +34,9 @@ fn age_entry(slot: u32) -> bool {
     let e = gi_entries[slot];
     // Only a moving object's entry looks its object up (a scan of the object list).
     let gone = e.object != 0u && object_index(e.object) == object_count();
-    // A coarse entry stays in use while any face of its cell is hit, but its rays start from the face that
-    // inserted it: once an edit removes that face, free it (the next hit inserts it again from a face that
-    // exists). A fine entry whose face went is simply no longer touched.
-    let lost_face = e.level > 0u && !is_surface(e.voxel, e.face);
+    // A coarse entry whose inserting face went (marked by refresh.wgsl, which reads the grid: reading it here
+    // leaked host memory on lavapipe, about 0.5 MiB a frame, see docs/bench/stress.md).
+    let lost_face = e.traced_epoch == LOST_FACE;
     if !used_within(e.last_used, MAX_AGE) || gone || lost_face {
         // A tombstone, not an empty slot: entries inserted further along the chain stay reachable.
         atomicStore(&gi_keys[slot], FREED_KEY);
@@ -77,7 +77,9 @@ fn compact(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocati
         // The dispatch size: counts only grow, so the largest workgroup count any group saw is the final one.
         atomicMax(&gi_work[work], (start + count + 63u) / 64u);
         atomicAdd(&counters[COUNT_GI_LIVE], atomicLoad(&live_in_group));
-        atomicAdd(&counters[COUNT_GI_EVICTED], atomicLoad(&evicted_in_group));
+        let evicted = atomicLoad(&evicted_in_group);
+        atomicAdd(&counters[COUNT_GI_EVICTED], evicted);
+        atomicAdd(&counters[COUNT_GI_FREED_TOTAL], evicted);
         atomicAdd(&counters[COUNT_GI_UPDATED], count);
     }
     workgroupBarrier();

@@ -5,7 +5,8 @@
 #import glowbrick::world::world_info
 #import glowbrick::traversal::{trace, box_entry, INF}
 #import glowbrick::gi::cache::{gi, gi_entries, gi_rays, gi_edits, gi_direct, GiEntry, listed_slot, ray_direction,
-    ray_origin, slot_seed, encode_hit, hit_face, hit_distance, NEVER_TRACED, MISS_FACE, NOT_FOUND, WORK_STATIC}
+    ray_origin, slot_seed, encode_hit, hit_face, hit_distance, is_surface, NEVER_TRACED, LOST_FACE, MISS_FACE, NOT_FOUND,
+    WORK_STATIC}
 #import glowbrick::gi::direct::update_direct
 #import glowbrick::counters::counters
 #import glowbrick::constants::{GI_CACHE, COUNT_GI_RETRACED, COUNT_GI_RAYS_TRACED}
@@ -105,6 +106,14 @@ fn refresh_static(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let e = gi_entries[slot];
+    // A coarse entry stays in use while any face of its cell is hit, but its rays start from the face that
+    // inserted it: once an edit removes that face, mark it for the next compaction to free (the next hit inserts
+    // it again from a face that exists; until then it keeps its value). A fine entry whose face went is simply
+    // no longer touched.
+    if e.level > 0u && !is_surface(e.voxel, e.face) {
+        gi_entries[slot].traced_epoch = LOST_FACE;
+        return;
+    }
     if (gi.flags & GI_CACHE) != 0u && refresh(slot, e, ray_origin(e.voxel, e.face, vec3(0.0))) > 0u {
         // What it blended so far saw the old world: start over, its direct light too (an edit reached it).
         gi_entries[slot].samples = 0u;

@@ -212,10 +212,12 @@ pub enum GpuCounter {
     ReservoirResets = 9,
     /// Since the start: GI estimates that came out non-finite (replaced by zero).
     GiResets = 10,
+    /// Since the start: GI entries freed (unused, their object gone, or their face lost to an edit).
+    GiFreedTotal = 11,
 }
 
 impl GpuCounter {
-    pub const ALL: [(GpuCounter, &'static str); 11] = [
+    pub const ALL: [(GpuCounter, &'static str); 12] = [
         (GpuCounter::GiUpdated, "COUNT_GI_UPDATED"),
         (GpuCounter::GiRetraced, "COUNT_GI_RETRACED"),
         (GpuCounter::GiLive, "COUNT_GI_LIVE"),
@@ -227,6 +229,7 @@ impl GpuCounter {
         (GpuCounter::GiDirectTraced, "COUNT_GI_DIRECT_TRACED"),
         (GpuCounter::ReservoirResets, "COUNT_RESERVOIR_RESETS"),
         (GpuCounter::GiResets, "COUNT_GI_RESETS"),
+        (GpuCounter::GiFreedTotal, "COUNT_GI_FREED_TOTAL"),
     ];
 }
 
@@ -234,7 +237,7 @@ impl GpuCounter {
 pub const COUNTERS: usize = 16;
 pub const PER_FRAME_COUNTERS: usize = 9;
 const _: () = assert!(GpuCounter::GiDirectTraced as usize + 1 == PER_FRAME_COUNTERS);
-const _: () = assert!((GpuCounter::GiResets as usize) < COUNTERS);
+const _: () = assert!((GpuCounter::GiFreedTotal as usize) < COUNTERS);
 
 /// `restir_flags` bits.
 pub const RESTIR_TEMPORAL: u32 = 1;

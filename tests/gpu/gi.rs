@@ -373,3 +373,33 @@ pub fn an_opened_doorway_lights_the_far_side_within_thirty_frames() {
     );
     assert!(within <= 30, "the indirect light beyond a new doorway is within 5% by frame {within}");
 }
+
+/// A coarse entry (a cell of 2^level voxels' faces of one orientation, away from the camera) starts its rays from
+/// the face that inserted it. An edit that covers that face frees it within a few frames (refresh.wgsl marks it,
+/// the next compaction frees it) and the next hit inserts it again from a face that exists; a still world frees
+/// nothing so soon (an entry lives 240 frames unused). The covering layer keeps the floor's cells in use: its top
+/// lies in the same coarse cells as the old one. Counted since the start, as a readback may span frames.
+pub fn a_coarse_entry_whose_face_an_edit_covers_is_freed_and_inserted_again() {
+    let (world, view) = walled_floor();
+    let freed_after = |edit: Option<Edit>| -> (u32, u32) {
+        let mut r = renderer(&world, &view, &["lighting=nee", "gi=on"]);
+        r.render(16).unwrap();
+        let before = r.counters().unwrap()[GpuCounter::GiFreedTotal as usize];
+        if let Some(edit) = edit {
+            r.app_mut().world_mut().write_message(EditRequest::player(edit));
+        }
+        r.render(6).unwrap();
+        let after = r.counters().unwrap();
+        (after[GpuCounter::GiFreedTotal as usize] - before, after[GpuCounter::GiLive as usize])
+    };
+    // One layer over the floor on the lamp's side of the wall, where cache rays arrive coarse.
+    let cover = Edit::FillBox { min: IVec3::new(0, 1, 0), max: IVec3::new(19, 1, 15), material: 1 };
+    let (freed, live) = freed_after(Some(cover));
+    let (still_freed, still_live) = freed_after(None);
+    eprintln!(
+        "after covering the floor: {freed} entries freed, {live} live; still world: {still_freed} freed, {still_live} live"
+    );
+    assert_eq!(still_freed, 0, "a still world frees no entry within 24 frames");
+    assert!(freed > 10, "coarse entries whose face was covered are freed: {freed}");
+    assert!(live + 20 >= still_live, "and inserted again from faces that exist: {live} live against {still_live}");
+}
