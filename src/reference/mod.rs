@@ -3,11 +3,13 @@
 //! - Primary rays go through pixel centres, exactly as `shaders/primary.wgsl` casts them, so reference and GPU
 //!   images agree on geometry pixel for pixel and errors measure lighting only. The camera hit is traced once per
 //!   pixel, not once per sample.
-//! - Direct light: resampled importance sampling (Talbot 2005) over `candidates` lights drawn by power (alias
-//!   table), each at a uniform point on a cube face that sees the shading point, with the unshadowed contribution
-//!   as the target; one shadow ray for the chosen one (visible when the first hit lies in the light's cube).
-//!   Unbiased because the target is non-zero wherever the shadowed contribution is; on 10^3-10^6 lights it spends
-//!   the shadow ray on a light that is near and facing, not on one picked by power alone.
+//! - Direct light: resampled importance sampling (Talbot 2005) over `candidates` lights, half drawn by power (alias
+//!   table) and half uniformly from the lights near the shading point (`nearby`), each weighed by the mixture's
+//!   density, at a point of a cube face that sees the shading point (uniform in area, or in solid angle for a
+//!   near face, `spherical_rect`), with the unshadowed contribution as the target; one shadow ray for the chosen
+//!   one (visible when the first hit lies in the light's cube). Unbiased because the target is non-zero wherever
+//!   the shadowed contribution is and the power pick reaches every light; on 10^3-10^6 lights it spends the
+//!   shadow ray on a light that is near and facing, not on one picked by power alone.
 //! - Indirect light (`bounces` > 0): cosine-sampled diffuse bounces with next-event estimation at every vertex;
 //!   emission is counted only at the camera hit and through next-event estimation, never twice.
 //! - Lighting is the emitters only (the thesis' convention: a primary miss is black), or with `daylight` also the
@@ -21,8 +23,10 @@
 
 pub mod flip;
 pub mod metrics;
+pub mod nearby;
 pub mod objects;
 pub mod sampling;
+pub mod spherical_rect;
 
 use crate::colour::luminance;
 use crate::image_io::LinearImage;
@@ -33,6 +37,7 @@ use crate::world::traversal::RAY_OFFSET;
 use crate::world::{CameraView, Hit, Ray, VoxelWorld, trace};
 use crate::world::{camera_ray, view_transform, world_from_clip};
 use bevy::math::{UVec2, Vec3};
+use nearby::{NearbyLights, Neighbourhood};
 use objects::ReferenceObjects;
 use rayon::prelude::*;
 use sampling::{Pcg, cosine_direction, light_contains, sample_light_point};
@@ -117,6 +122,8 @@ pub struct Scene<'a> {
     pub pool: &'a LightPool,
     pub alias: &'a AliasTable,
     pub objects: &'a ReferenceObjects,
+    /// The lights by place, for the candidates drawn near the shading point.
+    pub nearby: &'a NearbyLights,
 }
 
 impl Scene<'_> {
@@ -132,14 +139,16 @@ impl Scene<'_> {
         rays: &mut u64,
     ) -> Vec3 {
         let candidates = candidates.max(1);
+        let around = self.nearby.around(p);
         let mut chosen: Option<Candidate> = None;
         let mut weight_sum = 0.0f32;
         for _ in 0..candidates {
             // Every draw takes the same numbers whatever happens, so streams stay aligned across settings.
             let r_column = rng.next_u32();
             let u = [rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32()];
+            let u_strategy = rng.next_f32();
             let u_choose = rng.next_f32();
-            let Some((candidate, pdf)) = self.candidate(p, n, r_column, u) else { continue };
+            let Some((candidate, pdf)) = self.candidate(p, n, &around, u_strategy, r_column, u) else { continue };
             let weight = candidate.target / pdf;
             if !(weight.is_finite() && weight > 0.0) {
                 continue;
@@ -161,12 +170,23 @@ impl Scene<'_> {
         Vec3::from(albedo) * chosen.unshadowed * (contribution_weight / std::f32::consts::PI)
     }
 
-    /// One power-drawn light at a uniform point of a face that sees `p`, with its pdf (per unit area) and its
-    /// unshadowed contribution; `None` when it cannot light `p`. `u`: the pick within the alias column, the face,
-    /// and the point on it.
-    fn candidate(&self, p: Vec3, n: Vec3, r_column: u32, u: [f32; 4]) -> Option<(Candidate<'_>, f32)> {
-        let (slot, pick_pdf) = self.alias.sample(r_column, u[0])?;
+    /// One light at a point of a face that sees `p`, with its pdf (per unit area) and its unshadowed
+    /// contribution; `None` when it cannot light `p`. The light is drawn by power, or (half the time, when any
+    /// lies near) uniformly from `around`; its pdf is the mixture's. `u`: the pick within the alias column, the
+    /// face, and the point on it.
+    fn candidate(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        around: &Neighbourhood,
+        u_strategy: f32,
+        r_column: u32,
+        u: [f32; 4],
+    ) -> Option<(Candidate<'_>, f32)> {
+        let near_share = if around.is_empty() { 0.0 } else { 0.5 };
+        let slot = if u_strategy < near_share { around.pick(r_column)? } else { self.alias.sample(r_column, u[0])?.0 };
         let (Some(light), _) = self.pool.slot(slot)? else { return None };
+        let pick_pdf = (1.0 - near_share) * self.nearby.power_pdf(slot) + near_share * around.pdf(light.min);
         let point = sample_light_point(light, p, u[1], u[2], u[3])?;
         let to_light = point.position - p;
         let d2 = to_light.length_squared();
@@ -297,7 +317,8 @@ pub fn render_reference(
     let mut pool = LightPool::from_world(world);
     let alias = pool.alias().clone();
     let objects = ReferenceObjects::of(world)?;
-    let scene = Scene { world, pool: &pool, alias: &alias, objects: &objects };
+    let nearby = NearbyLights::of(&pool, &alias);
+    let scene = Scene { world, pool: &pool, alias: &alias, objects: &objects, nearby: &nearby };
     let transform = view_transform(view);
     let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
     // Camera hits once per pixel: every sample of a pixel shades the same point. A miss sees the background.

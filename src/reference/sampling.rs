@@ -1,6 +1,8 @@
 //! Random numbers and sampling for the CPU reference: a PCG stream per (pixel, sample), cosine-weighted
-//! hemisphere directions, and uniform points on the faces of a light's cube that face the shading point.
+//! hemisphere directions, and points on the faces of a light's cube that face the shading point (uniform in
+//! area, or in solid angle for a face close to it).
 
+use super::spherical_rect::SphericalRect;
 use crate::lights::Light;
 pub use crate::lights::daylight::frame;
 use bevy::math::{IVec3, Vec3};
@@ -46,9 +48,14 @@ pub struct LightPoint {
     pub pdf_area: f32,
 }
 
-/// Chooses uniformly one of the cube faces whose front side sees `p` and that touch air, then a uniform point on
-/// it. A face that cannot see `p` or is buried contributes nothing, so leaving it out keeps the estimator unbiased. `None` when `p` is inside
-/// the cube's slab on every axis (it is then inside the light).
+/// Within this many face sizes of a face's centre, its point is drawn by solid angle instead of area.
+const NEAR_FACE: f32 = 4.0;
+
+/// Chooses uniformly one of the cube faces whose front side sees `p` and that touch air, then a point on it:
+/// uniform in area, or uniform in the solid angle it subtends when `p` is near it (whose estimate stays bounded
+/// where area sampling's cos cos / d^2 does not). Both are unbiased, and which one is used depends only on `p` and
+/// the face. A face that cannot see `p` or is buried contributes nothing, so leaving it out keeps the estimator
+/// unbiased. `None` when `p` is inside the cube's slab on every axis (it is then inside the light).
 pub fn sample_light_point(light: &Light, p: Vec3, u_face: f32, u: f32, v: f32) -> Option<LightPoint> {
     let lo = light.min.as_vec3();
     let size = light.size as f32;
@@ -70,12 +77,28 @@ pub fn sample_light_point(light: &Light, p: Vec3, u_face: f32, u: f32, v: f32) -
     }
     let (axis, sign) = faces[((u_face * count as f32) as usize).min(count - 1)];
     let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
-    let mut position = Vec3::ZERO;
-    position[axis] = if sign > 0.0 { hi[axis] } else { lo[axis] };
-    position[a] = lo[a] + u * size;
-    position[b] = lo[b] + v * size;
+    let mut corner = lo;
+    corner[axis] = if sign > 0.0 { hi[axis] } else { lo[axis] };
     let mut normal = Vec3::ZERO;
     normal[axis] = sign;
+    let (mut edge_a, mut edge_b) = (Vec3::ZERO, Vec3::ZERO);
+    edge_a[a] = size;
+    edge_b[b] = size;
+    let centre = corner + 0.5 * (edge_a + edge_b);
+    if p.distance(centre) < NEAR_FACE * size
+        && let Some(rect) = SphericalRect::new(p, corner, edge_a, edge_b)
+    {
+        let position = rect.sample(u, v);
+        let to_point = position - p;
+        let d2 = to_point.length_squared() as f64;
+        let cos_light = (-normal.dot(to_point)) as f64 / d2.sqrt();
+        // The solid-angle density in area measure: cos / (d^2 x solid angle).
+        let pdf_area = cos_light / (d2 * rect.solid_angle * count as f64);
+        return Some(LightPoint { position, normal, pdf_area: pdf_area as f32 });
+    }
+    let mut position = corner;
+    position[a] = lo[a] + u * size;
+    position[b] = lo[b] + v * size;
     Some(LightPoint { position, normal, pdf_area: 1.0 / (count as f32 * size * size) })
 }
 

@@ -4,6 +4,7 @@
 use bevy::math::{IVec3, UVec3, Vec3};
 use glowbrick::lights::daylight::Daylight;
 use glowbrick::lights::{AliasTable, LightPool};
+use glowbrick::reference::nearby::NearbyLights;
 use glowbrick::reference::sampling::Pcg;
 use glowbrick::reference::{ReferenceOptions, Scene, SurfaceHit, render_reference};
 use glowbrick::settings::{Lighting, RenderSettings};
@@ -52,8 +53,20 @@ fn an_open_floor_reflects_exactly_the_sky_and_the_disk() {
     let (bare, world) = (bare_floor(), open_floor());
     let pool = LightPool::from_world(&world);
     let alias = AliasTable::default();
-    let open = Scene { world: &bare, pool: &pool, alias: &alias, objects: &Default::default() };
-    let scene = Scene { world: &world, pool: &pool, alias: &alias, objects: &Default::default() };
+    let open = Scene {
+        world: &bare,
+        pool: &pool,
+        alias: &alias,
+        objects: &Default::default(),
+        nearby: &NearbyLights::of(&pool, &alias),
+    };
+    let scene = Scene {
+        world: &world,
+        pool: &pool,
+        alias: &alias,
+        objects: &Default::default(),
+        nearby: &NearbyLights::of(&pool, &alias),
+    };
     let options = ReferenceOptions { daylight: Some(uniform_sky(0.5, 2.0)), bounces: 0, ..Default::default() };
     // In the open, every cosine ray leaves the world and the disk is unoccluded: each sample is exact,
     // albedo x (sky + disk x cos), with cos within the disk's tiny cone of 1.
