@@ -178,6 +178,58 @@ fn face_solid_angle(p: vec3<f32>, lo: vec3<f32>, size: f32, face: u32) -> f32 {
     return triangle_solid_angle(v0, v1, v2) + triangle_solid_angle(v0, v2, v3);
 }
 
+// Within this many face sizes of a face's centre, a candidate's point is drawn by solid angle, not by area.
+const NEAR_FACE: f32 = 4.0;
+
+// A point of face `face` of the cube [lo, lo + size]^3 drawn uniformly in the solid angle the face subtends from
+// p (the spherical-rectangle parametrisation of Urena, Fajardo and King 2013), as (u, v) on the face, with that
+// solid angle; solid angle 0 when it is too small to sample this way in f32. Beside a lamp lying on the floor a
+// uniform point on its side face weighs cos cos / d^2, unbounded (fireflies that temporal reuse keeps); drawn by
+// solid angle the weight is the receiver's cosine times the solid angle. src/reference/spherical_rect.rs is the
+// CPU twin.
+struct FaceSample {
+    uv: vec2<f32>,
+    solid_angle: f32,
+}
+
+fn sample_face_solid_angle(p: vec3<f32>, lo: vec3<f32>, size: f32, face: u32, u: vec2<f32>) -> FaceSample {
+    let axis = face / 2u;
+    var corner = lo - p;
+    corner[axis] += select(0.0, size, (face & 1u) == 0u);
+    // The face's frame: x and y along its two other axes, z away from p so the face lies at z = z0 < 0.
+    let z0 = -abs(corner[axis]);
+    let x0 = corner[(axis + 1u) % 3u];
+    let y0 = corner[(axis + 2u) % 3u];
+    let x1 = x0 + size;
+    let y1 = y0 + size;
+    let n0 = normalize(vec3(0.0, z0, -y0));
+    let n1 = normalize(vec3(-z0, 0.0, x1));
+    let n2 = normalize(vec3(0.0, -z0, y1));
+    let n3 = normalize(vec3(z0, 0.0, -x0));
+    let g0 = acos(clamp(-dot(n0, n1), -1.0, 1.0));
+    let g1 = acos(clamp(-dot(n1, n2), -1.0, 1.0));
+    let g2 = acos(clamp(-dot(n2, n3), -1.0, 1.0));
+    let g3 = acos(clamp(-dot(n3, n0), -1.0, 1.0));
+    let k = 2.0 * PI - g2 - g3;
+    let solid_angle = g0 + g1 - k;
+    if !(solid_angle > 1e-4) || !finite(solid_angle) {
+        return FaceSample(vec2(0.0), 0.0);
+    }
+    let b0 = n0.z;
+    let b1 = n2.z;
+    let au = u.x * solid_angle + k;
+    let fu = (cos(au) * b0 - b1) / sin(au);
+    let cu = clamp(select(-1.0, 1.0, fu > 0.0) * inverseSqrt(fu * fu + b0 * b0), -1.0, 1.0);
+    let xu = clamp(-(cu * z0) * inverseSqrt(max(1.0 - cu * cu, 1e-12)), x0, x1);
+    let d = sqrt(xu * xu + z0 * z0);
+    let h0 = y0 * inverseSqrt(d * d + y0 * y0);
+    let h1 = y1 * inverseSqrt(d * d + y1 * y1);
+    let hv = h0 + u.y * (h1 - h0);
+    let yv = select(y1, clamp(hv * d * inverseSqrt(max(1.0 - hv * hv, 1e-12)), y0, y1), hv * hv < 1.0 - 1e-6);
+    let uv = clamp(vec2((xu - x0) / size, (yv - y0) / size), vec2(0.0), vec2(1.0));
+    return FaceSample(uv, solid_angle);
+}
+
 struct Candidate {
     r: Reservoir,
     // Source pdf in the sample's measure (area or per light).
@@ -186,7 +238,8 @@ struct Candidate {
 }
 
 // One candidate: a light from the alias table (power or uniform), then, in area mode, one of the exposed faces
-// that see the shading point in proportion to its exact solid angle and a uniform point on it; in point mode the centre.
+// that see the shading point in proportion to its exact solid angle and a point on it (uniform in area, or in
+// solid angle when the face is near); in point mode the centre.
 fn sample_candidate(x: Shading, rng: ptr<function, Rng>) -> Candidate {
     var c = Candidate(empty_reservoir(), 0.0, 0.0);
     let picked = pick_light(scene.light_count, scene.power_pick == 1u, rng_next_u32(rng), rng_next(rng));
@@ -239,8 +292,21 @@ fn sample_candidate(x: Shading, rng: ptr<function, Rng>) -> Candidate {
             }
         }
         c.r.face = faces[chosen];
-        // Quantise first so the pdf and target are those of the point actually stored.
-        c.pdf = picked.pdf * (omega[chosen] / total) / (size * size);
+        let face_pdf = picked.pdf * (omega[chosen] / total);
+        c.pdf = face_pdf / (size * size);
+        let centre = light_point(light, c.r.face, vec2(0.5));
+        if distance(x.point, centre) < NEAR_FACE * size {
+            let near = sample_face_solid_angle(x.point, lo, size, c.r.face, uv);
+            if near.solid_angle > 0.0 {
+                // Quantise first so the pdf and target are those of the point actually stored.
+                c.r.uv = pack2x16unorm(near.uv);
+                let to_point = light_point(light, c.r.face, unpack2x16unorm(c.r.uv)) - x.point;
+                let d2 = dot(to_point, to_point);
+                let cos_light = -dot(face_normal(c.r.face), to_point) * inverseSqrt(d2);
+                // Uniform in solid angle, per unit area: cos / (d^2 x solid angle).
+                c.pdf = face_pdf * max(cos_light, 0.0) / (d2 * near.solid_angle);
+            }
+        }
     }
     c.target_value = luminance(unshadowed(x, light, c.r.face, unpack2x16unorm(c.r.uv)));
     return c;

@@ -216,13 +216,14 @@ fn cached_seeded_reference(
     let defaults = ReferenceOptions::default();
     // The estimator's version is part of the key: a cached image from another estimator is not reused.
     let key = format!(
-        "{}|{:?}|{}x{}|{}spp|{light}|seed{seed}|ris{}",
+        "{}|{:?}|{}x{}|{}spp|{light}|seed{seed}|ris{}|v{}",
         world_to_string(world),
         view,
         config.width,
         config.height,
         config.reference_spp,
-        defaults.candidates
+        defaults.candidates,
+        crate::reference::ESTIMATOR_VERSION
     );
     let path = cache_dir().join(format!("{:016x}.exr", fnv1a(key.as_bytes())));
     if let Ok(image) = read_image(&path)

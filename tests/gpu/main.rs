@@ -63,6 +63,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             a_single_light_behind_a_one_voxel_hole,
             emission_over_eight_decades_in_one_scene,
             lights_embedded_in_the_surface_the_camera_sees,
+            lamps_lying_on_a_floor,
         ],
         gi: [
             a_glowing_object_behind_a_wall_does_not_leak_through_it,
