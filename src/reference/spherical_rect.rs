@@ -57,7 +57,8 @@ impl SphericalRect {
         let (g0, g1, g2, g3) = (angle(n0, n1), angle(n1, n2), angle(n2, n3), angle(n3, n0));
         let k = TAU - g2 - g3;
         let solid_angle = g0 + g1 - k;
-        if !(solid_angle > 1e-12) {
+        // NaN fails this test too.
+        if solid_angle.is_nan() || solid_angle <= 1e-12 {
             return None;
         }
         Some(SphericalRect { origin, x, y, z, z0, x0, x1, y0, y1, b0: n0.z, b1: n2.z, k, solid_angle })
