@@ -57,7 +57,8 @@ pub struct ReferenceOptions {
     /// Diffuse bounces after the camera hit (0 = direct light only).
     pub bounces: u32,
     pub seed: u64,
-    /// Lights resampled per shadow ray (1 = plain next-event estimation by power).
+    /// Lights resampled per shadow ray (1 = plain next-event estimation by power, uniform points on the faces:
+    /// the GPU's NEE).
     pub candidates: u32,
     /// Stop early (after a whole batch of samples) when this much time has passed.
     pub time_budget: Option<Duration>,
@@ -143,7 +144,9 @@ impl Scene<'_> {
         rays: &mut u64,
     ) -> Vec3 {
         let candidates = candidates.max(1);
-        let around = self.nearby.around(p);
+        // One candidate is plain next-event estimation, the GPU's NEE: a light by power, a uniform point on a face.
+        let plain = candidates == 1;
+        let around = if plain { Neighbourhood::EMPTY } else { self.nearby.around(p) };
         let mut chosen: Option<Candidate> = None;
         let mut weight_sum = 0.0f32;
         for _ in 0..candidates {
@@ -152,7 +155,9 @@ impl Scene<'_> {
             let u = [rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32()];
             let u_strategy = rng.next_f32();
             let u_choose = rng.next_f32();
-            let Some((candidate, pdf)) = self.candidate(p, n, &around, u_strategy, r_column, u) else { continue };
+            let Some((candidate, pdf)) = self.candidate(p, n, &around, !plain, u_strategy, r_column, u) else {
+                continue;
+            };
             let weight = candidate.target / pdf;
             if !(weight.is_finite() && weight > 0.0) {
                 continue;
@@ -183,6 +188,7 @@ impl Scene<'_> {
         p: Vec3,
         n: Vec3,
         around: &Neighbourhood,
+        near_by_solid_angle: bool,
         u_strategy: f32,
         r_column: u32,
         u: [f32; 4],
@@ -191,7 +197,7 @@ impl Scene<'_> {
         let slot = if u_strategy < near_share { around.pick(r_column)? } else { self.alias.sample(r_column, u[0])?.0 };
         let (Some(light), _) = self.pool.slot(slot)? else { return None };
         let pick_pdf = (1.0 - near_share) * self.nearby.power_pdf(slot) + near_share * around.pdf(light.min);
-        let point = sample_light_point(light, p, u[1], u[2], u[3])?;
+        let point = sample_light_point(light, p, near_by_solid_angle, u[1], u[2], u[3])?;
         let to_light = point.position - p;
         let d2 = to_light.length_squared();
         if d2 <= 1e-12 {

@@ -70,6 +70,9 @@ impl NearbyLights {
 }
 
 impl Neighbourhood<'_> {
+    /// No light near: every candidate is drawn by power.
+    pub const EMPTY: Neighbourhood<'static> = Neighbourhood { centre: IVec3::ZERO, lists: [&[]; 27], count: 0 };
+
     pub fn is_empty(&self) -> bool {
         self.count == 0
     }

@@ -54,9 +54,16 @@ const NEAR_FACE: f32 = 4.0;
 /// Chooses uniformly one of the cube faces whose front side sees `p` and that touch air, then a point on it:
 /// uniform in area, or uniform in the solid angle it subtends when `p` is near it (whose estimate stays bounded
 /// where area sampling's cos cos / d^2 does not). Both are unbiased, and which one is used depends only on `p` and
-/// the face. A face that cannot see `p` or is buried contributes nothing, so leaving it out keeps the estimator
+/// the face (`near_by_solid_angle` false: always by area). A face that cannot see `p` or is buried contributes nothing, so leaving it out keeps the estimator
 /// unbiased. `None` when `p` is inside the cube's slab on every axis (it is then inside the light).
-pub fn sample_light_point(light: &Light, p: Vec3, u_face: f32, u: f32, v: f32) -> Option<LightPoint> {
+pub fn sample_light_point(
+    light: &Light,
+    p: Vec3,
+    near_by_solid_angle: bool,
+    u_face: f32,
+    u: f32,
+    v: f32,
+) -> Option<LightPoint> {
     let lo = light.min.as_vec3();
     let size = light.size as f32;
     let hi = lo + Vec3::splat(size);
@@ -85,7 +92,8 @@ pub fn sample_light_point(light: &Light, p: Vec3, u_face: f32, u: f32, v: f32) -
     edge_a[a] = size;
     edge_b[b] = size;
     let centre = corner + 0.5 * (edge_a + edge_b);
-    if p.distance(centre) < NEAR_FACE * size
+    if near_by_solid_angle
+        && p.distance(centre) < NEAR_FACE * size
         && let Some(rect) = SphericalRect::new(p, corner, edge_a, edge_b)
     {
         let position = rect.sample(u, v);

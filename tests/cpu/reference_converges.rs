@@ -69,7 +69,7 @@ fn one_emissive_brick_matches_the_analytic_form_factor() {
 /// A floor point 0.02 voxels from the side of a one-voxel lamp lying on the floor (the `lights-100k` layout):
 /// with uniform area samples the estimate is cos cos / d^2, unbounded there (two 1,024-spp references of that
 /// scene differed by MAE 0.3). The face is sampled by solid angle near the point: every sample is bounded and the
-/// mean matches a numerical integral of the face.
+/// mean matches a numerical integral of the face (area sampling: a standard error 20x this one).
 #[test]
 fn a_point_beside_a_lamp_on_the_floor_converges() {
     let albedo = 0.5;
@@ -106,7 +106,7 @@ fn a_point_beside_a_lamp_on_the_floor_converges() {
     let mut rng = Pcg::new(5, 0);
     let (mut sum, mut sum_sq, mut largest, mut rays) = (0.0f64, 0.0f64, 0.0f64, 0u64);
     for _ in 0..samples {
-        let x = scene.direct_sample(p, Vec3::Y, [albedo; 3], 1, &mut rng, &mut rays)[0] as f64;
+        let x = scene.direct_sample(p, Vec3::Y, [albedo; 3], 4, &mut rng, &mut rays)[0] as f64;
         sum += x;
         sum_sq += x * x;
         largest = largest.max(x);

@@ -49,13 +49,14 @@ fn check_convergence(name: &str) {
     let mean = common::masked(&truth, &keep).mean_luminance();
     eprintln!("{name}: mean {mean:.4}");
     // The default (one ray per neighbour) is unbiased for a still view like `unbiased`; `biased` (no rays) is
-    // darker near shadow edges (-10% cornell, -15% letters at this size).
+    // darker near shadow edges (-8% cornell, -16% letters at this size; -10% / -15% before near faces were
+    // sampled by solid angle).
     let cases: [(&[&str], f64); 5] = [
         (&["reuse=unbiased", "spatial=off"], 0.025),
         (&["reuse=unbiased", "temporal=off"], 0.025),
         (&["reuse=unbiased"], 0.025),
         (&["reuse=one-ray"], 0.025),
-        (&["reuse=biased"], 0.15),
+        (&["reuse=biased"], 0.17),
     ];
     for (pairs, bias_bound) in cases {
         let m = converged(&world, &view, &truth, &keep, pairs);
