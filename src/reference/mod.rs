@@ -152,12 +152,9 @@ impl Scene<'_> {
         for _ in 0..candidates {
             // Every draw takes the same numbers whatever happens, so streams stay aligned across settings.
             let r_column = rng.next_u32();
-            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32()];
-            let u_strategy = rng.next_f32();
+            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32()];
             let u_choose = rng.next_f32();
-            let Some((candidate, pdf)) = self.candidate(p, n, &around, !plain, u_strategy, r_column, u) else {
-                continue;
-            };
+            let Some((candidate, pdf)) = self.candidate(p, n, &around, !plain, r_column, u) else { continue };
             let weight = candidate.target / pdf;
             if !(weight.is_finite() && weight > 0.0) {
                 continue;
@@ -182,19 +179,18 @@ impl Scene<'_> {
     /// One light at a point of a face that sees `p`, with its pdf (per unit area) and its unshadowed
     /// contribution; `None` when it cannot light `p`. The light is drawn by power, or (half the time, when any
     /// lies near) uniformly from `around`; its pdf is the mixture's. `u`: the pick within the alias column, the
-    /// face, and the point on it.
+    /// face, the point on it, and the choice between the two picks.
     fn candidate(
         &self,
         p: Vec3,
         n: Vec3,
         around: &Neighbourhood,
         near_by_solid_angle: bool,
-        u_strategy: f32,
         r_column: u32,
-        u: [f32; 4],
+        u: [f32; 5],
     ) -> Option<(Candidate<'_>, f32)> {
         let near_share = if around.is_empty() { 0.0 } else { 0.5 };
-        let slot = if u_strategy < near_share { around.pick(r_column)? } else { self.alias.sample(r_column, u[0])?.0 };
+        let slot = if u[4] < near_share { around.pick(r_column)? } else { self.alias.sample(r_column, u[0])?.0 };
         let (Some(light), _) = self.pool.slot(slot)? else { return None };
         let pick_pdf = (1.0 - near_share) * self.nearby.power_pdf(slot) + near_share * around.pdf(light.min);
         let point = sample_light_point(light, p, near_by_solid_angle, u[1], u[2], u[3])?;
