@@ -131,6 +131,28 @@ pub struct Scene<'a> {
     pub nearby: &'a NearbyLights,
 }
 
+/// The light pool as the reference samples it: the pool, its alias table (power picks) and the lights by place.
+pub struct ReferenceLights {
+    pub pool: LightPool,
+    pub alias: AliasTable,
+    pub nearby: NearbyLights,
+}
+
+impl ReferenceLights {
+    pub fn of(world: &VoxelWorld) -> ReferenceLights {
+        let mut pool = LightPool::from_world(world);
+        let alias = pool.alias().clone();
+        let nearby = NearbyLights::of(&pool, &alias);
+        ReferenceLights { pool, alias, nearby }
+    }
+}
+
+impl<'a> Scene<'a> {
+    pub fn new(world: &'a VoxelWorld, lights: &'a ReferenceLights, objects: &'a ReferenceObjects) -> Scene<'a> {
+        Scene { world, pool: &lights.pool, alias: &lights.alias, objects, nearby: &lights.nearby }
+    }
+}
+
 impl Scene<'_> {
     /// One estimate of the direct light reflected towards the viewer at `p` (face normal `n`, diffuse `albedo`),
     /// by resampling `candidates` power-drawn lights and tracing one shadow ray. `rays` counts the shadow ray.
@@ -320,11 +342,9 @@ pub fn render_reference(
         return Err(problem);
     }
     let start = Instant::now();
-    let mut pool = LightPool::from_world(world);
-    let alias = pool.alias().clone();
+    let lights = ReferenceLights::of(world);
     let objects = ReferenceObjects::of(world)?;
-    let nearby = NearbyLights::of(&pool, &alias);
-    let scene = Scene { world, pool: &pool, alias: &alias, objects: &objects, nearby: &nearby };
+    let scene = Scene::new(world, &lights, &objects);
     let transform = view_transform(view);
     let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
     // Camera hits once per pixel: every sample of a pixel shades the same point. A miss sees the background.

@@ -3,10 +3,9 @@
 
 use bevy::math::{IVec3, UVec3, Vec3};
 use glowbrick::lights::daylight::Daylight;
-use glowbrick::lights::{AliasTable, LightPool};
-use glowbrick::reference::nearby::NearbyLights;
+use glowbrick::reference::objects::ReferenceObjects;
 use glowbrick::reference::sampling::Pcg;
-use glowbrick::reference::{ReferenceOptions, Scene, SurfaceHit, render_reference};
+use glowbrick::reference::{ReferenceLights, ReferenceOptions, Scene, SurfaceHit, render_reference};
 use glowbrick::settings::{Lighting, RenderSettings};
 use glowbrick::world::format::{parse_world, world_to_string};
 use glowbrick::world::{CameraView, Edit, Material, Palette, VoxelWorld};
@@ -51,22 +50,11 @@ fn floor_hit(x: f32, z: f32) -> SurfaceHit {
 #[test]
 fn an_open_floor_reflects_exactly_the_sky_and_the_disk() {
     let (bare, world) = (bare_floor(), open_floor());
-    let pool = LightPool::from_world(&world);
-    let alias = AliasTable::default();
-    let open = Scene {
-        world: &bare,
-        pool: &pool,
-        alias: &alias,
-        objects: &Default::default(),
-        nearby: &NearbyLights::of(&pool, &alias),
-    };
-    let scene = Scene {
-        world: &world,
-        pool: &pool,
-        alias: &alias,
-        objects: &Default::default(),
-        nearby: &NearbyLights::of(&pool, &alias),
-    };
+    // No lamps: the reference lights are the sun, the moon and the sky alone.
+    let (lights, no_objects) = (ReferenceLights::of(&world), ReferenceObjects::default());
+    assert!(lights.pool.is_empty());
+    let open = Scene::new(&bare, &lights, &no_objects);
+    let scene = Scene::new(&world, &lights, &no_objects);
     let options = ReferenceOptions { daylight: Some(uniform_sky(0.5, 2.0)), bounces: 0, ..Default::default() };
     // In the open, every cosine ray leaves the world and the disk is unoccluded: each sample is exact,
     // albedo x (sky + disk x cos), with cos within the disk's tiny cone of 1.

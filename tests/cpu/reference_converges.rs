@@ -3,11 +3,10 @@
 
 use bevy::math::{IVec3, UVec3, Vec3};
 use glowbrick::image_io::LinearImage;
-use glowbrick::lights::LightPool;
 use glowbrick::reference::metrics::compare;
-use glowbrick::reference::nearby::NearbyLights;
+use glowbrick::reference::objects::ReferenceObjects;
 use glowbrick::reference::sampling::Pcg;
-use glowbrick::reference::{ReferenceOptions, Scene, render_reference};
+use glowbrick::reference::{ReferenceLights, ReferenceOptions, Scene, render_reference};
 use glowbrick::world::scene::load_scene;
 use glowbrick::world::{Edit, Material, Palette, VoxelWorld};
 
@@ -28,16 +27,9 @@ fn one_emissive_brick_matches_the_analytic_form_factor() {
     let mut world = VoxelWorld::new(UVec3::splat(64), palette);
     world.apply(Edit::FillBox { min: IVec3::ZERO, max: IVec3::new(63, 0, 63), material: 1 }).unwrap();
     world.apply(Edit::FillBox { min: IVec3::new(24, 40, 24), max: IVec3::new(31, 47, 31), material: 2 }).unwrap();
-    let mut pool = LightPool::from_world(&world);
-    assert_eq!(pool.counts(), (0, 1));
-    let alias = pool.alias().clone();
-    let scene = Scene {
-        world: &world,
-        pool: &pool,
-        alias: &alias,
-        objects: &Default::default(),
-        nearby: &NearbyLights::of(&pool, &alias),
-    };
+    let (lights, no_objects) = (ReferenceLights::of(&world), ReferenceObjects::default());
+    assert_eq!(lights.pool.counts(), (0, 1));
+    let scene = Scene::new(&world, &lights, &no_objects);
     // Straight below the centre of the brick's bottom face (y = 40), on the floor's top (y = 1): only that 8 x 8
     // face sees the point, 39 voxels up. Four corner rectangles of 4 x 4.
     let p = Vec3::new(28.0, 1.0, 28.0);
@@ -78,15 +70,8 @@ fn a_point_beside_a_lamp_on_the_floor_converges() {
     let mut world = VoxelWorld::new(UVec3::splat(32), palette);
     world.apply(Edit::FillBox { min: IVec3::ZERO, max: IVec3::new(31, 0, 31), material: 1 }).unwrap();
     world.apply(Edit::FillBox { min: IVec3::new(10, 1, 10), max: IVec3::new(10, 1, 10), material: 2 }).unwrap();
-    let mut pool = LightPool::from_world(&world);
-    let alias = pool.alias().clone();
-    let scene = Scene {
-        world: &world,
-        pool: &pool,
-        alias: &alias,
-        objects: &Default::default(),
-        nearby: &NearbyLights::of(&pool, &alias),
-    };
+    let (lights, no_objects) = (ReferenceLights::of(&world), ReferenceObjects::default());
+    let scene = Scene::new(&world, &lights, &no_objects);
     let p = Vec3::new(9.98, 1.0, 10.3);
     // The lamp's -X face (x = 10, y 1..2, z 10..11) is the only one p sees: Lo = albedo / pi x Le x the integral
     // of cos_p cos_face / d^2 over it, by the midpoint rule on a grid much finer than p's distance.
@@ -140,16 +125,9 @@ fn a_floor_of_lamps_is_lit_by_its_near_lamps_without_bias() {
             }
         }
     }
-    let mut pool = LightPool::from_world(&world);
-    let alias = pool.alias().clone();
-    assert!(pool.len() > 4000, "{} lamps", pool.len());
-    let scene = Scene {
-        world: &world,
-        pool: &pool,
-        alias: &alias,
-        objects: &Default::default(),
-        nearby: &NearbyLights::of(&pool, &alias),
-    };
+    let (lights, no_objects) = (ReferenceLights::of(&world), ReferenceObjects::default());
+    assert!(lights.pool.len() > 4000, "{} lamps", lights.pool.len());
+    let scene = Scene::new(&world, &lights, &no_objects);
     // On the floor in a lamp-free strip, lamps on both sides.
     let p = Vec3::new(61.5, 1.0, 64.5);
     let mean_and_error = |values: &mut dyn FnMut(&mut Pcg) -> f64, n: usize| {
