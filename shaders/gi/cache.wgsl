@@ -26,7 +26,8 @@ struct GiParams {
     static_capacity: u32,
     dynamic_capacity: u32,
     frame: u32,
-    _pad: u32,
+    // This frame's update iteration (more than one only after a change of light).
+    iteration: u32,
 }
 
 // One (voxel, face) entry. The key lives in gi_keys (0 = empty); this is its payload.

@@ -6,9 +6,9 @@
 
 #import glowbrick::world::{object_index, object_count}
 #import glowbrick::counters::counters
-#import glowbrick::constants::{COUNT_GI_LIVE, COUNT_GI_EVICTED, COUNT_GI_UPDATED,
+#import glowbrick::constants::{GI_RESTART, COUNT_GI_LIVE, COUNT_GI_EVICTED, COUNT_GI_UPDATED,
     COUNT_GI_FREED_TOTAL}
-#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_work, gi_list, used_within, is_live_key, next_slot,
+#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_direct, gi_work, gi_list, used_within, is_live_key, next_slot,
     UPDATE_AGE, MAX_AGE, LOST_FACE, FREED_KEY, EMPTY_KEY, WORK_STATIC, WORK_DYNAMIC, WORK_COUNT}
 
 var<workgroup> due_in_group: atomic<u32>;
@@ -45,7 +45,15 @@ fn age_entry(slot: u32) -> bool {
         return false;
     }
     atomicAdd(&live_in_group, 1u);
-    return used_within(e.last_used, UPDATE_AGE);
+    let due = used_within(e.last_used, UPDATE_AGE);
+    // After a change of light an entry that is not updated this frame holds the old light: it has no value
+    // until it is due again (readers then skip it: a lamp switched off stayed in the room's filters and
+    // bounces through such entries until they were freed, 240 frames on).
+    if !due && (gi.flags & GI_RESTART) != 0u && e.samples != 0u {
+        gi_entries[slot].samples = 0u;
+        gi_direct[slot] = vec4(0.0);
+    }
+    return due;
 }
 
 @compute @workgroup_size(64, 1, 1)

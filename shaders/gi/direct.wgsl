@@ -8,7 +8,7 @@
 #import glowbrick::lights::{scene, direct_sample, disk_sample}
 #import glowbrick::random::{Rng, rng_next, pcg}
 #import glowbrick::guards::finite3
-#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET, GI_RESTART}
+#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET, GI_RESTART, GI_RESTART_SAMPLES}
 #import glowbrick::gi::cache::{gi, gi_direct, tangent_axes, slot_seed, cell_of, is_surface, GiEntry}
 
 // The blend of an entry's direct estimate: young entries average evenly, then an exponential blend over about
@@ -33,15 +33,9 @@ fn direct_at(point: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<functio
     return vec3(0.0);
 }
 
-// Blends one direct-light sample at a uniform point of the entry's face into its estimate: over frames the
-// estimate becomes the face's average direct light, which is what a ray hitting anywhere on the face reads.
-fn update_direct(slot: u32, e: GiEntry) {
-    let id = voxel_at(e.voxel);
-    if id == 0u {
-        gi_direct[slot] = vec4(0.0);
-        return;
-    }
-    var rng = Rng(pcg(slot_seed(slot) ^ pcg(gi.frame ^ 0x2545F491u)));
+// One direct-light sample at a uniform point of the entry's face (of a uniform voxel of its cell's plane for a
+// coarse entry).
+fn face_sample(e: GiEntry, id: u32, rng: ptr<function, Rng>) -> vec3<f32> {
     let n = face_normal(e.face);
     let t = tangent_axes(e.face);
     // A coarse entry averages its cell: a uniform voxel of the cell in the inserting face's plane, when that
@@ -52,8 +46,8 @@ fn update_direct(slot: u32, e: GiEntry) {
         let size = 1u << e.level;
         var other = cell_of(e.voxel, e.level) << vec3(e.level);
         other[e.face / 2u] = e.voxel[e.face / 2u];
-        other[t.x] += i32(min(u32(rng_next(&rng) * f32(size)), size - 1u));
-        other[t.y] += i32(min(u32(rng_next(&rng) * f32(size)), size - 1u));
+        other[t.x] += i32(min(u32(rng_next(rng) * f32(size)), size - 1u));
+        other[t.y] += i32(min(u32(rng_next(rng) * f32(size)), size - 1u));
         if is_surface(other, e.face) {
             voxel = other;
             albedo = materials[voxel_at(other)].albedo.rgb;
@@ -61,15 +55,35 @@ fn update_direct(slot: u32, e: GiEntry) {
     }
     // Inside the face by a hair: a point exactly on a neighbour's plane could start its shadow ray in that voxel.
     var point = vec3<f32>(voxel) + vec3(0.5) + n * 0.5;
-    point[t.x] += (rng_next(&rng) - 0.5) * 0.98;
-    point[t.y] += (rng_next(&rng) - 0.5) * 0.98;
-    var estimate = direct_at(point, n, albedo, &rng);
-    if !finite3(estimate) {
-        estimate = vec3(0.0);
+    point[t.x] += (rng_next(rng) - 0.5) * 0.98;
+    point[t.y] += (rng_next(rng) - 0.5) * 0.98;
+    let estimate = direct_at(point, n, albedo, rng);
+    return select(vec3(0.0), estimate, finite3(estimate));
+}
+
+// Blends one direct-light sample into the entry's estimate: over frames the estimate becomes the face's
+// average direct light, which is what a ray hitting anywhere on the face reads. After a change of light
+// (GI_RESTART) it starts over from GI_RESTART_SAMPLES samples: with one, a whole room swung with the few faces
+// the light reaches first (every entry's bounces read them), a lamp switched off left the room at 70-200% of its
+// new light for several frames.
+fn update_direct(slot: u32, e: GiEntry) {
+    let id = voxel_at(e.voxel);
+    if id == 0u {
+        gi_direct[slot] = vec4(0.0);
+        return;
     }
+    var rng = Rng(pcg(slot_seed(slot) ^ pcg(gi.frame ^ 0x2545F491u)));
+    if (gi.flags & GI_RESTART) != 0u {
+        var sum = vec3(0.0);
+        for (var i = 0u; i < GI_RESTART_SAMPLES; i++) {
+            sum += face_sample(e, id, &rng);
+        }
+        gi_direct[slot] = vec4(sum / f32(GI_RESTART_SAMPLES), f32(GI_RESTART_SAMPLES));
+        return;
+    }
+    let estimate = face_sample(e, id, &rng);
     let old = gi_direct[slot];
-    // After a change of light the estimate starts over (as the indirect light's blend, update.wgsl).
-    let count = select(old.w, 0.0, (gi.flags & GI_RESTART) != 0u);
+    let count = old.w;
     let weight = max(DIRECT_ALPHA, 1.0 / (count + 1.0));
     let blended = select(mix(old.rgb, estimate, weight), estimate, count == 0.0);
     gi_direct[slot] = vec4(blended, min(count + 1.0, 1.0e6));

@@ -20,7 +20,11 @@
 
 // The indirect light a hit face's entry holds (last frame's filtered value), or `fallback` (the shooting entry's
 // own) where it has none yet or no room in a full table: counted as borrowed.
+// In the first iteration after a change of light there is none: the start from zero (GI_RESTART).
 fn incoming_at(slot: u32, fallback: vec3<f32>) -> vec3<f32> {
+    if (gi.flags & GI_RESTART) != 0u && gi.iteration == 0u {
+        return vec3(0.0);
+    }
     if slot != NOT_FOUND && gi_entries[slot].samples > 0u {
         return gi_filtered[slot].rgb;
     }
@@ -123,8 +127,10 @@ fn update_entry(slot: u32) {
     let seen = used_within(e.last_seen, 1u) && !dynamic;
     let own = select(vec3(0.0), gi_filtered[slot].rgb, samples > 0u);
     let seed = slot_seed(slot);
-    var rng = Rng(pcg(seed ^ pcg(gi.frame)));
-    let first = pcg(seed ^ 0x5bd1e995u) + gi.frame * gi.update_rays;
+    var rng = Rng(pcg(seed ^ pcg(gi.frame ^ (gi.iteration << 28u))));
+    // Each frame re-shades the next `update_rays` of the K directions; a frame's further iterations take
+    // others (3 steps on: distinct for up to K / update_rays / 3 + 1 iterations).
+    let first = pcg(seed ^ 0x5bd1e995u) + (gi.frame + gi.iteration * 3u) * gi.update_rays;
     var sum = vec3(0.0);
     for (var j = 0u; j < gi.update_rays; j++) {
         let i = (first + j) % gi.rays;

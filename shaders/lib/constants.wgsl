@@ -47,6 +47,8 @@ const GI_BOUNCES: u32 = #{GI_BOUNCES}u;
 const GI_CACHE: u32 = #{GI_CACHE}u;
 const GI_RESTART: u32 = #{GI_RESTART}u;
 const GI_EDIT_RESTART: u32 = #{GI_EDIT_RESTART}u;
+// Direct-light samples an entry starts over with after a change of light (gi/direct.wgsl).
+const GI_RESTART_SAMPLES: u32 = #{GI_RESTART_SAMPLES}u;
 
 // The G-buffer's packed hit: bit 0 hit, then the face, the material and the moving object's id.
 const GBUFFER_FACE_SHIFT: u32 = #{GBUFFER_FACE_SHIFT}u;

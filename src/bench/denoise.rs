@@ -122,7 +122,51 @@ fn measure_scene(scene: &'static str, view: Option<&str>, config: &BenchConfig) 
 
 /// Frames until the mean over the pixels a lamp lights is within 10% of its converged value after the lamp is
 /// switched off, then on again (test-room at night, denoised), or `None` when 16 frames are not enough.
-fn reaction(config: &BenchConfig) -> Result<(Option<u32>, Option<u32>), String> {
+/// Frames a reaction is followed for after the edit.
+const REACTION_FRAMES: usize = 16;
+
+/// A lamp switched off, then on again, in a still view: the mean over the pixels it lights, frame by frame after
+/// each edit, and the values the same renderer converges to after each (settled, then accumulated).
+struct Reaction {
+    /// "night" or "day".
+    when: &'static str,
+    denoise: &'static str,
+    pixels: usize,
+    lit: f64,
+    unlit: f64,
+    off: Vec<f64>,
+    on: Vec<f64>,
+    /// Wall time of the frame after the edit (the GI cache's restart), mean of the two edits, and of a settled
+    /// frame.
+    restart_ms: f64,
+    frame_ms: f64,
+}
+
+impl Reaction {
+    /// The first frame after the edit from which every later followed frame is within 10% of `target`.
+    fn frames_to(trajectory: &[f64], target: f64) -> Option<usize> {
+        let within = |v: &f64| (v - target).abs() <= 0.1 * target.max(1e-12);
+        match trajectory.iter().rposition(|v| !within(v)) {
+            None => Some(1),
+            Some(i) if i + 1 < trajectory.len() => Some(i + 2),
+            Some(_) => None,
+        }
+    }
+    fn off_frames(&self) -> Option<usize> {
+        Self::frames_to(&self.off, self.unlit)
+    }
+    fn on_frames(&self) -> Option<usize> {
+        Self::frames_to(&self.on, self.lit)
+    }
+}
+
+/// The test room at `time` ("time=H"): its lamp switched off, then on again, with the denoiser `denoise`
+/// ("denoise=on|off").
+fn reaction(
+    config: &BenchConfig,
+    (when, time): (&'static str, &'static str),
+    denoise: &'static str,
+) -> Result<Reaction, String> {
     let world = load_scene("test-room").map_err(|e| e.to_string())?;
     let view = world.view(Some("inside")).cloned().ok_or("test-room: no view 'inside'")?;
     let lamp = world.palette.id_of("lamp").ok_or("test-room: no lamp")?;
@@ -130,30 +174,118 @@ fn reaction(config: &BenchConfig) -> Result<(Option<u32>, Option<u32>), String> 
     let mut dark = world.clone();
     dark.apply(Edit::FillBox { min: lo, max: hi, material: 0 }).map_err(|e| e.to_string())?;
     let size = (config.width, config.height);
-    let converged = |w: &VoxelWorld| -> Result<LinearImage, String> {
-        renderer(w, &view, size, &["time=0", "accumulate=on"])?.render(ACCUMULATED_FRAMES)
+    // The pixels the lamp lights: where it more than doubles the light (two fresh renderers, accumulated).
+    let accumulated = |r: &mut HeadlessRenderer| -> Result<LinearImage, String> {
+        r.render(SETTLE_FRAMES)?;
+        r.app_mut().world_mut().resource_mut::<RenderSettings>().accumulate = true;
+        let image = r.render(ACCUMULATED_FRAMES)?;
+        r.app_mut().world_mut().resource_mut::<RenderSettings>().accumulate = false;
+        Ok(image)
     };
-    let (lit, unlit) = (converged(&world)?, converged(&dark)?);
+    let lit = accumulated(&mut renderer(&world, &view, size, &[time])?)?;
+    let unlit = accumulated(&mut renderer(&dark, &view, size, &[time])?)?;
     let affected: Vec<usize> =
         (0..lit.pixels.len()).filter(|&i| lit.pixels[i][1] > 2.0 * unlit.pixels[i][1] + 0.005).collect();
     let mean = |image: &LinearImage| {
         affected.iter().map(|&i| image.pixels[i][1] as f64).sum::<f64>() / affected.len().max(1) as f64
     };
-    let mut r = renderer(&world, &view, size, &["time=0", "denoise=on"])?;
+    let mut r = renderer(&world, &view, size, &[time, denoise])?;
     r.render(SETTLE_FRAMES)?;
-    let frames_after = |r: &mut HeadlessRenderer, edit: Edit, target: f64| -> Result<Option<u32>, String> {
+    // The means of the frames after an edit, and the first one's wall time (the cache's restart).
+    let follow = |r: &mut HeadlessRenderer, edit: Edit| -> Result<(Vec<f64>, f64), String> {
         r.app_mut().world_mut().write_message(EditRequest::player(edit));
-        for frame in 1..=16 {
-            if (mean(&r.render_next()?) - target).abs() <= 0.1 * target.max(1e-4) {
-                return Ok(Some(frame));
+        let start = Instant::now();
+        let first = mean(&r.render_next()?);
+        let ms = start.elapsed().as_secs_f64() * 1000.0;
+        let rest: Result<Vec<f64>, String> =
+            (1..REACTION_FRAMES).map(|_| r.render_next().map(|image| mean(&image))).collect();
+        Ok((std::iter::once(first).chain(rest?).collect(), ms))
+    };
+    // Each target is what this renderer's frames settle to after the edit (the mean of its frames
+    // SETTLE_FRAMES to 2 x SETTLE_FRAMES after it): the filter's own bias is in the tables above, not in how fast
+    // it reacts.
+    // With the mean wall time of those frames.
+    let settled = |r: &mut HeadlessRenderer| -> Result<(f64, f64), String> {
+        r.render(SETTLE_FRAMES - REACTION_FRAMES as u32)?;
+        let start = Instant::now();
+        let frames: Result<Vec<f64>, String> = (0..SETTLE_FRAMES).map(|_| r.render_next().map(|i| mean(&i))).collect();
+        let ms = start.elapsed().as_secs_f64() * 1000.0 / SETTLE_FRAMES as f64;
+        Ok((frames?.iter().sum::<f64>() / SETTLE_FRAMES as f64, ms))
+    };
+    let (off, off_ms) = follow(&mut r, Edit::FillBox { min: lo, max: hi, material: 0 })?;
+    let (unlit, _) = settled(&mut r)?;
+    let (on, on_ms) = follow(&mut r, Edit::FillBox { min: lo, max: hi, material: lamp })?;
+    let (lit, frame_ms) = settled(&mut r)?;
+    Ok(Reaction {
+        when,
+        denoise,
+        pixels: affected.len(),
+        lit,
+        unlit,
+        off,
+        on,
+        restart_ms: (off_ms + on_ms) / 2.0,
+        frame_ms,
+    })
+}
+
+fn reaction_markdown(reactions: &[Reaction]) -> String {
+    let frames = |f: Option<usize>| f.map_or(format!("more than {REACTION_FRAMES}"), |f| f.to_string());
+    let mut text = format!(
+        "\n## Reaction\n\nThe test room, the game's frame: its lamp switched off after {SETTLE_FRAMES} frames, then \
+         on again after {SETTLE_FRAMES} more; the mean over the pixels it lights (where it more than doubles the \
+         light), frame by frame after the edit, as a share of the value the same renderer's frames settle to (the \
+         mean of frames {SETTLE_FRAMES} to {} after the edit). At night the lamp is nearly all the light: unlit, \
+         the room is the moon's faint bounce light. Restart: the wall time of the frame after the edit (the GI \
+         cache starts over: its update runs {} times, each entry's direct light takes {} samples) against a \
+         settled frame's.\n\n| time | denoiser | pixels | unlit | lit | lit / unlit | frames to within 10%, off | \
+         on | restart ms | frame ms |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        2 * SETTLE_FRAMES,
+        crate::render::gi::RESTART_ITERATIONS,
+        crate::render::gi::RESTART_DIRECT_SAMPLES
+    );
+    for r in reactions {
+        text += &format!(
+            "| {} | {} | {} | {:.6} | {:.5} | {:.0} | **{}** | **{}** | {:.1} | {:.1} |\n",
+            r.when,
+            r.denoise,
+            r.pixels,
+            r.unlit,
+            r.lit,
+            r.lit / r.unlit.max(1e-12),
+            frames(r.off_frames()),
+            frames(r.on_frames()),
+            r.restart_ms,
+            r.frame_ms
+        );
+    }
+    text += "\n| time | denoiser | frame after the edit |";
+    let shown = [0usize, 1, 2, 3, 4, 5, 7, 11, 15];
+    for &i in &shown {
+        text += &format!(" {} |", i + 1);
+    }
+    text += "\n|---|---|---|";
+    text += &"---|".repeat(shown.len());
+    for r in reactions {
+        for (name, trajectory, target) in [("switched off", &r.off, r.unlit), ("switched on", &r.on, r.lit)] {
+            text += &format!("\n| {} | {} | {name} |", r.when, r.denoise);
+            for &i in &shown {
+                text += &format!(" {:.0}% |", 100.0 * trajectory[i] / target.max(1e-12));
             }
         }
-        Ok(None)
-    };
-    let off = frames_after(&mut r, Edit::FillBox { min: lo, max: hi, material: 0 }, mean(&unlit))?;
-    r.render(SETTLE_FRAMES)?;
-    let on = frames_after(&mut r, Edit::FillBox { min: lo, max: hi, material: lamp }, mean(&lit))?;
-    Ok((off, on))
+    }
+    text + "\n"
+}
+
+/// The reaction at night and by day, raw and denoised.
+fn reactions(config: &BenchConfig) -> Result<Vec<Reaction>, String> {
+    let mut all = Vec::new();
+    for when in [("night", "time=0"), ("day", "time=10")] {
+        for denoise in ["denoise=off", "denoise=on"] {
+            all.push(reaction(config, when, denoise)?);
+        }
+    }
+    Ok(all)
 }
 
 fn cost(size: (u32, u32)) -> Result<CostRow, String> {
@@ -177,6 +309,13 @@ fn cost(size: (u32, u32)) -> Result<CostRow, String> {
 /// Runs the bench at the config's size, writes `denoise.md` into `out` and returns its text.
 pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    if config.only.iter().any(|o| o == "reaction") {
+        let text =
+            format!("# The denoiser's reaction to a change of light\n{}", reaction_markdown(&reactions(config)?));
+        let path = out.join("denoise-reaction.md");
+        std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
+        return Ok(text);
+    }
     if config.only.iter().any(|o| o == "motion") {
         let text = format!(
             "# The denoiser under motion
@@ -193,22 +332,17 @@ pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, Str
         eprintln!("denoise bench: {scene}: raw {} / denoised {}", row.raw, row.denoised);
         rows.push(row);
     }
-    let reaction = reaction(config)?;
-    eprintln!("denoise bench: lamp off {:?} frames, on {:?} frames", reaction.0, reaction.1);
+    let reaction = reactions(config)?;
+    eprintln!("denoise bench: reaction {}", reaction_markdown(&reaction));
     let costs = [cost((320, 180))?, cost((1280, 720))?];
     let motion = run_motion(config)?;
-    let text = markdown(&rows, reaction, &costs, config) + &motion_markdown(&motion);
+    let text = markdown(&rows, &reaction, &costs, config) + &motion_markdown(&motion);
     let path = out.join("denoise.md");
     std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(text)
 }
 
-fn markdown(
-    rows: &[SceneRow],
-    reaction: (Option<u32>, Option<u32>),
-    costs: &[CostRow],
-    config: &BenchConfig,
-) -> String {
+fn markdown(rows: &[SceneRow], reaction: &[Reaction], costs: &[CostRow], config: &BenchConfig) -> String {
     let mut text = format!(
         "# The denoiser: error, bias, flicker, reaction and cost\n\n`glowbrick bench --denoise`: {}x{}, the game's \
          frame (`lighting=full gi=on`, time {DEFAULT_HOURS} h), {SETTLE_FRAMES} frames to settle, then one frame, \
@@ -248,13 +382,7 @@ fn markdown(
             r.denoised_flicker
         );
     }
-    let frames = |f: Option<u32>| f.map_or("more than 16".to_string(), |f| f.to_string());
-    text += &format!(
-        "\n## Reaction\n\ntest-room at night, denoised: frames until the mean over the pixels its lamp lights is \
-         within 10% of its converged value: lamp switched off {}, switched on again {}.\n",
-        frames(reaction.0),
-        frames(reaction.1)
-    );
+    text += &reaction_markdown(reaction);
     text += "\n## Cost\n\ncornell, the game's frame, mean wall time of 8 frames (lavapipe), and the GPU time of each \
              denoiser pass (timestamp queries).\n\n| size | frame ms raw | frame ms denoised | share of the frame | \
              temporal | wavelet 1 | 2 | 4 | 8 + write |\n|---|---|---|---|---|---|---|---|---|\n";

@@ -45,6 +45,10 @@ pub struct BenchArgs {
     /// frame against its own reference); writes denoise-motion.md.
     #[arg(long, requires = "denoise")]
     motion: bool,
+    /// With --denoise: only its section on reaction (a lamp switched off and on again, the light it lit frame by
+    /// frame against the converged values); writes denoise-reaction.md.
+    #[arg(long, requires = "denoise", conflicts_with = "motion")]
+    reaction: bool,
     /// With --gi: only its section at game sizes (320x180 and 1280x720: frame with and without the cache, GPU
     /// ms per pass, the table's load); writes gi-scale.md.
     #[arg(long, requires = "gi")]
@@ -76,7 +80,8 @@ enum BenchMode {
     /// The game's lighting at three times of day: daylight.md.
     Daylight { spp: u32 },
     /// The denoiser: denoise.md (or its motion section alone).
-    Denoise { spp: u32, motion: bool },
+    /// `section`: one section alone ("motion" or "reaction"), or all of them.
+    Denoise { spp: u32, section: Option<&'static str> },
 }
 
 impl BenchArgs {
@@ -105,8 +110,8 @@ impl BenchArgs {
                 let config = BenchConfig { width: 160, height: 90, reference_spp: spp, ..BenchConfig::full() };
                 on_gpu(|| run_daylight_bench(&config, &out)).map(|text| println!("{text}"))
             }
-            BenchMode::Denoise { spp, motion } => {
-                let only = if motion { vec!["motion".into()] } else { Vec::new() };
+            BenchMode::Denoise { spp, section } => {
+                let only = section.map(|s| vec![s.to_string()]).unwrap_or_default();
                 let config = BenchConfig { width: 160, height: 90, reference_spp: spp, only, ..BenchConfig::full() };
                 on_gpu(|| run_denoise_bench(&config, &out)).map(|text| println!("{text}"))
             }
@@ -122,7 +127,14 @@ impl BenchArgs {
         } else if self.daylight {
             BenchMode::Daylight { spp: self.spp }
         } else if self.denoise {
-            BenchMode::Denoise { spp: self.spp, motion: self.motion }
+            let section = if self.motion {
+                Some("motion")
+            } else if self.reaction {
+                Some("reaction")
+            } else {
+                None
+            };
+            BenchMode::Denoise { spp: self.spp, section }
         } else {
             BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }
         }

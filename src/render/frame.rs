@@ -483,7 +483,7 @@ pub fn view_frame(
     frames.0.fetch_add(1, Ordering::Relaxed);
 }
 
-/// The world-level frame, once after every camera: the GI cache (work lists, refresh, updates, filters; the
+/// The world-level frame, once before every camera (whose shading then reads this frame's light): the GI cache (work lists, refresh, updates, filters; the
 /// moving objects' table only while objects exist).
 pub fn world_frame(
     pipelines: Option<Res<VoxelPipelines>>,
@@ -516,13 +516,19 @@ pub fn world_frame(
     recorder.dispatch(&gi::COMPACT_PASS, compact[0], no_view);
     cache.publish_work(recorder.encoder);
     recorder.dispatch(refresh, statics[0], no_view);
-    recorder.dispatch(update_static, statics[1], no_view);
-    if with_objects {
-        recorder.dispatch(update_dynamic, dynamics[0], no_view);
-    }
-    recorder.dispatch(filter_static, statics[2], no_view);
-    if with_objects {
-        recorder.dispatch(filter_dynamic, dynamics[1], no_view);
+    // After a change of light, several iterations: each one bounce more of the new light.
+    for iteration in 0..cache.iterations() {
+        if iteration > 0 {
+            cache.set_iteration(recorder.encoder, iteration);
+        }
+        recorder.dispatch(update_static, statics[1], no_view);
+        if with_objects {
+            recorder.dispatch(update_dynamic, dynamics[0], no_view);
+        }
+        recorder.dispatch(filter_static, statics[2], no_view);
+        if with_objects {
+            recorder.dispatch(filter_dynamic, dynamics[1], no_view);
+        }
     }
 }
 
@@ -538,7 +544,7 @@ pub fn add(render_app: &mut SubApp) {
         .add_systems(RenderStartup, init_pipelines)
         .add_systems(Render, prepare_view_resources.after(SceneUploaded).in_set(RenderSystems::PrepareResources))
         .add_systems(Core3d, view_frame.after(main_transparent_pass_3d).in_set(Core3dSystems::MainPass))
-        .add_systems(RenderGraph, world_frame.after(camera_driver).in_set(RenderGraphSystems::Render));
+        .add_systems(RenderGraph, world_frame.before(camera_driver).in_set(RenderGraphSystems::Render));
 }
 
 #[cfg(test)]

@@ -237,19 +237,23 @@ pub struct GiCache {
     frame: u32,
     /// The lighting the entries were blended under (mode, time of day, sun, shadows); a change restarts them.
     lighting: Option<(crate::settings::Lighting, u32, bool, bool)>,
-    /// Frames left in which the entries restart their blends.
-    restart_frames: u32,
     /// Frames left in which the entries an edit reached restart theirs.
     edit_restart_frames: u32,
+    /// Frames that restarted the entries (after a change of light).
+    restarts: u32,
+    /// Update iterations this frame (RESTART_ITERATIONS in the first frame after a change of light, else 1).
+    iterations: u32,
+    /// 0, 1, .. RESTART_ITERATIONS - 1: copied into the parameters' `iteration` between iterations.
+    iteration_indices: Buffer,
     pub bind_group: Option<BindGroup>,
     /// Whether GI runs this frame.
     pub enabled: bool,
 }
 
 impl GiCache {
-    /// Frames left in which the entries restart their blends after a change of light (0 in a still scene).
-    pub fn restart_frames_left(&self) -> u32 {
-        self.restart_frames
+    /// Frames that restarted the entries after a change of light, since the cache was made.
+    pub fn restarts(&self) -> u32 {
+        self.restarts
     }
 
     /// Slots of both tables (the compaction pass's threads).
@@ -260,6 +264,18 @@ impl GiCache {
     /// Copies the dispatch sizes the compaction pass wrote to where the listed passes read them.
     pub fn publish_work(&self, encoder: &mut CommandEncoder) {
         encoder.copy_buffer_to_buffer(&self.tables.work, 0, &self.tables.arguments, 0, WORK_BYTES);
+    }
+
+    /// Update iterations this frame.
+    pub fn iterations(&self) -> u32 {
+        self.iterations
+    }
+
+    /// Sets the parameters' `iteration` for the passes recorded after this (the queue's write of the parameters
+    /// lands before the frame's commands; this copy between two of them).
+    pub fn set_iteration(&self, encoder: &mut CommandEncoder, iteration: u32) {
+        let field = std::mem::offset_of!(GiParams, iteration) as u64;
+        encoder.copy_buffer_to_buffer(&self.iteration_indices, 4 * iteration as u64, &self.params, field, 4);
     }
 
     /// The buffer the listed passes take their dispatch sizes from.
@@ -282,8 +298,17 @@ pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
         usage: BufferUsages::STORAGE | BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
+    let indices: Vec<u32> = (0..RESTART_ITERATIONS).collect();
+    let iteration_indices = device.create_buffer_with_data(&BufferInitDescriptor {
+        label: Some("glowbrick_gi_iteration_indices"),
+        contents: bytemuck::cast_slice(&indices),
+        usage: BufferUsages::COPY_SRC,
+    });
     commands.insert_resource(GiCache {
         params,
+        iterations: 1,
+        restarts: 0,
+        iteration_indices,
         edits,
         tables: Tables::new(&device, shape),
         shape,
@@ -292,7 +317,6 @@ pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
         lost_epoch: 0,
         frame: FIRST_FRAME,
         lighting: None,
-        restart_frames: 0,
         edit_restart_frames: 0,
         bind_group: None,
         enabled: false,
@@ -358,20 +382,17 @@ pub fn prepare_gi(
         }
     };
     let gi = settings.gi.clone();
-    // A change of light restarts the entries' blends, so a lamp switched off or the clock moved on does not
-    // linger for 1 / alpha frames (at the game's alpha 0.03, more than 16 frames after a lamp went out:
-    // docs/bench/denoise.md). For RESTART_FRAMES frames each entry takes that frame's estimate alone: its bounces
-    // read last frame's values, which still hold the old light, and one restart would average that into the
-    // next 1 / alpha frames.
+    // A change of light restarts the entries: their direct light from several samples, their indirect light
+    // from zero with RESTART_ITERATIONS bounces in this one frame, so nothing of the old light is left to drain
+    // (with the blend restarted from last frame's values instead, a lamp switched off left its light in the room
+    // for 16+ frames at the game's alpha 0.03: docs/bench/denoise.md).
     let lighting = Some((settings.lighting, settings.time.to_bits(), settings.sun, settings.shadows));
     // A moving object that appears or goes is a change of light too (a lantern's core is in no light pool).
     let objects_came_or_went = gpu_objects.as_ref().is_some_and(|o| o.set_changed);
-    if gpu_lights.as_ref().is_some_and(|l| l.changed) || objects_came_or_went || cache.lighting != lighting {
-        cache.restart_frames = RESTART_FRAMES;
-    }
+    let restart = gpu_lights.as_ref().is_some_and(|l| l.changed) || objects_came_or_went || cache.lighting != lighting;
     cache.lighting = lighting;
-    let restart = cache.restart_frames > 0;
-    cache.restart_frames = cache.restart_frames.saturating_sub(1);
+    cache.iterations = if restart { RESTART_ITERATIONS } else { 1 };
+    cache.restarts += restart as u32;
     let max_binding = device.limits().max_storage_buffer_binding_size;
     let shape = Shape::of(&gi, max_binding);
     if shape.halved(&gi) && shape != cache.shape {
@@ -419,7 +440,7 @@ pub fn prepare_gi(
         static_capacity: shape.static_entries,
         dynamic_capacity: shape.dynamic_entries,
         frame: cache.frame,
-        _pad: 0,
+        iteration: 0,
     };
     queue.write_buffer(&cache.params, 0, bytemuck::bytes_of(&params));
     queue.write_buffer(&cache.tables.work, 0, bytemuck::cast_slice(&EMPTY_WORK));
@@ -446,9 +467,12 @@ pub fn prepare_gi(
     ));
 }
 
-/// Frames after a change of light in which every entry takes only that frame's estimate (each removes one more
-/// bounce of the old light).
-const RESTART_FRAMES: u32 = 3;
+/// Update iterations (update + filter, each one bounce more) in the frame after a change of light, started from
+/// zero indirect light (GI_RESTART): the frame shows the new light with this many bounces and none of the old.
+pub const RESTART_ITERATIONS: u32 = 4;
+/// Direct-light samples an entry starts over with after a change of light (`RESTART_SAMPLES` in
+/// shaders/gi/direct.wgsl, a shader def).
+pub const RESTART_DIRECT_SAMPLES: u32 = 8;
 /// Frames the entries an edit reached restart their blends.
 const EDIT_RESTART_FRAMES: u32 = 6;
 

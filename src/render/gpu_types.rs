@@ -127,7 +127,9 @@ pub struct GiParams {
     pub static_capacity: u32,
     pub dynamic_capacity: u32,
     pub frame: u32,
-    pub _pad: u32,
+    /// Which of this frame's update iterations runs (0 but in the frames after a change of light); the GPU
+    /// copies it in between the iterations.
+    pub iteration: u32,
 }
 
 /// One GI cache entry's payload (`GiEntry` in `shaders/gi/cache.wgsl`); only the GPU writes it, Rust sizes it.
@@ -255,7 +257,9 @@ pub const GI_FILTER: u32 = 1;
 pub const GI_BOUNCES: u32 = 2;
 pub const GI_CACHE: u32 = 4;
 /// `GiParams::flags`: the light changed this frame (a lamp placed or removed, the time of day, the lighting
-/// mode): entries replace their blended light with this frame's estimate and average evenly from there.
+/// mode): entries start over. Their direct light from several samples; their indirect light from zero, the
+/// update iterating (one bounce more each) and taking the last iteration's estimate alone; from there they
+/// average as young entries do.
 pub const GI_RESTART: u32 = 8;
 /// `GiParams::flags`: the world was edited in the last few frames: entries an edit reached (refresh.wgsl marks
 /// them with one sample) take this frame's estimate alone, so their average starts once the new light has
@@ -324,6 +328,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("GI_CACHE", U32(GI_CACHE)),
         ("GI_RESTART", U32(GI_RESTART)),
         ("GI_EDIT_RESTART", U32(GI_EDIT_RESTART)),
+        ("GI_RESTART_SAMPLES", U32(super::gi::RESTART_DIRECT_SAMPLES)),
         // The G-buffer's packed hit.
         ("GBUFFER_FACE_SHIFT", U32(GBUFFER_FACE_SHIFT)),
         ("GBUFFER_MATERIAL_SHIFT", U32(GBUFFER_MATERIAL_SHIFT)),
