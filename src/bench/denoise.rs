@@ -5,7 +5,7 @@
 //! `denoise.md` (with `--motion` only the last, `denoise-motion.md`).
 
 use super::motion::{motion_markdown, run_motion};
-use super::{BenchConfig, Reference, cached_reference_of, reference_noise_of};
+use super::{BenchConfig, Reference, two_seed_reference};
 use crate::colour::luminance;
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::LinearImage;
@@ -41,7 +41,8 @@ struct SceneRow {
     raw_flicker: f64,
     denoised_flicker: f64,
     mean: f64,
-    noise: f64,
+    /// The reference's own error (the two seeds' mean: see `two_seed_reference`).
+    noise: Metrics,
 }
 
 struct CostRow {
@@ -103,8 +104,7 @@ fn measure_scene(scene: &'static str, view: Option<&str>, config: &BenchConfig) 
     let world = load_scene(scene).map_err(|e| e.to_string())?;
     let view = world.view(view).cloned().ok_or_else(|| format!("{scene}: no such view"))?;
     let what = Reference { bounces: REFERENCE_BOUNCES, daylight: Some(Daylight::at(DEFAULT_HOURS, true)) };
-    let truth = cached_reference_of(&world, &view, config, &what)?;
-    let noise = reference_noise_of(&world, &view, config, &what, &truth)?;
+    let (truth, noise) = two_seed_reference(&world, &view, config, &what)?;
     let (raw, raw_flicker, raw_accumulated) = measure(&world, &view, config, &truth, "denoise=off")?;
     let (denoised, denoised_flicker, denoised_accumulated) = measure(&world, &view, config, &truth, "denoise=on")?;
     Ok(SceneRow {
@@ -347,14 +347,24 @@ fn markdown(rows: &[SceneRow], reaction: &[Reaction], costs: &[CostRow], config:
         "# The denoiser: error, bias, flicker, reaction and cost\n\n`glowbrick bench --denoise`: {}x{}, the game's \
          frame (`lighting=full gi=on`, time {DEFAULT_HOURS} h), {SETTLE_FRAMES} frames to settle, then one frame, \
          {FLICKER_FRAMES} frame-to-frame changes and {ACCUMULATED_FRAMES} accumulated frames, raw (`denoise=off`) \
-         and denoised, against a {}-spp CPU reference with {REFERENCE_BOUNCES} bounces (its own noise: MAE against \
-         another seed).\n\n## One frame\n\n| scene | raw MAE | raw relMSE | raw bias | denoised MAE | denoised \
-         relMSE | denoised bias | relMSE raw / denoised | reference noise |\n|---|---|---|---|---|---|---|---|---|\n",
+         and denoised, against a CPU reference with {REFERENCE_BOUNCES} bounces: the mean of two of {} spp with \
+         different seeds. The reference's own error is estimated from their difference (MAE halved, relMSE \
+         quartered); the last column is the ratio of the two relMSEs with that share taken out of both (the \
+         frame's and the reference's errors are independent, so their squared errors add).\n\n## One frame\n\n\
+         | scene | raw MAE | raw relMSE | raw bias | denoised MAE | denoised relMSE | denoised bias | relMSE raw / \
+         denoised | reference's MAE | reference's relMSE | raw / denoised, reference's share out |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
         config.width, config.height, config.reference_spp
     );
     for r in rows {
+        let own = r.noise.relmse;
+        let corrected = if r.denoised.relmse > 1.5 * own {
+            format!("{:.1}x", (r.raw.relmse - own) / (r.denoised.relmse - own))
+        } else {
+            format!("> {:.1}x (denoised within 1.5x of the reference's own)", (r.raw.relmse - own) / (0.5 * own))
+        };
         text += &format!(
-            "| {} | {:.5} | {:.4} | {:+.5} | {:.5} | {:.4} | {:+.5} | {:.1}x | {:.5} |\n",
+            "| {} | {:.5} | {:.4} | {:+.5} | {:.5} | {:.4} | {:+.5} | {:.1}x | {:.5} | {:.4} | {} |\n",
             r.scene,
             r.raw.mae,
             r.raw.relmse,
@@ -363,7 +373,9 @@ fn markdown(rows: &[SceneRow], reaction: &[Reaction], costs: &[CostRow], config:
             r.denoised.relmse,
             r.denoised.bias,
             r.raw.relmse / r.denoised.relmse.max(1e-12),
-            r.noise
+            r.noise.mae,
+            own,
+            corrected
         );
     }
     text += "\n## What the filter does to the mean, and flicker\n\nBias of the accumulated images against the \

@@ -173,6 +173,23 @@ pub fn reference_noise_of(
     Ok(compare(&other, image)?.mae)
 }
 
+/// A reference of twice the samples, the mean of the two seeds' (each cached), and its own noise: MAE and relMSE
+/// between the two halved and quartered (the mean's error has half the standard deviation of each).
+pub fn two_seed_reference(
+    world: &VoxelWorld,
+    view: &CameraView,
+    config: &BenchConfig,
+    what: &Reference,
+) -> Result<(LinearImage, Metrics), String> {
+    let first = cached_reference_of(world, view, config, what)?;
+    let second = cached_seeded_reference(world, view, config, what, 2)?;
+    let between = compare(&first, &second)?;
+    let pixels =
+        first.pixels.iter().zip(&second.pixels).map(|(a, b)| std::array::from_fn(|c| 0.5 * (a[c] + b[c]))).collect();
+    let noise = Metrics { mae: between.mae / 2.0, mse: between.mse / 4.0, relmse: between.relmse / 4.0, ..between };
+    Ok((LinearImage { width: first.width, height: first.height, pixels }, noise))
+}
+
 /// The reference with `bounces` diffuse bounces (0: direct light), cached like `cached_reference`.
 pub fn cached_path_reference(
     world: &VoxelWorld,
@@ -201,7 +218,7 @@ pub fn cached_reference_of(
     cached_seeded_reference(world, view, config, what, 1)
 }
 
-fn cached_seeded_reference(
+pub fn cached_seeded_reference(
     world: &VoxelWorld,
     view: &CameraView,
     config: &BenchConfig,
