@@ -4,9 +4,10 @@
 //! - `view_frame` (Core3d, main pass, once per camera): the G-buffer, then Voxel ReSTIR's three passes when it
 //!   lights the view, then the denoiser's passes when it is on; the view's bind group is built once here and
 //!   shared by every pass.
-//! - `world_frame` (RenderGraph, after every camera, once per frame): the GI cache's passes, which keep a
-//!   world-level cache and so must not run once per camera. The cameras' passes inserted this frame's entries;
-//!   the shading passes read the values this writes next frame (one frame of latency).
+//! - `world_frame` (RenderGraph, before every camera, once per frame): the GI cache's passes, which keep a
+//!   world-level cache and so must not run once per camera. The cameras' shading reads what they write this
+//!   frame (a change of light or an edit shows in the frame it happens); the entries the cameras insert are
+//!   updated first next frame.
 //!
 //! Bind groups: 0 the world (grid, materials, objects, counters; `scene::world`), 1 the view (`ViewResources`;
 //! empty for world passes), 2 the lights and scene lighting (`scene::lights`), 3 the GI cache (`gi`).

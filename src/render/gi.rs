@@ -5,9 +5,9 @@
 //! and traced again only for rays that cross a brick edited since (the edit log below), and the entry's own direct
 //! light (one shadow ray a frame, `direct.wgsl`); `update.wgsl` re-shades a few of them per frame (a ray reads the
 //! direct light of the face it hits from that face's entry) (and traces moving objects' entries outright); `filter.wgsl` averages
-//! same-orientation neighbours; the shading passes interpolate (one frame of latency). With GI off the buffers
+//! same-orientation neighbours; the shading passes interpolate. With GI off the buffers
 //! shrink to a placeholder and no GI pass is dispatched; without moving objects their passes are not either.
-//! The passes run once per frame after every camera (`frame::world_frame`), in the order listed there.
+//! The passes run once per frame before every camera (`frame::world_frame`), in the order listed there.
 
 use super::frame::{Dispatch, VoxelPass};
 use super::gpu_types::{
