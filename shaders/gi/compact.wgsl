@@ -46,9 +46,9 @@ fn age_entry(slot: u32) -> bool {
     }
     atomicAdd(&live_in_group, 1u);
     let due = used_within(e.last_used, UPDATE_AGE);
-    // After a change of light an entry that is not updated this frame holds the old light: it has no value
-    // until it is due again (readers then skip it: a lamp switched off stayed in the room's filters and
-    // bounces through such entries until they were freed, 240 frames on).
+    // After a change of light an entry that is not updated this frame (unused for UPDATE_AGE frames) still holds
+    // the old light: it has no value until it is due again, so the filter and the rays that find it skip it
+    // rather than read the old light until it is freed.
     if !due && (gi.flags & GI_RESTART) != 0u && e.samples != 0u {
         gi_entries[slot].samples = 0u;
         gi_direct[slot] = vec4(0.0);

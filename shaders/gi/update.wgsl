@@ -128,8 +128,8 @@ fn update_entry(slot: u32) {
     let own = select(vec3(0.0), gi_filtered[slot].rgb, samples > 0u);
     let seed = slot_seed(slot);
     var rng = Rng(pcg(seed ^ pcg(gi.frame ^ (gi.iteration << 28u))));
-    // Each frame re-shades the next `update_rays` of the K directions; a frame's further iterations take
-    // others (3 steps on: distinct for up to K / update_rays / 3 + 1 iterations).
+    // Each frame re-shades the next `update_rays` of the K directions; a frame's further iterations (after a
+    // change of light) start 3 groups further on each, other directions at the game's K = 64 and 8 rays.
     let first = pcg(seed ^ 0x5bd1e995u) + (gi.frame + gi.iteration * 3u) * gi.update_rays;
     var sum = vec3(0.0);
     for (var j = 0u; j < gi.update_rays; j++) {

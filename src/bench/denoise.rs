@@ -120,13 +120,11 @@ fn measure_scene(scene: &'static str, view: Option<&str>, config: &BenchConfig) 
     })
 }
 
-/// Frames until the mean over the pixels a lamp lights is within 10% of its converged value after the lamp is
-/// switched off, then on again (test-room at night, denoised), or `None` when 16 frames are not enough.
 /// Frames a reaction is followed for after the edit.
 const REACTION_FRAMES: usize = 16;
 
 /// A lamp switched off, then on again, in a still view: the mean over the pixels it lights, frame by frame after
-/// each edit, and the values the same renderer converges to after each (settled, then accumulated).
+/// each edit, and the values the same renderer's frames settle to after each.
 struct Reaction {
     /// "night" or "day".
     when: &'static str,
@@ -160,66 +158,87 @@ impl Reaction {
     }
 }
 
-/// The test room at `time` ("time=H"): its lamp switched off, then on again, with the denoiser `denoise`
-/// ("denoise=on|off").
+/// The test room at one time of day, its lamp (a column of two voxels) and the pixels that lamp lights: where it
+/// more than doubles the light of two fresh renderers, with and without it, settled and accumulated. Shared by
+/// the raw and the denoised run, so both measure the same pixels.
+struct LampScene {
+    world: VoxelWorld,
+    view: CameraView,
+    time: &'static str,
+    lamp: u16,
+    affected: Vec<usize>,
+}
+
+const LAMP_MIN: IVec3 = IVec3::new(24, 1, 24);
+const LAMP_MAX: IVec3 = IVec3::new(24, 2, 24);
+
+impl LampScene {
+    fn new(config: &BenchConfig, time: &'static str) -> Result<Self, String> {
+        let world = load_scene("test-room").map_err(|e| e.to_string())?;
+        let view = world.view(Some("inside")).cloned().ok_or("test-room: no view 'inside'")?;
+        let lamp = world.palette.id_of("lamp").ok_or("test-room: no lamp")?;
+        let mut dark = world.clone();
+        dark.apply(Self::edit(0)).map_err(|e| e.to_string())?;
+        let size = (config.width, config.height);
+        let accumulated = |w: &VoxelWorld| -> Result<LinearImage, String> {
+            let mut r = renderer(w, &view, size, &[time])?;
+            r.render(SETTLE_FRAMES)?;
+            r.app_mut().world_mut().resource_mut::<RenderSettings>().accumulate = true;
+            r.render(ACCUMULATED_FRAMES)
+        };
+        let (lit, unlit) = (accumulated(&world)?, accumulated(&dark)?);
+        let affected = (0..lit.pixels.len()).filter(|&i| lit.pixels[i][1] > 2.0 * unlit.pixels[i][1] + 0.005).collect();
+        Ok(LampScene { world, view, time, lamp, affected })
+    }
+
+    /// The lamp's voxels set to `material` (0: switched off).
+    fn edit(material: u16) -> Edit {
+        Edit::FillBox { min: LAMP_MIN, max: LAMP_MAX, material }
+    }
+
+    fn mean(&self, image: &LinearImage) -> f64 {
+        self.affected.iter().map(|&i| image.pixels[i][1] as f64).sum::<f64>() / self.affected.len().max(1) as f64
+    }
+}
+
+/// The lamp switched off, then on again, with the denoiser `denoise` ("denoise=on|off").
 fn reaction(
     config: &BenchConfig,
-    (when, time): (&'static str, &'static str),
+    scene: &LampScene,
+    when: &'static str,
     denoise: &'static str,
 ) -> Result<Reaction, String> {
-    let world = load_scene("test-room").map_err(|e| e.to_string())?;
-    let view = world.view(Some("inside")).cloned().ok_or("test-room: no view 'inside'")?;
-    let lamp = world.palette.id_of("lamp").ok_or("test-room: no lamp")?;
-    let (lo, hi) = (IVec3::new(24, 1, 24), IVec3::new(24, 2, 24));
-    let mut dark = world.clone();
-    dark.apply(Edit::FillBox { min: lo, max: hi, material: 0 }).map_err(|e| e.to_string())?;
-    let size = (config.width, config.height);
-    // The pixels the lamp lights: where it more than doubles the light (two fresh renderers, accumulated).
-    let accumulated = |r: &mut HeadlessRenderer| -> Result<LinearImage, String> {
-        r.render(SETTLE_FRAMES)?;
-        r.app_mut().world_mut().resource_mut::<RenderSettings>().accumulate = true;
-        let image = r.render(ACCUMULATED_FRAMES)?;
-        r.app_mut().world_mut().resource_mut::<RenderSettings>().accumulate = false;
-        Ok(image)
-    };
-    let lit = accumulated(&mut renderer(&world, &view, size, &[time])?)?;
-    let unlit = accumulated(&mut renderer(&dark, &view, size, &[time])?)?;
-    let affected: Vec<usize> =
-        (0..lit.pixels.len()).filter(|&i| lit.pixels[i][1] > 2.0 * unlit.pixels[i][1] + 0.005).collect();
-    let mean = |image: &LinearImage| {
-        affected.iter().map(|&i| image.pixels[i][1] as f64).sum::<f64>() / affected.len().max(1) as f64
-    };
-    let mut r = renderer(&world, &view, size, &[time, denoise])?;
+    let mut r = renderer(&scene.world, &scene.view, (config.width, config.height), &[scene.time, denoise])?;
     r.render(SETTLE_FRAMES)?;
     // The means of the frames after an edit, and the first one's wall time (the cache's restart).
     let follow = |r: &mut HeadlessRenderer, edit: Edit| -> Result<(Vec<f64>, f64), String> {
         r.app_mut().world_mut().write_message(EditRequest::player(edit));
         let start = Instant::now();
-        let first = mean(&r.render_next()?);
+        let first = scene.mean(&r.render_next()?);
         let ms = start.elapsed().as_secs_f64() * 1000.0;
         let rest: Result<Vec<f64>, String> =
-            (1..REACTION_FRAMES).map(|_| r.render_next().map(|image| mean(&image))).collect();
+            (1..REACTION_FRAMES).map(|_| r.render_next().map(|image| scene.mean(&image))).collect();
         Ok((std::iter::once(first).chain(rest?).collect(), ms))
     };
     // Each target is what this renderer's frames settle to after the edit (the mean of its frames
-    // SETTLE_FRAMES to 2 x SETTLE_FRAMES after it): the filter's own bias is in the tables above, not in how fast
-    // it reacts.
-    // With the mean wall time of those frames.
+    // SETTLE_FRAMES to 2 x SETTLE_FRAMES after it), with their mean wall time: the filter's own bias is in the
+    // tables above, not in how fast it reacts.
     let settled = |r: &mut HeadlessRenderer| -> Result<(f64, f64), String> {
         r.render(SETTLE_FRAMES - REACTION_FRAMES as u32)?;
         let start = Instant::now();
-        let frames: Result<Vec<f64>, String> = (0..SETTLE_FRAMES).map(|_| r.render_next().map(|i| mean(&i))).collect();
+        let frames: Result<Vec<f64>, String> =
+            (0..SETTLE_FRAMES).map(|_| r.render_next().map(|i| scene.mean(&i))).collect();
         let ms = start.elapsed().as_secs_f64() * 1000.0 / SETTLE_FRAMES as f64;
         Ok((frames?.iter().sum::<f64>() / SETTLE_FRAMES as f64, ms))
     };
-    let (off, off_ms) = follow(&mut r, Edit::FillBox { min: lo, max: hi, material: 0 })?;
+    let (off, off_ms) = follow(&mut r, LampScene::edit(0))?;
     let (unlit, _) = settled(&mut r)?;
-    let (on, on_ms) = follow(&mut r, Edit::FillBox { min: lo, max: hi, material: lamp })?;
+    let (on, on_ms) = follow(&mut r, LampScene::edit(scene.lamp))?;
     let (lit, frame_ms) = settled(&mut r)?;
     Ok(Reaction {
         when,
         denoise,
-        pixels: affected.len(),
+        pixels: scene.affected.len(),
         lit,
         unlit,
         off,
@@ -280,9 +299,10 @@ fn reaction_markdown(reactions: &[Reaction]) -> String {
 /// The reaction at night and by day, raw and denoised.
 fn reactions(config: &BenchConfig) -> Result<Vec<Reaction>, String> {
     let mut all = Vec::new();
-    for when in [("night", "time=0"), ("day", "time=10")] {
+    for (when, time) in [("night", "time=0"), ("day", "time=10")] {
+        let scene = LampScene::new(config, time)?;
         for denoise in ["denoise=off", "denoise=on"] {
-            all.push(reaction(config, when, denoise)?);
+            all.push(reaction(config, &scene, when, denoise)?);
         }
     }
     Ok(all)

@@ -484,8 +484,8 @@ pub fn view_frame(
     frames.0.fetch_add(1, Ordering::Relaxed);
 }
 
-/// The world-level frame, once before every camera (whose shading then reads this frame's light): the GI cache (work lists, refresh, updates, filters; the
-/// moving objects' table only while objects exist).
+/// The world-level frame, once before every camera (whose shading then reads this frame's light): the GI cache
+/// (work lists, refresh, updates, filters; the moving objects' table only while objects exist).
 pub fn world_frame(
     pipelines: Option<Res<VoxelPipelines>>,
     pipeline_cache: Res<PipelineCache>,
