@@ -17,6 +17,23 @@ impl LinearImage {
         self.pixels[(y * self.width + x) as usize]
     }
 
+    /// Every `step`-th pixel in each direction, at `step * i + step / 2`: the pixels a reference with
+    /// `lattice: step` integrates (`reference::ReferenceOptions`). `step` must be at least 1.
+    pub fn lattice(&self, step: u32) -> LinearImage {
+        let (width, height) = (self.width / step, self.height / step);
+        let pixels = (0..width * height)
+            .map(|i| self.pixel((i % width) * step + step / 2, (i / width) * step + step / 2))
+            .collect();
+        LinearImage { width, height, pixels }
+    }
+
+    /// Every colour channel clamped to at most `limit` (alpha kept): what an 8-bit export without tone mapping
+    /// holds at `limit` 1, e.g. to compare with numbers measured on such exports.
+    pub fn clamped(&self, limit: f32) -> LinearImage {
+        let pixels = self.pixels.iter().map(|p| [p[0].min(limit), p[1].min(limit), p[2].min(limit), p[3]]).collect();
+        LinearImage { pixels, ..*self }
+    }
+
     /// Count of pixels with a NaN or infinite channel.
     pub fn non_finite_pixels(&self) -> usize {
         self.pixels.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count()

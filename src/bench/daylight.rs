@@ -80,7 +80,7 @@ fn measure(
     config: &BenchConfig,
 ) -> Result<DaylightRow, String> {
     let day = Some(Daylight::at(hours, true));
-    let reference = Reference { bounces: REFERENCE_BOUNCES, daylight: day };
+    let reference = Reference { bounces: REFERENCE_BOUNCES, daylight: day, lattice: None };
     let truth = cached_reference_of(world, view, config, &reference)?;
     let noise = reference_noise_of(world, view, config, &reference, &truth)?;
     let mut pairs: Vec<String> = GAME_PAIRS.iter().map(|p| p.to_string()).collect();

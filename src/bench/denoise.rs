@@ -103,7 +103,8 @@ fn measure(
 fn measure_scene(scene: &'static str, view: Option<&str>, config: &BenchConfig) -> Result<SceneRow, String> {
     let world = load_scene(scene).map_err(|e| e.to_string())?;
     let view = world.view(view).cloned().ok_or_else(|| format!("{scene}: no such view"))?;
-    let what = Reference { bounces: REFERENCE_BOUNCES, daylight: Some(Daylight::at(DEFAULT_HOURS, true)) };
+    let what =
+        Reference { bounces: REFERENCE_BOUNCES, daylight: Some(Daylight::at(DEFAULT_HOURS, true)), lattice: None };
     let (truth, noise) = two_seed_reference(&world, &view, config, &what)?;
     let (raw, raw_flicker, raw_accumulated) = measure(&world, &view, config, &truth, "denoise=off")?;
     let (denoised, denoised_flicker, denoised_accumulated) = measure(&world, &view, config, &truth, "denoise=on")?;
@@ -352,6 +353,12 @@ pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, Str
         eprintln!("denoise bench: {scene}: raw {} / denoised {}", row.raw, row.denoised);
         rows.push(row);
     }
+    if config.only.iter().any(|o| o == "frame") {
+        let text = format!("# The denoiser on one frame\n\n{}", frame_markdown(&rows, config));
+        let path = out.join("denoise-frame.md");
+        std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
+        return Ok(text);
+    }
     let reaction = reactions(config)?;
     eprintln!("denoise bench: reaction {}", reaction_markdown(&reaction));
     let costs = [cost((320, 180))?, cost((1280, 720))?];
@@ -362,9 +369,10 @@ pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, Str
     Ok(text)
 }
 
-fn markdown(rows: &[SceneRow], reaction: &[Reaction], costs: &[CostRow], config: &BenchConfig) -> String {
+/// The one-frame section: error raw and denoised, the bias the filter adds, flicker.
+fn frame_markdown(rows: &[SceneRow], config: &BenchConfig) -> String {
     let mut text = format!(
-        "# The denoiser: error, bias, flicker, reaction and cost\n\n`glowbrick bench --denoise`: {}x{}, the game's \
+        "`glowbrick bench --denoise`: {}x{}, the game's \
          frame (`lighting=full gi=on`, time {DEFAULT_HOURS} h), {SETTLE_FRAMES} frames to settle, then one frame, \
          {FLICKER_FRAMES} frame-to-frame changes and {ACCUMULATED_FRAMES} accumulated frames, raw (`denoise=off`) \
          and denoised, against a CPU reference with {REFERENCE_BOUNCES} bounces: the mean of two of {} spp with \
@@ -414,6 +422,12 @@ fn markdown(rows: &[SceneRow], reaction: &[Reaction], costs: &[CostRow], config:
             r.denoised_flicker
         );
     }
+    text
+}
+
+fn markdown(rows: &[SceneRow], reaction: &[Reaction], costs: &[CostRow], config: &BenchConfig) -> String {
+    let mut text =
+        format!("# The denoiser: error, bias, flicker, reaction and cost\n\n{}", frame_markdown(rows, config));
     text += &reaction_markdown(reaction);
     text += "\n## Cost\n\ncornell, the game's frame, mean wall time of 8 frames (lavapipe), and the GPU time of each \
              denoiser pass (timestamp queries).\n\n| size | frame ms raw | frame ms denoised | share of the frame | \

@@ -197,7 +197,7 @@ pub fn cached_path_reference(
     config: &BenchConfig,
     bounces: u32,
 ) -> Result<LinearImage, String> {
-    cached_reference_of(world, view, config, &Reference { bounces, daylight: None })
+    cached_reference_of(world, view, config, &Reference { bounces, ..Reference::default() })
 }
 
 /// Which light a reference integrates: emitters only (the default) or with a sun or moon and sky, and how many
@@ -206,6 +206,8 @@ pub fn cached_path_reference(
 pub struct Reference {
     pub bounces: u32,
     pub daylight: Option<Daylight>,
+    /// Only every n-th pixel of the bench's image in each direction (`ReferenceOptions::lattice`), or all.
+    pub lattice: Option<u32>,
 }
 
 /// The reference `what`, computed once and cached by world, view, size, spp and lighting.
@@ -231,6 +233,10 @@ pub fn cached_seeded_reference(
         light += &format!("|{day:?}");
     }
     let defaults = ReferenceOptions::default();
+    let step = what.lattice.unwrap_or(1);
+    if let Some(step) = what.lattice {
+        light += &format!("|lattice{step}");
+    }
     // The estimator's version is part of the key: a cached image from another estimator is not reused.
     let key = format!(
         "{}|{:?}|{}x{}|{}spp|{light}|seed{seed}|ris{}|v{}",
@@ -244,7 +250,7 @@ pub fn cached_seeded_reference(
     );
     let path = cache_dir().join(format!("{:016x}.exr", fnv1a(key.as_bytes())));
     if let Ok(image) = read_image(&path)
-        && (image.width, image.height) == (config.width, config.height)
+        && (image.width, image.height) == (config.width / step, config.height / step)
     {
         return Ok(image);
     }
@@ -255,6 +261,7 @@ pub fn cached_seeded_reference(
         bounces,
         seed,
         daylight: what.daylight,
+        lattice: step,
         ..defaults
     };
     let reference = render_reference(world, view, &options)?;

@@ -4,10 +4,14 @@
 //! reference; our GPU time per pass. Writes `thesis.md` beside the thesis' Table 3.
 //!
 //! The thesis rendered 1600 x 1024; `scale` shrinks both sides (and the 30 px spatial radius with them), so the
-//! CPU reference stays affordable on a small machine.
+//! CPU reference stays affordable on a small machine. Or `lattice` keeps the thesis' size and integrates the
+//! reference at every `lattice`-th pixel only, measuring the error on those pixels: an unbiased estimate of the
+//! full image's MAE and MSE at 1 / lattice^2 of the reference's cost. The reference is the mean of two seeds, so
+//! its own noise is measured and stated.
 
-use super::{BenchConfig, PassTimes, cached_reference, pass_times};
+use super::{BenchConfig, PassTimes, Reference, pass_times, two_seed_reference};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::image_io::write_image;
 use crate::reference::metrics::{Metrics, compare};
 use crate::settings::RenderSettings;
 use crate::world::VoxelWorld;
@@ -22,6 +26,8 @@ pub struct ThesisView {
     pub brick_lights: bool,
     /// Table 3 MAE: Voxel ReSTIR area, point, and GfxExp's triangle ReSTIR (None where the thesis has none).
     pub thesis_mae: [Option<f64>; 3],
+    /// Table 1's MSE of Voxel ReSTIR, area samples, 32 candidates.
+    pub thesis_mse_area: f64,
 }
 
 pub const THESIS_VIEWS: [ThesisView; 4] = [
@@ -31,6 +37,7 @@ pub const THESIS_VIEWS: [ThesisView; 4] = [
         view: "letters1",
         brick_lights: true,
         thesis_mae: [Some(0.0059), Some(0.0075), Some(0.0133)],
+        thesis_mse_area: 0.0009,
     },
     ThesisView {
         label: "letters 2",
@@ -38,6 +45,7 @@ pub const THESIS_VIEWS: [ThesisView; 4] = [
         view: "letters2",
         brick_lights: true,
         thesis_mae: [Some(0.0067), Some(0.0089), Some(0.0101)],
+        thesis_mse_area: 0.0013,
     },
     ThesisView {
         label: "cornell, 256 brick lights",
@@ -45,6 +53,7 @@ pub const THESIS_VIEWS: [ThesisView; 4] = [
         view: "cornell1",
         brick_lights: true,
         thesis_mae: [Some(0.0111), Some(0.0396), Some(0.0279)],
+        thesis_mse_area: 0.0252,
     },
     ThesisView {
         label: "cornell, voxel lights",
@@ -52,6 +61,7 @@ pub const THESIS_VIEWS: [ThesisView; 4] = [
         view: "cornell1",
         brick_lights: false,
         thesis_mae: [Some(0.0142), Some(0.0430), None],
+        thesis_mse_area: 0.1660,
     },
 ];
 
@@ -77,15 +87,30 @@ pub fn thesis_scene(file: &str) -> Result<PathBuf, String> {
 /// One measured mode of one view.
 pub struct ThesisResult {
     pub metrics: Metrics,
+    /// The same with both images clamped to 1 (what an 8-bit export without tone mapping holds).
+    pub clamped: Metrics,
     pub passes: PassTimes,
+}
+
+/// What `bench --thesis` runs.
+pub struct ThesisOptions {
+    /// Image size as a fraction of the thesis' 1600 x 1024.
+    pub scale: f32,
+    /// Samples per pixel of the reference, in total over its two seeds.
+    pub spp: u32,
+    /// The reference at every `lattice`-th pixel only (1: all).
+    pub lattice: u32,
+    /// Only the views whose label contains one of these (empty: all four).
+    pub views: Vec<String>,
 }
 
 fn render_mode(
     world: &VoxelWorld,
     view: &crate::world::CameraView,
     config: &BenchConfig,
-    reference: &crate::image_io::LinearImage,
+    reference: &Lattice,
     sample: &str,
+    (label, out): (&str, &Path),
 ) -> Result<ThesisResult, String> {
     let radius = (30.0 * config.width as f32 / 1600.0).round().max(1.0);
     let pairs = ["lighting=restir", "candidates=32", "taps=5", "temporal=on", "spatial=on", "reuse=biased"]
@@ -98,27 +123,61 @@ fn render_mode(
     let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;
     let image = renderer.render(THESIS_FRAMES)?;
     let passes = pass_times(&renderer);
-    Ok(ThesisResult { metrics: compare(&image, reference)?, passes })
+    let measured = if reference.step > 1 { image.lattice(reference.step) } else { image };
+    let path = out.join(format!("{}-{sample}.exr", file_stem(label)));
+    write_image(&measured, &path)?;
+    Ok(ThesisResult {
+        metrics: compare(&measured, &reference.image)?,
+        clamped: compare(&measured.clamped(1.0), &reference.image.clamped(1.0))?,
+        passes,
+    })
 }
 
-/// Runs the protocol at `scale` of 1600 x 1024 with `reference_spp`, writes `thesis.md` into `out`.
-pub fn run_thesis_bench(scale: f32, reference_spp: u32, out: &Path) -> Result<String, String> {
+/// A view's label as a file name: "cornell, voxel lights" -> "cornell-voxel-lights".
+fn file_stem(label: &str) -> String {
+    label.split(|c: char| !c.is_ascii_alphanumeric()).filter(|w| !w.is_empty()).collect::<Vec<_>>().join("-")
+}
+
+/// The reference of a view at the lattice's pixels (every `step`-th; 1: all).
+struct Lattice {
+    image: crate::image_io::LinearImage,
+    step: u32,
+}
+
+/// Runs the protocol, writes `thesis.md` into `out`.
+pub fn run_thesis_bench(options: &ThesisOptions, out: &Path) -> Result<String, String> {
+    let ThesisOptions { scale, spp, lattice, .. } = *options;
     if !(scale.is_finite() && scale > 0.0 && scale <= 1.0) {
         return Err(format!("--scale {scale} must be within (0, 1]"));
+    }
+    if spp < 2 {
+        return Err(format!("--spp {spp}: the reference is the mean of two seeds, so it needs at least 2"));
     }
     let config = BenchConfig {
         width: ((1600.0 * scale).round() as u32).max(16),
         height: ((1024.0 * scale).round() as u32).max(16),
         warmup_frames: 0,
         timed_frames: 0,
-        reference_spp,
+        reference_spp: spp / 2,
         curve_frames: 0,
         camera: None,
         only: Vec::new(),
     };
+    if lattice == 0 || lattice > config.width.min(config.height) / 4 {
+        return Err(format!("--lattice {lattice} must be within 1..={}", config.width.min(config.height) / 4));
+    }
+    let views: Vec<&ThesisView> = THESIS_VIEWS
+        .iter()
+        .filter(|t| options.views.is_empty() || options.views.iter().any(|v| t.label.contains(v.as_str())))
+        .collect();
+    if views.is_empty() {
+        let labels: Vec<&str> = THESIS_VIEWS.iter().map(|t| t.label).collect();
+        return Err(format!("--views {:?} names none of the views: {}", options.views, labels.join(", ")));
+    }
+    let what = Reference { lattice: (lattice > 1).then_some(lattice), ..Reference::default() };
     let mut rows = Vec::new();
     let mut loaded: Option<(&str, VoxelWorld)> = None;
-    for t in &THESIS_VIEWS {
+    for t in views {
         if loaded.as_ref().is_none_or(|(file, _)| *file != t.file) {
             let path = thesis_scene(t.file)?;
             let start = std::time::Instant::now();
@@ -129,13 +188,16 @@ pub fn run_thesis_bench(scale: f32, reference_spp: u32, out: &Path) -> Result<St
         let mut world = loaded.as_ref().map(|(_, w)| w.clone()).ok_or("no world")?;
         world.brick_lights = t.brick_lights;
         let view = world.view(Some(t.view)).cloned().ok_or_else(|| format!("{}: no view {}", t.file, t.view))?;
-        let reference = cached_reference(&world, &view, &config)?;
-        let area = render_mode(&world, &view, &config, &reference, "area")?;
-        let point = render_mode(&world, &view, &config, &reference, "point")?;
-        eprintln!("thesis: {}: area {}, point {}", t.label, area.metrics, point.metrics);
-        rows.push((t, area, point));
+        let (image, noise) = two_seed_reference(&world, &view, &config, &what)?;
+        std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+        write_image(&image, &out.join(format!("{}-reference.exr", file_stem(t.label))))?;
+        let reference = Lattice { image, step: lattice };
+        let area = render_mode(&world, &view, &config, &reference, "area", (t.label, out))?;
+        let point = render_mode(&world, &view, &config, &reference, "point", (t.label, out))?;
+        eprintln!("thesis: {}: area {}, point {}, reference noise {}", t.label, area.metrics, point.metrics, noise);
+        rows.push((t, area, point, noise));
     }
-    let text = thesis_markdown(&rows, &config, scale);
+    let text = thesis_markdown(&rows, &config, options);
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let path = out.join("thesis.md");
     std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -156,29 +218,55 @@ fn passes_text(passes: &[(&'static str, f64)]) -> String {
     format!("{total:.1} ({})", each.join(", "))
 }
 
-fn thesis_markdown(rows: &[(&ThesisView, ThesisResult, ThesisResult)], config: &BenchConfig, scale: f32) -> String {
+type ThesisRow<'a> = (&'a ThesisView, ThesisResult, ThesisResult, Metrics);
+
+fn thesis_markdown(rows: &[ThesisRow], config: &BenchConfig, options: &ThesisOptions) -> String {
+    let ThesisOptions { scale, lattice, .. } = *options;
+    let command = if lattice > 1 {
+        format!("glowbrick bench --thesis --scale {scale} --lattice {lattice} --spp {}", options.spp)
+    } else {
+        format!("glowbrick bench --thesis --scale {scale} --spp {}", options.spp)
+    };
+    let measured_on = if lattice > 1 {
+        format!(
+            "; errors measured on every {lattice}th pixel in each direction ({}x{} pixels, an unbiased estimate of \
+             the whole image's), where the reference is integrated",
+            config.width / lattice,
+            config.height / lattice
+        )
+    } else {
+        String::new()
+    };
     let mut text = format!(
-        "# The thesis protocol\n\n`glowbrick bench --thesis --scale {scale}`: seed 000's scenes and views at {}x{} \
-         ({scale} of 1600x1024, spatial radius scaled from 30 px), static camera, frame {THESIS_FRAMES} of Voxel \
-         ReSTIR (M = 32, temporal + spatial reuse, 5 taps, biased reuse), against a {}-spp direct-light CPU \
-         reference. MAE and MSE as seed 000 §3.3. GPU ms: timestamp queries of our passes (primary + the three \
-         ReSTIR passes), averaged over the run. What each row means and why some are worse than the thesis: \
-         [restir.md](restir.md#against-the-thesis-table-3).\n\n\
-         | view | our MAE area | our MAE point | thesis area | thesis point | GfxExp | our MSE area | our MSE point \
-         | GPU ms area (per pass) | GPU ms point |\n|---|---|---|---|---|---|---|---|---|---|\n",
-        config.width, config.height, config.reference_spp
+        "# The thesis protocol\n\n`{command}`: seed 000's scenes and views at {}x{} ({scale} of 1600x1024, \
+         spatial radius scaled from 30 px), static camera, frame {THESIS_FRAMES} of Voxel ReSTIR (M = 32, temporal \
+         + spatial reuse, 5 taps, biased reuse), against a {}-spp direct-light CPU reference (the mean of two \
+         seeds' {} spp; its own noise is their MAE halved){measured_on}. MAE and MSE as seed 000 §3.3. GPU ms: \
+         timestamp queries of our passes (primary + the three ReSTIR passes), averaged over the run. What each row \
+         means and why some are worse than the thesis: [restir.md](restir.md#against-the-thesis-table-3).\n\n\
+         | view | our MAE area | our MAE point | thesis area | thesis point | GfxExp | reference noise (MAE) \
+         | our MAE area, point clamped to 1 | our MSE area | our MSE point | thesis MSE area | GPU ms area (per pass) \
+         | GPU ms point |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        config.width,
+        config.height,
+        2 * config.reference_spp,
+        config.reference_spp
     );
-    for (t, area, point) in rows {
+    for (t, area, point, noise) in rows {
         text += &format!(
-            "| {} | {:.4} | {:.4} | {} | {} | {} | {:.5} | {:.5} | {} | {} |\n",
+            "| {} | {:.4} | {:.4} | {} | {} | {} | {:.4} | {:.4}, {:.4} | {:.5} | {:.5} | {:.4} | {} | {} |\n",
             t.label,
             area.metrics.mae,
             point.metrics.mae,
             cell(t.thesis_mae[0]),
             cell(t.thesis_mae[1]),
             cell(t.thesis_mae[2]),
+            noise.mae,
+            area.clamped.mae,
+            point.clamped.mae,
             area.metrics.mse,
             point.metrics.mse,
+            t.thesis_mse_area,
             passes_text(&area.passes),
             passes_text(&point.passes),
         );

@@ -6,7 +6,8 @@ use super::args::parse_camera;
 use super::on_gpu;
 use crate::bench::daylight::run_daylight_bench;
 use crate::bench::denoise::run_denoise_bench;
-use crate::bench::{ALL_SCENES, BenchConfig, QUICK_SCENES, gi::run_gi_bench, run_bench, thesis::run_thesis_bench};
+use crate::bench::thesis::{ThesisOptions, run_thesis_bench};
+use crate::bench::{ALL_SCENES, BenchConfig, QUICK_SCENES, gi::run_gi_bench, run_bench};
 use crate::world::CameraView;
 use clap::{ArgGroup, Args};
 use std::path::{Path, PathBuf};
@@ -49,6 +50,10 @@ pub struct BenchArgs {
     /// frame against the converged values); writes denoise-reaction.md.
     #[arg(long, requires = "denoise", conflicts_with = "motion")]
     reaction: bool,
+    /// With --denoise: only its first section (one frame raw and denoised against the reference on four scenes,
+    /// the bias the filter adds, flicker); writes denoise-frame.md.
+    #[arg(long, requires = "denoise", conflicts_with_all = ["motion", "reaction"])]
+    one_frame: bool,
     /// With --gi: only its section at game sizes (320x180 and 1280x720: frame with and without the cache, GPU
     /// ms per pass, the table's load); writes gi-scale.md.
     #[arg(long, requires = "gi")]
@@ -56,6 +61,14 @@ pub struct BenchArgs {
     /// With --thesis: image size as a fraction of the thesis' 1600x1024.
     #[arg(long, default_value_t = 0.2, requires = "thesis", conflicts_with_all = ["gi", "daylight", "denoise", "scenes", "quick", "settings", "camera"])]
     scale: f32,
+    /// With --thesis: integrate the reference only at every n-th pixel in each direction and measure the error
+    /// there (an unbiased estimate of the whole image's error at 1/n^2 of the reference's cost), e.g. the
+    /// thesis' full size with `--scale 1 --lattice 5`.
+    #[arg(long, default_value_t = 1, requires = "thesis")]
+    lattice: u32,
+    /// With --thesis: only the views whose label contains one of these, e.g. `letters` (default: all four).
+    #[arg(long, value_delimiter = ',', requires = "thesis")]
+    views: Vec<String>,
     /// With --thesis, --gi, --daylight or --denoise: samples per pixel of the CPU reference.
     #[arg(long, default_value_t = 1024, requires = "mode", conflicts_with_all = SWEEP)]
     spp: u32,
@@ -74,7 +87,7 @@ enum BenchMode {
     /// Scenes x bench settings (the default): results.csv, report.md, plot.svg, image strips.
     Settings { scenes: Vec<String>, quick: bool, only: Vec<String>, camera: Option<CameraView> },
     /// The thesis protocol: thesis.md.
-    Thesis { scale: f32, spp: u32 },
+    Thesis(ThesisOptions),
     /// The GI cache bench: gi.md.
     Gi { spp: u32, game_sizes: bool },
     /// The game's lighting at three times of day: daylight.md.
@@ -92,9 +105,7 @@ impl BenchArgs {
         }
         match self.mode() {
             BenchMode::Settings { scenes, quick, only, camera } => run_settings(scenes, quick, only, camera, &out),
-            BenchMode::Thesis { scale, spp } => {
-                on_gpu(|| run_thesis_bench(scale, spp, &out)).map(|text| println!("{text}"))
-            }
+            BenchMode::Thesis(options) => on_gpu(|| run_thesis_bench(&options, &out)).map(|text| println!("{text}")),
             BenchMode::Gi { spp, game_sizes } => {
                 let config = BenchConfig {
                     width: 128,
@@ -121,7 +132,12 @@ impl BenchArgs {
     /// The mode the flags pick; clap has already refused `--thesis` with `--gi` and every flag of another mode.
     fn mode(self) -> BenchMode {
         if self.thesis {
-            BenchMode::Thesis { scale: self.scale, spp: self.spp }
+            BenchMode::Thesis(ThesisOptions {
+                scale: self.scale,
+                spp: self.spp,
+                lattice: self.lattice,
+                views: self.views,
+            })
         } else if self.gi {
             BenchMode::Gi { spp: self.spp, game_sizes: self.game_sizes }
         } else if self.daylight {
@@ -131,6 +147,8 @@ impl BenchArgs {
                 Some("motion")
             } else if self.reaction {
                 Some("reaction")
+            } else if self.one_frame {
+                Some("frame")
             } else {
                 None
             };

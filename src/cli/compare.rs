@@ -18,6 +18,10 @@ pub struct CompareArgs {
     /// What `--diff` shows: the absolute error (white at 4x the MAE) or the FLIP map (magma).
     #[arg(long, value_enum, default_value_t = DiffKind::Absolute)]
     diff_kind: DiffKind,
+    /// Clamp every channel of both images to at most this before measuring (1: what an 8-bit export without
+    /// tone mapping holds).
+    #[arg(long)]
+    clamp: Option<f32>,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -37,8 +41,13 @@ impl CompareArgs {
         if let Some(path) = &self.diff {
             check_output(path, &["png"])?;
         }
-        let a = read_image(&self.image)?;
-        let b = read_image(&self.reference)?;
+        let (mut a, mut b) = (read_image(&self.image)?, read_image(&self.reference)?);
+        if let Some(limit) = self.clamp {
+            if !(limit.is_finite() && limit > 0.0) {
+                return Err(format!("--clamp {limit} must be a positive number"));
+            }
+            (a, b) = (a.clamped(limit), b.clamped(limit));
+        }
         let m = metrics::compare(&a, &b)?;
         let flip = flip(&a, encoding_of(&self.image), &b, encoding_of(&self.reference))?;
         if let Some(path) = self.diff {

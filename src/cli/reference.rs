@@ -58,6 +58,7 @@ impl ReferenceArgs {
             time_budget: self.seconds.map(std::time::Duration::from_secs_f64),
             show_progress: true,
             daylight: settings.daylight(),
+            lattice: 1,
         };
         let result = render_reference(&world, &view, &options)?;
         write_image(&result.image, &self.out)?;

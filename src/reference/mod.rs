@@ -66,6 +66,11 @@ pub struct ReferenceOptions {
     pub show_progress: bool,
     /// The sun or moon and the sky (`lighting=full`), or `None` for the emitters only.
     pub daylight: Option<Daylight>,
+    /// Integrate only every `lattice`-th pixel of the `width` x `height` image in each direction (the pixel at
+    /// `lattice * i + lattice / 2`), giving a `width / lattice` x `height / lattice` image whose pixels equal the
+    /// full reference's at those points, sample for sample: an unbiased estimate of a full-size image's error at
+    /// 1 / lattice^2 of its cost. 1: every pixel.
+    pub lattice: u32,
 }
 
 impl Default for ReferenceOptions {
@@ -80,6 +85,7 @@ impl Default for ReferenceOptions {
             time_budget: None,
             show_progress: false,
             daylight: None,
+            lattice: 1,
         }
     }
 }
@@ -337,6 +343,10 @@ pub fn render_reference(
     if !(1..=4096).contains(&options.candidates) {
         return Err(format!("candidates {} must be within 1..=4096", options.candidates));
     }
+    let step = options.lattice;
+    if step == 0 || step > w.min(h) {
+        return Err(format!("lattice {step} must be within 1..={} for a {w}x{h} image", w.min(h)));
+    }
     // A zero field of view or a zero direction would give a silently black image.
     if let Some(problem) = view.problem() {
         return Err(problem);
@@ -347,33 +357,38 @@ pub fn render_reference(
     let scene = Scene::new(world, &lights, &objects);
     let transform = view_transform(view);
     let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
+    // The pixels integrated (all of them, or the lattice's), as pixels of the full image.
+    let (out_w, out_h) = (w / step, h / step);
+    let full_pixel = |x: u32, y: u32| UVec2::new(x * step + step / 2, y * step + step / 2);
     // Camera hits once per pixel: every sample of a pixel shades the same point. A miss sees the background.
     let background = |ray: &Ray| options.daylight.map_or(Vec3::ZERO, |day| day.background(ray.dir));
-    let (hits, backgrounds): (Vec<Option<SurfaceHit>>, Vec<Vec3>) = (0..w * h)
+    let (hits, backgrounds): (Vec<Option<SurfaceHit>>, Vec<Vec3>) = (0..out_w * out_h)
         .into_par_iter()
         .map(|i| {
-            let ray = camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h);
+            let ray = camera_ray(m, transform.translation, full_pixel(i % out_w, i / out_w), w, h);
             (scene.surface(&ray), background(&ray))
         })
         .unzip();
-    let mut rays = (w * h) as u64;
-    let mut sum = vec![Vec3::ZERO; (w * h) as usize];
+    let mut rays = (out_w * out_h) as u64;
+    let mut sum = vec![Vec3::ZERO; (out_w * out_h) as usize];
     let mut done = 0u32;
     // Rows x samples; a time budget ends it early (the bar then stops short).
-    let total = options.spp as u64 * h as u64;
+    let total = options.spp as u64 * out_h as u64;
     let progress = if options.show_progress { Progress::new("reference", total) } else { Progress::hidden(total) };
     // Batches of samples, so a time budget can stop between them.
     while done < options.spp {
         let batch = (options.spp - done).min(16.max(done / 4));
         rays += sum
-            .par_chunks_mut(w as usize)
-            .zip(hits.par_chunks(w as usize))
+            .par_chunks_mut(out_w as usize)
+            .zip(hits.par_chunks(out_w as usize))
             .enumerate()
             .map(|(y, (row, row_hits))| {
                 let mut row_rays = 0u64;
                 for (x, (acc, hit)) in row.iter_mut().zip(row_hits).enumerate() {
                     let Some(hit) = hit else { continue };
-                    let pixel = y as u64 * w as u64 + x as u64;
+                    // The full image's pixel index keys the random stream, so a lattice pixel draws its samples.
+                    let at = full_pixel(x as u32, y as u32);
+                    let pixel = at.y as u64 * w as u64 + at.x as u64;
                     for s in done..done + batch {
                         let mut rng = Pcg::new(options.seed, pixel * 0x1_0000_0000 + s as u64);
                         *acc += scene.path_sample(hit, options, &mut rng, &mut row_rays);
@@ -395,5 +410,6 @@ pub fn render_reference(
         .zip(&backgrounds)
         .map(|((s, hit), background)| if hit.is_some() { *s / done as f32 } else { *background }.extend(1.0).to_array())
         .collect();
-    Ok(Reference { image: LinearImage { width: w, height: h, pixels }, spp: done, elapsed: start.elapsed(), rays })
+    let image = LinearImage { width: out_w, height: out_h, pixels };
+    Ok(Reference { image, spp: done, elapsed: start.elapsed(), rays })
 }

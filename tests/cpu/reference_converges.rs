@@ -247,3 +247,23 @@ fn metrics_have_known_values_and_refuse_bad_input() {
     assert!(compare(&nan, &b).unwrap_err().contains("non-finite pixel at (0, 0)"));
     assert!(compare(&b, &nan).unwrap_err().starts_with("reference has a non-finite"));
 }
+
+#[test]
+fn a_lattice_reference_is_the_full_reference_at_its_pixels() {
+    // `bench --thesis --lattice` measures a full-size frame's error on these pixels only: they must be the very
+    // pixels (same camera rays, same random streams) of the full reference, so the estimate is unbiased.
+    let world = load_scene("cornell").unwrap();
+    let view = world.view(Some("front")).unwrap().clone();
+    let options = ReferenceOptions { width: 30, height: 21, spp: 4, bounces: 0, seed: 5, ..Default::default() };
+    let full = render_reference(&world, &view, &options).unwrap().image;
+    let sparse = render_reference(&world, &view, &ReferenceOptions { lattice: 4, ..options.clone() }).unwrap();
+    assert_eq!((sparse.image.width, sparse.image.height), (7, 5));
+    assert_eq!(sparse.image.pixels, full.lattice(4).pixels);
+    // The lattice's pixels are the full image's at 4i + 2: (2, 2) first, (26, 18) last.
+    assert_eq!(sparse.image.pixel(0, 0), full.pixel(2, 2));
+    assert_eq!(sparse.image.pixel(6, 4), full.pixel(26, 18));
+    assert!(sparse.image.mean_luminance() > 0.0);
+    // A lattice wider than the image is refused, not an empty image.
+    let refused = render_reference(&world, &view, &ReferenceOptions { lattice: 22, ..options });
+    assert!(refused.unwrap_err().contains("lattice 22"));
+}
