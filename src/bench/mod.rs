@@ -63,8 +63,19 @@ pub const SETTINGS: &[BenchSetting] = &[
 /// The setting whose frame time sets the NEE frame budget of the equal-time row.
 pub(crate) const EQUAL_TIME_TO: &str = "restir";
 
-/// Scenes of a full run and of `--quick`.
-pub const ALL_SCENES: &[&str] = &["cornell", "letters", "apartments", "mountain", "window-room", "lights-100k"];
+/// Scenes of a full run and of `--quick`. `thesis-NAME` is the thesis' own `NAME.vx` at its first camera view
+/// (`load_bench_scene`): scenes nobody here built or tuned on.
+pub const ALL_SCENES: &[&str] = &[
+    "cornell",
+    "letters",
+    "apartments",
+    "mountain",
+    "window-room",
+    "lights-100k",
+    "lamp-checkerboard",
+    "thesis-letters",
+    "thesis-cornellbox",
+];
 pub const QUICK_SCENES: &[&str] = &["cornell", "letters"];
 
 /// How big and how long.
@@ -151,14 +162,29 @@ pub fn cached_reference(world: &VoxelWorld, view: &CameraView, config: &BenchCon
     cached_path_reference(world, view, config, 0)
 }
 
-/// The reference's own noise: MAE between the cached reference and one with another seed (also cached).
+/// The reference's own noise: a reference with another seed (also cached) measured against the cached one, the
+/// way a rendered frame is (its MAE is the noise the bench states; its fireflies are the count a frame's are held
+/// to).
 pub fn reference_noise(
     world: &VoxelWorld,
     view: &CameraView,
     config: &BenchConfig,
     reference: &LinearImage,
-) -> Result<f64, String> {
-    reference_noise_of(world, view, config, &Reference::default(), reference)
+) -> Result<Metrics, String> {
+    let other = cached_seeded_reference(world, view, config, &Reference::default(), 2)?;
+    compare(&other, reference)
+}
+
+/// A bench scene by name: a bundled recipe (`assets/scenes/NAME.ron`) or `thesis-NAME`, the thesis' `NAME.vx`
+/// from `../shared/scenes/thesis` (or the tests' copy).
+pub fn load_bench_scene(name: &str) -> Result<VoxelWorld, String> {
+    match name.strip_prefix("thesis-") {
+        Some(stem) => {
+            let path = thesis::thesis_scene(&format!("{stem}.vx"))?;
+            crate::world::source::load_path(&path).map_err(|e| e.to_string())
+        }
+        None => load_scene(name).map_err(|e| e.to_string()),
+    }
 }
 
 /// The noise of the reference `what` (already rendered as `image`): MAE against one with another seed.
@@ -341,16 +367,16 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
     }
     // Every scene is checked before anything is written (a typo in the last name must not cost a long run).
     for name in scenes {
-        load_scene(name).map_err(|e| e.to_string())?;
+        load_bench_scene(name)?;
     }
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let mut rows = Vec::new();
     let mut curves: Vec<CurvePoint> = Vec::new();
-    let mut noise: Vec<(String, f64)> = Vec::new();
+    let mut noise: Vec<(String, Metrics)> = Vec::new();
     let chosen = SETTINGS.iter().filter(|s| config.only.is_empty() || config.only.iter().any(|o| o == s.name)).count();
     let progress = Progress::new("bench", (scenes.len() * chosen) as u64);
     for name in scenes {
-        let world = load_scene(name).map_err(|e| e.to_string())?;
+        let world = load_bench_scene(name)?;
         let view = config.camera.clone().or_else(|| world.view(None).cloned()).unwrap_or_else(|| world.overview());
         let reference = cached_reference(&world, &view, config)?;
         noise.push((name.clone(), reference_noise(&world, &view, config, &reference)?));
@@ -460,11 +486,12 @@ fn write_csv(rows: &[BenchRow], path: &Path) -> Result<(), String> {
 fn write_markdown(
     rows: &[BenchRow],
     curves: &[CurvePoint],
-    noise: &[(String, f64)],
+    noise: &[(String, Metrics)],
     config: &BenchConfig,
     path: &Path,
 ) -> Result<(), String> {
-    let noise_text: Vec<String> = noise.iter().map(|(scene, mae)| format!("{scene} {mae:.5}")).collect();
+    let noise_text: Vec<String> =
+        noise.iter().map(|(scene, m)| format!("{scene} {:.5} ({} fireflies)", m.mae, m.fireflies)).collect();
     let mut text = format!(
         "# Run time against error\n\n{}x{}, one frame (no accumulation; ReSTIR with the temporal history of the \
          frames before it) against a {}-spp direct-light CPU reference; frame time averaged over {} frames after {} \
@@ -472,7 +499,8 @@ fn write_markdown(
          ReSTIR passes; n/a where the adapter has no timestamps). `nee-equal-time` accumulates NEE frames for the \
          frame time of `restir` (its frame ms is the total). FLIP is the mean LDR-FLIP (0: identical). Fireflies: \
          pixels above 100x the reference's luminance plus 1 (after the warm-up and timed frames of a still camera).\n\n\
-         The reference's own noise (MAE between two references with different seeds): {}.\n\n\
+         The reference's own noise (MAE between two references with different seeds, and the fireflies of the \
+         second against the first by the same rule): {}.\n\n\
          | scene | setting | frames | frame ms | GPU ms | MAE | MSE | relMSE | bias | FLIP | fireflies |\n\
          |---|---|---|---|---|---|---|---|---|---|---|\n",
         config.width,

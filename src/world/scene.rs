@@ -41,6 +41,9 @@ pub enum SceneOp {
         size_min: (i32, i32, i32),
         size_max: (i32, i32, i32),
     },
+    /// Fills the voxels of `[min, max)` whose x + y + z is even with a material: a checkerboard of one-voxel
+    /// lamps, each lit on all sides, the many-light stress case of issue 15 (`lamp-checkerboard`).
+    Checker { min: (i32, i32, i32), max: (i32, i32, i32), material: String },
     /// Replaces a seeded `fraction` of the air-exposed voxels of material `on` with materials drawn from
     /// `materials` (lit windows on blocks).
     Speckle { on: String, materials: Vec<String>, fraction: f32 },
@@ -110,6 +113,23 @@ fn apply_op(world: &mut VoxelWorld, seed: u32, op_index: u32, op: &SceneOp) -> R
             let id = material_id(&world.palette, material)?;
             let (lo, hi) = (IVec3::from(*min), IVec3::from(*max));
             world.grid.fill_box(lo, hi, id).map(|_| ()).map_err(|e| format!("box {lo}..{hi}: {e}"))
+        }
+        SceneOp::Checker { min, max, material } => {
+            let id = material_id(&world.palette, material)?;
+            let (lo, hi) = (IVec3::from(*min), IVec3::from(*max));
+            if lo.cmpge(hi).any() || !world.grid.contains(lo) || !world.grid.contains(hi - IVec3::ONE) {
+                return Err(format!("checker {lo}..{hi} must be a non-empty box inside the world"));
+            }
+            for z in lo.z..hi.z {
+                for y in lo.y..hi.y {
+                    // The first x of this row whose x + y + z is even.
+                    let first = lo.x + (lo.x + y + z).rem_euclid(2);
+                    for x in (first..hi.x).step_by(2) {
+                        world.grid.set(IVec3::new(x, y, z), id).map_err(|e| e.to_string())?;
+                    }
+                }
+            }
+            Ok(())
         }
         SceneOp::Terrain { params, rock, soil, surface } => {
             let ids = (

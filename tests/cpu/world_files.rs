@@ -2,7 +2,7 @@
 
 use bevy::math::{IVec3, UVec3};
 use glowbrick::world::format::{load_world, parse_world, save_world, world_to_string};
-use glowbrick::world::scene::{generated_world, load_scene};
+use glowbrick::world::scene::{generated_world, load_scene, parse_recipe};
 use glowbrick::world::source::load_path;
 use glowbrick::world::{Edit, VoxelWorld};
 use std::path::PathBuf;
@@ -144,4 +144,24 @@ fn thesis_like_recipes_build_with_their_lights() {
     assert_eq!(lights("mountain"), (4500, 0));
     // The daylight panel outside the window is 4 x 8 aligned bricks.
     assert_eq!(lights("window-room"), (0, 32));
+    // Half of a 448 x 448 layer, every lamp alone among air and its four diagonal neighbours.
+    assert_eq!(lights("lamp-checkerboard"), (100_352, 0));
+}
+
+/// `Checker` fills the even cells of its box only, and refuses a box outside the world.
+#[test]
+fn checker_fills_every_other_voxel() {
+    let recipe = |ops: &str| {
+        format!(
+            "(size: (8, 4, 8), materials: [(name: \"lamp\", albedo: (1.0, 1.0, 1.0), emission: (1.0, 1.0, 1.0), strength: \
+             1.0)], ops: [{ops}])"
+        )
+    };
+    let world = parse_recipe(&recipe("Checker(min: (1, 1, 1), max: (5, 2, 4), material: \"lamp\")"), "c.ron").unwrap();
+    let mut filled = Vec::new();
+    world.grid.for_each_solid(|p, _| filled.push(p));
+    assert_eq!(filled.len(), 6, "{filled:?}");
+    assert!(filled.iter().all(|p| (p.x + p.y + p.z) % 2 == 0 && p.y == 1), "{filled:?}");
+    let outside = parse_recipe(&recipe("Checker(min: (0, 0, 0), max: (9, 1, 1), material: \"lamp\")"), "c.ron");
+    assert!(outside.unwrap_err().to_string().contains("inside the world"));
 }
