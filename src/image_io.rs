@@ -34,6 +34,23 @@ impl LinearImage {
         LinearImage { pixels, ..*self }
     }
 
+    /// The pixel-wise mean of images of one size (e.g. successive frames accumulated); an empty slice gives an
+    /// empty image.
+    pub fn mean_of(images: &[LinearImage]) -> LinearImage {
+        let Some(first) = images.first() else { return LinearImage { width: 0, height: 0, pixels: Vec::new() } };
+        let mut sum = vec![[0.0f64; 4]; first.pixels.len()];
+        for image in images {
+            for (s, p) in sum.iter_mut().zip(&image.pixels) {
+                for c in 0..4 {
+                    s[c] += p[c] as f64;
+                }
+            }
+        }
+        let n = images.len() as f64;
+        let pixels = sum.iter().map(|s| s.map(|v| (v / n) as f32)).collect();
+        LinearImage { pixels, ..*first }
+    }
+
     /// Count of pixels with a NaN or infinite channel.
     pub fn non_finite_pixels(&self) -> usize {
         self.pixels.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count()

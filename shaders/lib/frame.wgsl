@@ -94,9 +94,11 @@ fn unpack_surface(texel: vec4<f32>) -> Surface {
 fn primary_ray_dir(pixel: vec2<u32>, size: vec2<f32>) -> vec3<f32> {
     let uv = (vec2<f32>(pixel) + 0.5) / size;
     let ndc = vec2(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
-    // Reverse-Z infinite projection: depth 1 is the near plane.
-    let p = view.world_from_clip * vec4(ndc, 1.0, 1.0);
-    return normalize(p.xyz / p.w - view.world_position);
+    // Reverse-Z infinite projection: depth 0 is the point at infinity, whose homogeneous w is 0, so the product
+    // is the direction itself. (The near-plane point minus the camera's position cancelled: with the camera 900
+    // voxels from the origin, as in the thesis' scenes, the direction lost ~1e-3 of itself and 6% of the pixels of
+    // a 320x180 view hit a neighbour of the CPU's voxel.)
+    return normalize((view.world_from_clip * vec4(ndc, 0.0, 1.0)).xyz);
 }
 
 // Voxels across one pixel at `point` (at the view's centre; the GI cache picks its level of detail from it).

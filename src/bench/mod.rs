@@ -18,6 +18,7 @@ pub mod gi;
 pub mod gi_scale;
 pub mod motion;
 pub mod plot;
+pub mod same_hit;
 pub mod thesis;
 
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
@@ -210,10 +211,8 @@ pub fn two_seed_reference(
     let first = cached_reference_of(world, view, config, what)?;
     let second = cached_seeded_reference(world, view, config, what, 2)?;
     let between = compare(&first, &second)?;
-    let pixels =
-        first.pixels.iter().zip(&second.pixels).map(|(a, b)| std::array::from_fn(|c| 0.5 * (a[c] + b[c]))).collect();
     let noise = Metrics { mae: between.mae / 2.0, mse: between.mse / 4.0, relmse: between.relmse / 4.0, ..between };
-    Ok((LinearImage { width: first.width, height: first.height, pixels }, noise))
+    Ok((LinearImage::mean_of(&[first, second]), noise))
 }
 
 /// The reference with `bounces` diffuse bounces (0: direct light), cached like `cached_reference`.
@@ -311,13 +310,15 @@ fn radius_pair(config: &BenchConfig) -> String {
 /// GPU ms per pass that ran, by pass name.
 pub type PassTimes = Vec<(&'static str, f64)>;
 
-/// Renders one scene under one setting and measures it.
+/// Renders one scene under one setting and measures it: the frame time, the passes' GPU times and the `frames`
+/// single frames that follow the timed ones (at least one; the first is the setting's row).
 fn measure(
     world: &VoxelWorld,
     view: &CameraView,
     setting: &BenchSetting,
     config: &BenchConfig,
-) -> Result<(f64, PassTimes, LinearImage), String> {
+    frames: u32,
+) -> Result<(f64, PassTimes, Vec<LinearImage>), String> {
     let mut pairs: Vec<String> = setting.pairs.iter().map(|p| p.to_string()).collect();
     pairs.insert(0, radius_pair(config));
     let settings = RenderSettings::default().with_pairs(&pairs)?;
@@ -330,7 +331,7 @@ fn measure(
     }
     let frame_ms = start.elapsed().as_secs_f64() * 1000.0 / config.timed_frames.max(1) as f64;
     let passes = pass_times(&renderer);
-    Ok((frame_ms, passes, renderer.render(1)?))
+    Ok((frame_ms, passes, renderer.render_sequence(frames.max(1), |_, _| {})?))
 }
 
 /// GPU time of each voxel pass that ran (the primary pass, and the ReSTIR passes when they ran).
@@ -341,7 +342,37 @@ pub(crate) fn pass_times(renderer: &HeadlessRenderer) -> PassTimes {
         .collect()
 }
 
-/// NEE accumulated over as many frames as fit in `budget_ms` of NEE frame time: (frames, frame ms, metrics).
+/// Independent draws the equal-time comparison averages. One accumulation's relMSE is heavy-tailed: NEE's on
+/// `letters` read 0.83, 0.22, 0.10, 0.19, 0.20 at 3, 6, 10, 18, 34 frames of one run (a rare firefly moves it 5x),
+/// so one draw made the ReSTIR / NEE ratio read 4x in one run and 14x in another. The mean of several draws
+/// estimates the expected error a player gets.
+pub(crate) const EQUAL_TIME_TRIALS: u32 = 8;
+
+/// The mean of several measurements; fireflies are the most any one had.
+pub(crate) fn mean_metrics(all: &[Metrics]) -> Metrics {
+    let n = all.len().max(1) as f64;
+    let mean = |f: fn(&Metrics) -> f64| all.iter().map(f).sum::<f64>() / n;
+    Metrics {
+        mae: mean(|m| m.mae),
+        mse: mean(|m| m.mse),
+        relmse: mean(|m| m.relmse),
+        bias: mean(|m| m.bias),
+        fireflies: all.iter().map(|m| m.fireflies).max().unwrap_or(0),
+    }
+}
+
+/// NEE at the time one ReSTIR frame takes: as many NEE frames as fit in `budget_ms` of NEE frame time, averaged;
+/// `EQUAL_TIME_TRIALS` such averages of successive frames (independent: every frame draws its own numbers).
+struct EqualTime {
+    frames: u32,
+    /// The first average (the row of the table) and its FLIP.
+    first: Metrics,
+    flip: f64,
+    /// The mean error over the trials, over all pixels and over the pixels of `keep`.
+    expected: Metrics,
+    expected_kept: Metrics,
+}
+
 fn measure_equal_time(
     world: &VoxelWorld,
     view: &CameraView,
@@ -349,14 +380,44 @@ fn measure_equal_time(
     reference: &LinearImage,
     nee_frame_ms: f64,
     budget_ms: f64,
-) -> Result<(u32, Metrics, f64), String> {
-    let frames = (budget_ms / nee_frame_ms.max(1e-3)).round().clamp(1.0, 4096.0) as u32;
-    let pairs = ["lighting=nee", "pick=power", "accumulate=on"].map(String::from);
+    keep: &[bool],
+) -> Result<EqualTime, String> {
+    let frames = (budget_ms / nee_frame_ms.max(1e-3)).round().clamp(1.0, 512.0) as u32;
+    let pairs = ["lighting=nee", "pick=power"].map(String::from);
     let settings = RenderSettings::default().with_pairs(&pairs)?;
     let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
     let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;
-    let image = renderer.render(frames)?;
-    Ok((frames, compare(&image, reference)?, flip(&image, Encoding::Linear, reference, Encoding::Linear)?.mean))
+    // Warm up as the timed settings do: a sequence read from a new renderer's first frame caught a frame with
+    // no light yet (the first 6-frame average on apartments read -17% of the mean).
+    renderer.render(config.warmup_frames.max(1))?;
+    let images = renderer.render_sequence(frames * EQUAL_TIME_TRIALS, |_, _| {})?;
+    let averages: Vec<LinearImage> = images.chunks(frames as usize).map(LinearImage::mean_of).collect();
+    let metrics = averages.iter().map(|a| compare(a, reference)).collect::<Result<Vec<_>, _>>()?;
+    let flip = flip(&averages[0], Encoding::Linear, reference, Encoding::Linear)?.mean;
+    let kept_reference = same_hit::kept(reference, keep);
+    let kept =
+        averages.iter().map(|a| compare(&same_hit::kept(a, keep), &kept_reference)).collect::<Result<Vec<_>, _>>()?;
+    Ok(EqualTime {
+        frames,
+        first: metrics[0],
+        flip,
+        expected: mean_metrics(&metrics),
+        expected_kept: mean_metrics(&kept),
+    })
+}
+
+/// One scene's equal-time comparison for the report: ReSTIR's expected one-frame error (the mean over
+/// `EQUAL_TIME_TRIALS` successive frames) against NEE's expected error at the same time.
+struct EqualTimeRow {
+    scene: String,
+    nee_frames: u32,
+    nee: Metrics,
+    restir: Metrics,
+    /// The same over the pixels whose camera ray hits the same voxel face on the GPU and the CPU
+    /// (`same_hit`), and how many pixels that leaves out.
+    nee_kept: Metrics,
+    restir_kept: Metrics,
+    left_out: usize,
 }
 
 /// Runs every scene x setting and writes the three outputs to `out`.
@@ -373,6 +434,7 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
     let mut rows = Vec::new();
     let mut curves: Vec<CurvePoint> = Vec::new();
     let mut noise: Vec<(String, Metrics)> = Vec::new();
+    let mut equal_time: Vec<EqualTimeRow> = Vec::new();
     let chosen = SETTINGS.iter().filter(|s| config.only.is_empty() || config.only.iter().any(|o| o == s.name)).count();
     let progress = Progress::new("bench", (scenes.len() * chosen) as u64);
     for name in scenes {
@@ -382,8 +444,22 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
         noise.push((name.clone(), reference_noise(&world, &view, config, &reference)?));
         let first = rows.len();
         let mut strip = vec![reference.clone()];
+        let mut restir_expected = None;
+        let keep = same_hit::same_hit_pixels(&world, &view, config.width, config.height)?;
+        let kept_reference = same_hit::kept(&reference, &keep);
         for setting in SETTINGS.iter().filter(|s| config.only.is_empty() || config.only.iter().any(|o| o == s.name)) {
-            let (frame_ms, passes, image) = measure(&world, &view, setting, config)?;
+            // The setting NEE is held to at equal time: its expected one-frame error over several frames.
+            let frames = if setting.name == EQUAL_TIME_TO { EQUAL_TIME_TRIALS } else { 1 };
+            let (frame_ms, passes, images) = measure(&world, &view, setting, config, frames)?;
+            if setting.name == EQUAL_TIME_TO {
+                let each = images.iter().map(|i| compare(i, &reference)).collect::<Result<Vec<_>, _>>()?;
+                let kept = images
+                    .iter()
+                    .map(|i| compare(&same_hit::kept(i, &keep), &kept_reference))
+                    .collect::<Result<Vec<_>, _>>()?;
+                restir_expected = Some((mean_metrics(&each), mean_metrics(&kept)));
+            }
+            let image = images.into_iter().next().ok_or("no frame rendered")?;
             let metrics = compare(&image, &reference)?;
             let flip = flip(&image, Encoding::Linear, &reference, Encoding::Linear)?;
             progress.println(&format!(
@@ -407,8 +483,12 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
         let times: Vec<(String, f64)> = rows[first..].iter().map(|r| (r.setting.clone(), r.frame_ms)).collect();
         let time_of = |setting: &str| times.iter().find(|(s, _)| s == setting).map(|&(_, ms)| ms);
         if let (Some(nee_ms), Some(budget_ms)) = (time_of("nee-power"), time_of(EQUAL_TIME_TO)) {
-            let (frames, metrics, flip) = measure_equal_time(&world, &view, config, &reference, nee_ms, budget_ms)?;
-            progress.println(&format!("bench: {name} nee-equal-time ({frames} frames): {metrics}"));
+            let nee = measure_equal_time(&world, &view, config, &reference, nee_ms, budget_ms, &keep)?;
+            let frames = nee.frames;
+            progress.println(&format!(
+                "bench: {name} nee-equal-time ({frames} frames): {}; mean of {EQUAL_TIME_TRIALS}: {}",
+                nee.first, nee.expected
+            ));
             rows.push(BenchRow {
                 scene: name.clone(),
                 setting: format!("nee-equal-time ({frames} frames)"),
@@ -416,9 +496,26 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
                 frame_ms: nee_ms * frames as f64,
                 gpu_ms: None,
                 passes: Vec::new(),
-                metrics,
-                flip,
+                metrics: nee.first,
+                flip: nee.flip,
             });
+            if let Some((restir, restir_kept)) = restir_expected {
+                progress.println(&format!(
+                    "bench: {name} equal time over the {} pixels hit alike: NEE {}, ReSTIR {}",
+                    keep.iter().filter(|k| **k).count(),
+                    nee.expected_kept,
+                    restir_kept
+                ));
+                equal_time.push(EqualTimeRow {
+                    scene: name.clone(),
+                    nee_frames: frames,
+                    nee: nee.expected,
+                    restir,
+                    nee_kept: nee.expected_kept,
+                    restir_kept,
+                    left_out: keep.iter().filter(|k| !**k).count(),
+                });
+            }
         }
         for method in METHODS {
             let Some(frame_ms) = time_of(method.setting) else { continue };
@@ -448,9 +545,47 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
         });
     }
     write_csv(&rows, &out.join("results.csv"))?;
-    write_markdown(&rows, &curves, &noise, config, &out.join("report.md"))?;
+    write_markdown(&rows, &curves, &noise, &equal_time, config, &out.join("report.md"))?;
     plot::write_plot(&rows, &curves, &out.join("plot.svg"))?;
     Ok(rows)
+}
+
+/// The expected equal-time comparison: the ratio of the mean errors, each over `EQUAL_TIME_TRIALS` draws.
+fn equal_time_markdown(rows: &[EqualTimeRow]) -> String {
+    if rows.is_empty() {
+        return String::new();
+    }
+    let mut text = format!(
+        "\n## Equal time, expected\n\nReSTIR's one-frame error averaged over {EQUAL_TIME_TRIALS} successive frames \
+         (`{EQUAL_TIME_TO}`, after the timed ones) against NEE averaged over the frames that fit in one ReSTIR \
+         frame's time, itself averaged over {EQUAL_TIME_TRIALS} such accumulations of successive frames. One draw \
+         of either is heavy-tailed (a rare firefly moves NEE's relMSE several times over); the table above has one \
+         draw each. The last columns measure the same over the pixels whose camera ray hits the same voxel face \
+         on the GPU and the CPU (`src/bench/same_hit.rs`: a lamp one voxel thick seen edge-on is a lamp in one \
+         image and a wall in the other).\n\n| scene | NEE frames | relMSE NEE | relMSE ReSTIR | ratio | MAE NEE | \
+         MAE ReSTIR | ratio | bias ReSTIR | most fireflies in one ReSTIR frame | pixels hit differently | relMSE \
+         NEE, same hits | relMSE ReSTIR, same hits | ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+    );
+    for r in rows {
+        text += &format!(
+            "| {} | {} | {:.5} | {:.5} | {:.1}x | {:.5} | {:.5} | {:.1}x | {:+.6} | {} | {} | {:.5} | {:.5} | {:.1}x |\n",
+            r.scene,
+            r.nee_frames,
+            r.nee.relmse,
+            r.restir.relmse,
+            r.nee.relmse / r.restir.relmse.max(1e-12),
+            r.nee.mae,
+            r.restir.mae,
+            r.nee.mae / r.restir.mae.max(1e-12),
+            r.restir.bias,
+            r.restir.fireflies,
+            r.left_out,
+            r.nee_kept.relmse,
+            r.restir_kept.relmse,
+            r.nee_kept.relmse / r.restir_kept.relmse.max(1e-12),
+        );
+    }
+    text
 }
 
 fn gpu_text(ms: Option<f64>) -> String {
@@ -487,6 +622,7 @@ fn write_markdown(
     rows: &[BenchRow],
     curves: &[CurvePoint],
     noise: &[(String, Metrics)],
+    equal_time: &[EqualTimeRow],
     config: &BenchConfig,
     path: &Path,
 ) -> Result<(), String> {
@@ -513,6 +649,7 @@ fn write_markdown(
     for r in rows.iter().filter(|r| !r.setting.ends_with(" accumulated")) {
         text += &format!("| {} |\n", cells(r).join(" | "));
     }
+    text += &equal_time_markdown(equal_time);
     text += &format!(
         "\n## Convergence\n\nA static camera accumulating frames (`accumulate=on`): the error read at about 1, 2, 4, \
          ... {} frames (the readback lands a frame or two after the goal; `frames` is the real count), at frames x \

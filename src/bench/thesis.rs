@@ -102,6 +102,8 @@ pub struct ThesisOptions {
     pub lattice: u32,
     /// Only the views whose label contains one of these (empty: all four).
     pub views: Vec<String>,
+    /// Area samples only; the point-sample columns read n/a.
+    pub area_only: bool,
 }
 
 fn render_mode(
@@ -193,8 +195,13 @@ pub fn run_thesis_bench(options: &ThesisOptions, out: &Path) -> Result<String, S
         write_image(&image, &out.join(format!("{}-reference.exr", file_stem(t.label))))?;
         let reference = Lattice { image, step: lattice };
         let area = render_mode(&world, &view, &config, &reference, "area", (t.label, out))?;
-        let point = render_mode(&world, &view, &config, &reference, "point", (t.label, out))?;
-        eprintln!("thesis: {}: area {}, point {}, reference noise {}", t.label, area.metrics, point.metrics, noise);
+        let point = if options.area_only {
+            None
+        } else {
+            Some(render_mode(&world, &view, &config, &reference, "point", (t.label, out))?)
+        };
+        let point_text = point.as_ref().map_or("not rendered".to_string(), |p| p.metrics.to_string());
+        eprintln!("thesis: {}: area {}, point {point_text}, reference noise {}", t.label, area.metrics, noise);
         rows.push((t, area, point, noise));
     }
     let text = thesis_markdown(&rows, &config, options);
@@ -218,15 +225,20 @@ fn passes_text(passes: &[(&'static str, f64)]) -> String {
     format!("{total:.1} ({})", each.join(", "))
 }
 
-type ThesisRow<'a> = (&'a ThesisView, ThesisResult, ThesisResult, Metrics);
+type ThesisRow<'a> = (&'a ThesisView, ThesisResult, Option<ThesisResult>, Metrics);
 
 fn thesis_markdown(rows: &[ThesisRow], config: &BenchConfig, options: &ThesisOptions) -> String {
     let ThesisOptions { scale, lattice, .. } = *options;
-    let command = if lattice > 1 {
-        format!("glowbrick bench --thesis --scale {scale} --lattice {lattice} --spp {}", options.spp)
-    } else {
-        format!("glowbrick bench --thesis --scale {scale} --spp {}", options.spp)
-    };
+    let mut command = format!("glowbrick bench --thesis --scale {scale} --spp {}", options.spp);
+    if lattice > 1 {
+        command += &format!(" --lattice {lattice}");
+    }
+    if !options.views.is_empty() {
+        command += &format!(" --views {}", options.views.join(","));
+    }
+    if options.area_only {
+        command += " --area-only";
+    }
     let measured_on = if lattice > 1 {
         format!(
             "; errors measured on every {lattice}th pixel in each direction ({}x{} pixels, an unbiased estimate of \
@@ -253,22 +265,23 @@ fn thesis_markdown(rows: &[ThesisRow], config: &BenchConfig, options: &ThesisOpt
         config.reference_spp
     );
     for (t, area, point, noise) in rows {
+        let of_point = |f: &dyn Fn(&ThesisResult) -> String| point.as_ref().map_or("n/a".to_string(), f);
         text += &format!(
-            "| {} | {:.4} | {:.4} | {} | {} | {} | {:.4} | {:.4}, {:.4} | {:.5} | {:.5} | {:.4} | {} | {} |\n",
+            "| {} | {:.4} | {} | {} | {} | {} | {:.4} | {:.4}, {} | {:.5} | {} | {:.4} | {} | {} |\n",
             t.label,
             area.metrics.mae,
-            point.metrics.mae,
+            of_point(&|p| format!("{:.4}", p.metrics.mae)),
             cell(t.thesis_mae[0]),
             cell(t.thesis_mae[1]),
             cell(t.thesis_mae[2]),
             noise.mae,
             area.clamped.mae,
-            point.clamped.mae,
+            of_point(&|p| format!("{:.4}", p.clamped.mae)),
             area.metrics.mse,
-            point.metrics.mse,
+            of_point(&|p| format!("{:.5}", p.metrics.mse)),
             t.thesis_mse_area,
             passes_text(&area.passes),
-            passes_text(&point.passes),
+            of_point(&|p| passes_text(&p.passes)),
         );
     }
     text

@@ -69,6 +69,10 @@ pub struct BenchArgs {
     /// With --thesis: only the views whose label contains one of these, e.g. `letters` (default: all four).
     #[arg(long, value_delimiter = ',', requires = "thesis")]
     views: Vec<String>,
+    /// With --thesis: area samples only (the point-sample columns read n/a): half the GPU time, for the
+    /// thesis' full size on a slow adapter.
+    #[arg(long, requires = "thesis")]
+    area_only: bool,
     /// With --thesis, --gi, --daylight or --denoise: samples per pixel of the CPU reference.
     #[arg(long, default_value_t = 1024, requires = "mode", conflicts_with_all = SWEEP)]
     spp: u32,
@@ -137,6 +141,7 @@ impl BenchArgs {
                 spp: self.spp,
                 lattice: self.lattice,
                 views: self.views,
+                area_only: self.area_only,
             })
         } else if self.gi {
             BenchMode::Gi { spp: self.spp, game_sizes: self.game_sizes }

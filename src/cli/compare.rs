@@ -58,7 +58,8 @@ impl CompareArgs {
             };
             write_png_plain(&picture, &path)?;
         }
-        println!("{m} flip={:.6}", flip.mean);
+        // The reference's mean says what a bias is a share of.
+        println!("{m} flip={:.6} reference_mean={:.6}", flip.mean, b.mean_luminance());
         Ok(())
     }
 }

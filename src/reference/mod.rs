@@ -44,8 +44,9 @@ use sampling::{Pcg, cosine_direction, light_contains, sample_light_point};
 use std::time::{Duration, Instant};
 
 /// Changes whenever the estimator changes what a given seed draws, so cached references are not reused across
-/// estimators (2: near faces by solid angle, half the candidates from the nearby lights).
-pub const ESTIMATOR_VERSION: u32 = 2;
+/// estimators (2: near faces by solid angle, half the candidates from the nearby lights; 3: camera rays from the
+/// point at infinity, `world::camera_ray`).
+pub const ESTIMATOR_VERSION: u32 = 3;
 
 /// How to integrate.
 #[derive(Clone, Debug)]

@@ -27,6 +27,7 @@ pub fn world_from_clip(transform: &Transform, fov_y: f32, width: u32, height: u3
 pub fn camera_ray(world_from_clip: Mat4, origin: Vec3, pixel: UVec2, width: u32, height: u32) -> Ray {
     let uv = (pixel.as_vec2() + 0.5) / Vec2::new(width as f32, height as f32);
     let ndc = Vec2::new(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
-    let p = world_from_clip * Vec4::new(ndc.x, ndc.y, 1.0, 1.0);
-    Ray::new(origin, p.truncate() / p.w - origin)
+    // Depth 0 of the reverse-Z infinite projection is the point at infinity (w = 0): the product is the direction,
+    // free of the cancellation that a near-plane point minus a camera far from the origin suffers.
+    Ray::new(origin, (world_from_clip * Vec4::new(ndc.x, ndc.y, 0.0, 1.0)).truncate())
 }

@@ -41,25 +41,35 @@ fn converged(world: &VoxelWorld, view: &CameraView, truth: &LinearImage, keep: &
     compare(&common::masked(&image, keep), &common::masked(truth, keep)).unwrap()
 }
 
+/// Every reuse (bias bound as a share of the mean): unbiased with temporal only, spatial only and both; the
+/// default (one ray per neighbour) and biased with both. The default is unbiased for a still view like
+/// `unbiased`; `biased` (no rays) is darker near shadow edges (-8% cornell, -16% letters at this size; -10% / -15%
+/// before near faces were sampled by solid angle).
+const EVERY_REUSE: [(&[&str], f64); 5] = [
+    (&["reuse=unbiased", "spatial=off"], 0.025),
+    (&["reuse=unbiased", "temporal=off"], 0.025),
+    (&["reuse=unbiased"], 0.025),
+    (&["reuse=one-ray"], 0.025),
+    (&["reuse=biased"], 0.17),
+];
+
+/// Temporal and spatial reuse together, in each variant.
+const FULL_REUSE: [(&[&str], f64); 3] =
+    [(&["reuse=unbiased"], 0.025), (&["reuse=one-ray"], 0.025), (&["reuse=biased"], 0.17)];
+
 fn check_convergence(name: &str) {
     let world = load_scene(name).unwrap();
     let view = world.view(Some("front")).unwrap().clone();
-    let keep = common::comparable_pixels(&world, &view, W, H);
-    let truth = reference(&world, &view, 4096);
+    check_convergence_of(name, &world, &view, &EVERY_REUSE);
+}
+
+fn check_convergence_of(name: &str, world: &VoxelWorld, view: &CameraView, cases: &[(&[&str], f64)]) {
+    let keep = common::comparable_pixels(world, view, W, H);
+    let truth = reference(world, view, 4096);
     let mean = common::masked(&truth, &keep).mean_luminance();
     eprintln!("{name}: mean {mean:.4}");
-    // The default (one ray per neighbour) is unbiased for a still view like `unbiased`; `biased` (no rays) is
-    // darker near shadow edges (-8% cornell, -16% letters at this size; -10% / -15% before near faces were
-    // sampled by solid angle).
-    let cases: [(&[&str], f64); 5] = [
-        (&["reuse=unbiased", "spatial=off"], 0.025),
-        (&["reuse=unbiased", "temporal=off"], 0.025),
-        (&["reuse=unbiased"], 0.025),
-        (&["reuse=one-ray"], 0.025),
-        (&["reuse=biased"], 0.17),
-    ];
-    for (pairs, bias_bound) in cases {
-        let m = converged(&world, &view, &truth, &keep, pairs);
+    for &(pairs, bias_bound) in cases {
+        let m = converged(world, view, &truth, &keep, pairs);
         eprintln!("{name} {pairs:?}: {m} (bias {:+.1}% of the mean)", 100.0 * m.bias / mean);
         assert!(m.bias.abs() < bias_bound * mean, "{name} {pairs:?}: bias {} of mean {mean}", m.bias);
         assert!(m.relmse < 0.02, "{name} {pairs:?}: relMSE {}", m.relmse);
@@ -72,6 +82,27 @@ pub fn unbiased_restir_converges_to_the_reference_on_the_cornell_box() {
 
 pub fn unbiased_restir_converges_to_the_reference_on_the_letters() {
     check_convergence("letters");
+}
+
+/// Scenes nobody here tuned on, each with temporal and spatial reuse on: the thesis' own letters (both of its
+/// views) and cornell box, imported from `.vx`, and our apartments and mountain (issue 15). The same bounds as
+/// the recipes above.
+pub fn restir_with_temporal_reuse_converges_on_the_thesis_scenes_apartments_and_mountain() {
+    let thesis = |file: &str| {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/thesis").join(file);
+        glowbrick::world::source::load_path(&path).unwrap()
+    };
+    let letters = thesis("letters.vx");
+    let cornell = thesis("cornellbox.vx");
+    for (name, world, view) in
+        [("letters1", &letters, "letters1"), ("letters2", &letters, "letters2"), ("cornell1", &cornell, "cornell1")]
+    {
+        check_convergence_of(name, world, world.view(Some(view)).unwrap(), &FULL_REUSE);
+    }
+    for name in ["apartments", "mountain"] {
+        let world = load_scene(name).unwrap();
+        check_convergence_of(name, &world, &world.views[0], &FULL_REUSE);
+    }
 }
 
 /// A 32^3 room: white floor, a one-voxel wall across x = 16 (both faces seen from either side), and a lamp
