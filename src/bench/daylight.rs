@@ -82,7 +82,7 @@ fn measure(
     let day = Some(Daylight::at(hours, true));
     let reference = Reference { bounces: REFERENCE_BOUNCES, daylight: day, lattice: None };
     let truth = cached_reference_of(world, view, config, &reference)?;
-    let noise = reference_noise_of(world, view, config, &reference, &truth)?;
+    let noise = reference_noise_of(world, view, config, &reference, &truth)?.mae;
     let mut pairs: Vec<String> = GAME_PAIRS.iter().map(|p| p.to_string()).collect();
     pairs.push(format!("time={hours}"));
     let mut r = renderer(world, view, config, &pairs)?;

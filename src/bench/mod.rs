@@ -172,8 +172,7 @@ pub fn reference_noise(
     config: &BenchConfig,
     reference: &LinearImage,
 ) -> Result<Metrics, String> {
-    let other = cached_seeded_reference(world, view, config, &Reference::default(), 2)?;
-    compare(&other, reference)
+    reference_noise_of(world, view, config, &Reference::default(), reference)
 }
 
 /// A bench scene by name: a bundled recipe (`assets/scenes/NAME.ron`) or `thesis-NAME`, the thesis' `NAME.vx`
@@ -195,9 +194,9 @@ pub fn reference_noise_of(
     config: &BenchConfig,
     what: &Reference,
     image: &LinearImage,
-) -> Result<f64, String> {
+) -> Result<Metrics, String> {
     let other = cached_seeded_reference(world, view, config, what, 2)?;
-    Ok(compare(&other, image)?.mae)
+    compare(&other, image)
 }
 
 /// A reference of twice the samples, the mean of the two seeds' (each cached), and its own noise: MAE and relMSE
@@ -361,6 +360,22 @@ pub(crate) fn mean_metrics(all: &[Metrics]) -> Metrics {
     }
 }
 
+/// The mean error of `images` against `reference`, over all pixels and over the pixels of `keep`.
+fn expected_errors(
+    images: &[LinearImage],
+    reference: &LinearImage,
+    keep: &[bool],
+) -> Result<(Metrics, Metrics), String> {
+    let kept_reference = same_hit::kept(reference, keep);
+    let mut all = Vec::new();
+    let mut kept = Vec::new();
+    for image in images {
+        all.push(compare(image, reference)?);
+        kept.push(compare(&same_hit::kept(image, keep), &kept_reference)?);
+    }
+    Ok((mean_metrics(&all), mean_metrics(&kept)))
+}
+
 /// NEE at the time one ReSTIR frame takes: as many NEE frames as fit in `budget_ms` of NEE frame time, averaged;
 /// `EQUAL_TIME_TRIALS` such averages of successive frames (independent: every frame draws its own numbers).
 struct EqualTime {
@@ -392,18 +407,10 @@ fn measure_equal_time(
     renderer.render(config.warmup_frames.max(1))?;
     let images = renderer.render_sequence(frames * EQUAL_TIME_TRIALS, |_, _| {})?;
     let averages: Vec<LinearImage> = images.chunks(frames as usize).map(LinearImage::mean_of).collect();
-    let metrics = averages.iter().map(|a| compare(a, reference)).collect::<Result<Vec<_>, _>>()?;
+    let first = compare(&averages[0], reference)?;
     let flip = flip(&averages[0], Encoding::Linear, reference, Encoding::Linear)?.mean;
-    let kept_reference = same_hit::kept(reference, keep);
-    let kept =
-        averages.iter().map(|a| compare(&same_hit::kept(a, keep), &kept_reference)).collect::<Result<Vec<_>, _>>()?;
-    Ok(EqualTime {
-        frames,
-        first: metrics[0],
-        flip,
-        expected: mean_metrics(&metrics),
-        expected_kept: mean_metrics(&kept),
-    })
+    let (expected, expected_kept) = expected_errors(&averages, reference, keep)?;
+    Ok(EqualTime { frames, first, flip, expected, expected_kept })
 }
 
 /// One scene's equal-time comparison for the report: ReSTIR's expected one-frame error (the mean over
@@ -446,18 +453,12 @@ pub fn run_bench(scenes: &[String], config: &BenchConfig, out: &Path) -> Result<
         let mut strip = vec![reference.clone()];
         let mut restir_expected = None;
         let keep = same_hit::same_hit_pixels(&world, &view, config.width, config.height)?;
-        let kept_reference = same_hit::kept(&reference, &keep);
         for setting in SETTINGS.iter().filter(|s| config.only.is_empty() || config.only.iter().any(|o| o == s.name)) {
             // The setting NEE is held to at equal time: its expected one-frame error over several frames.
             let frames = if setting.name == EQUAL_TIME_TO { EQUAL_TIME_TRIALS } else { 1 };
             let (frame_ms, passes, images) = measure(&world, &view, setting, config, frames)?;
             if setting.name == EQUAL_TIME_TO {
-                let each = images.iter().map(|i| compare(i, &reference)).collect::<Result<Vec<_>, _>>()?;
-                let kept = images
-                    .iter()
-                    .map(|i| compare(&same_hit::kept(i, &keep), &kept_reference))
-                    .collect::<Result<Vec<_>, _>>()?;
-                restir_expected = Some((mean_metrics(&each), mean_metrics(&kept)));
+                restir_expected = Some(expected_errors(&images, &reference, &keep)?);
             }
             let image = images.into_iter().next().ok_or("no frame rendered")?;
             let metrics = compare(&image, &reference)?;

@@ -100,8 +100,5 @@ pub fn touches_emitter(world: &VoxelWorld, v: IVec3) -> bool {
         .any(|z| (-1..=1).any(|y| (-1..=1).any(|x| world.palette.is_emissive(world.grid.get(v + IVec3::new(x, y, z))))))
 }
 
-/// The pixels of `image` where `keep` is true, as a one-row image.
-pub fn masked(image: &LinearImage, keep: &[bool]) -> LinearImage {
-    let pixels = image.pixels.iter().zip(keep).filter(|(_, k)| **k).map(|(p, _)| *p).collect::<Vec<_>>();
-    LinearImage { width: pixels.len() as u32, height: 1, pixels }
-}
+/// The pixels of `image` where `keep` is true, as a one-row image (the bench's own mask).
+pub use glowbrick::bench::same_hit::kept as masked;
