@@ -5,7 +5,7 @@
 
 #import glowbrick::traversal::{trace_scene, INF}
 #import glowbrick::random::{Rng, rng_next, rng_next_u32}
-#import glowbrick::constants::{RAY_OFFSET, PI, LIGHT_FACES_SHIFT, LIGHT_SIZE_MASK}
+#import glowbrick::constants::{RAY_OFFSET, PI, LIGHT_FACES_SHIFT, LIGHT_SIZE_MASK, BRICK_SIZE}
 
 struct Light {
     min: vec3<i32>,
@@ -42,6 +42,11 @@ struct SceneLighting {
 @group(2) @binding(0) var<storage, read> lights: array<Light>;
 @group(2) @binding(1) var<storage, read> alias_table: array<AliasEntry>;
 @group(2) @binding(2) var<uniform> scene: SceneLighting;
+// Light cube -> alias column, open addressing at load <= 1/2 (src/lights/index.rs builds it; an entry is only the
+// column, the key is checked against the light itself).
+@group(2) @binding(3) var<storage, read> light_index: array<u32>;
+
+const NO_COLUMN: u32 = 0xffffffffu;
 
 // Sky radiance in direction `dir`, not counting the disk (lights::daylight::Daylight::sky).
 fn sky(dir: vec3<f32>) -> vec3<f32> {
@@ -141,6 +146,43 @@ fn pick_light(count: u32, power: bool, r_column: u32, u_pick: f32) -> PickedLigh
     }
     let other = alias_table[entry.alias_column];
     return PickedLight(other.slot, other.pdf);
+}
+
+// The home entry of a light cube (src/lights/index.rs, light_hash): multiply-xor, then murmur3's finaliser.
+fn light_hash(min: vec3<i32>, size: i32) -> u32 {
+    var h = (u32(min.x) * 0x8da6b343u) ^ (u32(min.y) * 0xd8163841u) ^ (u32(min.z) * 0xcb1ab31fu) ^ u32(size);
+    h ^= h >> 16u;
+    h *= 0x85ebca6bu;
+    h ^= h >> 13u;
+    h *= 0xc2b2ae35u;
+    return h ^ (h >> 16u);
+}
+
+// The alias column of the light whose cube is (min, size), or NO_COLUMN.
+fn find_light(min: vec3<i32>, size: i32) -> u32 {
+    let mask = arrayLength(&light_index) - 1u;
+    var i = light_hash(min, size) & mask;
+    for (var probe = 0u; probe <= mask; probe++) {
+        let column = light_index[i];
+        if column == NO_COLUMN {
+            break;
+        }
+        let light = lights[alias_table[column].slot];
+        if all(light.min == min) && light_size(light) == size {
+            return column;
+        }
+        i = (i + 1u) & mask;
+    }
+    return NO_COLUMN;
+}
+
+// The alias column of the light that voxel p belongs to: a one-voxel light, or its brick's brick light.
+fn light_at_voxel(p: vec3<i32>) -> u32 {
+    let column = find_light(p, 1);
+    if column != NO_COLUMN {
+        return column;
+    }
+    return find_light(p & vec3(-BRICK_SIZE), BRICK_SIZE);
 }
 
 fn light_size(light: Light) -> i32 {

@@ -4,13 +4,14 @@
 // shade.wgsl.
 #define_import_path glowbrick::restir::common
 
-#import glowbrick::world::materials
+#import glowbrick::world::{materials, voxel_at}
 #import glowbrick::traversal::{trace_scene, face_normal}
-#import glowbrick::lights::{Light, lights, scene, pick_light, light_contains, light_size, face_exposed}
+#import glowbrick::lights::{Light, PickedLight, lights, scene, alias_table, pick_light, light_contains, light_size,
+    face_exposed, light_at_voxel, NO_COLUMN}
 #import glowbrick::random::{Rng, rng_next, rng_next_u32, pcg}
 #import glowbrick::counters::counters
 #import glowbrick::guards::finite
-#import glowbrick::constants::{RAY_OFFSET, PI, RESTIR_POINT, RESTIR_UNBIASED, RESTIR_ONE_RAY,
+#import glowbrick::constants::{RAY_OFFSET, PI, RESTIR_POINT, RESTIR_UNBIASED, RESTIR_ONE_RAY, RESTIR_LOCAL,
     COUNT_RESERVOIR_RESETS}
 #import glowbrick::frame::{frame, view, Surface, luminance}
 
@@ -237,12 +238,95 @@ struct Candidate {
     target_value: f32,
 }
 
-// One candidate: a light from the alias table (power or uniform), then, in area mode, one of the exposed faces
+// The lights touching the air in front of a face, found once per pixel: a lamp lying beside a surface lights it
+// most (its contribution grows without bound at the edge), yet the power pick finds it once in N lights, so
+// among 10^5 lamps one candidate in thousands of frames found it and that pixel flashed. Candidates are a mixture:
+// with probability LOCAL_SHARE one of these lights uniformly, else the power pick; every candidate's pdf is the
+// mixture's, so the estimate stays unbiased.
+const LOCAL_LIGHTS: u32 = 8u;
+const LOCAL_SHARE: f32 = 0.25;
+
+struct LocalLights {
+    slots: array<u32, LOCAL_LIGHTS>,
+    // The power pick's probability of each (its alias entry's pdf, or 1 / n when picking uniformly).
+    pick_pdfs: array<f32, LOCAL_LIGHTS>,
+    count: u32,
+}
+
+// The lights among the 3x3 voxels around the air voxel in front of the face and the 3x3 beyond them (17 voxels:
+// the face's own layer holds nothing that can shine on it). None with local_lights off or a single light.
+fn local_lights(x: Shading) -> LocalLights {
+    var local: LocalLights;
+    local.count = 0u;
+    if (frame.restir_flags & RESTIR_LOCAL) == 0u || scene.light_count <= 1u {
+        return local;
+    }
+    let n = vec3<i32>(round(x.normal));
+    let front = vec3<i32>(floor(x.point + 0.5 * x.normal));
+    let axis = select(select(2u, 1u, n.y != 0), 0u, n.x != 0);
+    var t = vec3(0);
+    t[(axis + 1u) % 3u] = 1;
+    var b = vec3(0);
+    b[(axis + 2u) % 3u] = 1;
+    for (var layer = 0; layer < 2; layer++) {
+        for (var du = -1; du <= 1; du++) {
+            for (var dv = -1; dv <= 1; dv++) {
+                if layer == 0 && du == 0 && dv == 0 {
+                    continue;
+                }
+                let q = front + layer * n + du * t + dv * b;
+                let material = voxel_at(q);
+                if material == 0u || all(materials[material].radiance.rgb == vec3(0.0)) {
+                    continue;
+                }
+                let column = light_at_voxel(q);
+                if column == NO_COLUMN {
+                    continue;
+                }
+                let slot = alias_table[column].slot;
+                var known = false;
+                for (var i = 0u; i < local.count; i++) {
+                    known = known || local.slots[i] == slot;
+                }
+                if !known && local.count < LOCAL_LIGHTS {
+                    local.slots[local.count] = slot;
+                    local.pick_pdfs[local.count] =
+                        select(1.0 / f32(scene.light_count), alias_table[column].pdf, scene.power_pick == 1u);
+                    local.count++;
+                }
+            }
+        }
+    }
+    return local;
+}
+
+// A light by the mixture of the power pick and the local lights, with the mixture's probability.
+fn pick_candidate_light(local: ptr<function, LocalLights>, rng: ptr<function, Rng>) -> PickedLight {
+    let count = (*local).count;
+    if count == 0u {
+        return pick_light(scene.light_count, scene.power_pick == 1u, rng_next_u32(rng), rng_next(rng));
+    }
+    var picked: PickedLight;
+    if rng_next(rng) < LOCAL_SHARE {
+        let i = min(u32(rng_next(rng) * f32(count)), count - 1u);
+        picked = PickedLight((*local).slots[i], (*local).pick_pdfs[i]);
+    } else {
+        picked = pick_light(scene.light_count, scene.power_pick == 1u, rng_next_u32(rng), rng_next(rng));
+    }
+    var local_pdf = 0.0;
+    for (var i = 0u; i < count; i++) {
+        local_pdf = select(local_pdf, 1.0 / f32(count), (*local).slots[i] == picked.slot);
+    }
+    picked.pdf = (1.0 - LOCAL_SHARE) * picked.pdf + LOCAL_SHARE * local_pdf;
+    return picked;
+}
+
+// One candidate: a light from the alias table (power or uniform) or the local lights, then, in area mode, one of the exposed faces
 // that see the shading point in proportion to its exact solid angle and a point on it (uniform in area, or in
 // solid angle when the face is near); in point mode the centre.
-fn sample_candidate(x: Shading, rng: ptr<function, Rng>) -> Candidate {
+fn sample_candidate(x: Shading, local: ptr<function, LocalLights>, rng: ptr<function, Rng>) -> Candidate {
     var c = Candidate(empty_reservoir(), 0.0, 0.0);
-    let picked = pick_light(scene.light_count, scene.power_pick == 1u, rng_next_u32(rng), rng_next(rng));
+    let picked = pick_candidate_light(local, rng);
     let u_face = rng_next(rng);
     let uv = vec2(rng_next(rng), rng_next(rng));
     let light = lights[picked.slot];

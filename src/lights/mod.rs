@@ -11,10 +11,12 @@
 
 pub mod alias;
 pub mod daylight;
+pub mod index;
 pub mod plugin;
 pub mod summary;
 
 pub use alias::{AliasEntry, AliasTable};
+pub use index::LightIndex;
 
 use crate::colour::luminance;
 use crate::world::grid::{BRICK_SIZE, BrickCell, Voxel};
@@ -72,6 +74,8 @@ pub struct LightPool {
     /// Slots added, removed or changed since the last `take_changed`.
     changed: BTreeSet<u32>,
     alias: AliasTable,
+    /// Light cube -> alias column, rebuilt with the alias table.
+    index: LightIndex,
     alias_stale: bool,
     /// Voxel lights per brick, so edits can skip bricks that have none and can have none.
     voxel_lights_per_brick: HashMap<IVec3, u32>,
@@ -326,15 +330,29 @@ impl LightPool {
         &self.alias
     }
 
+    /// The light cube -> alias column table (`index`), rebuilt first if the pool changed since it was built.
+    pub fn light_index(&mut self) -> &LightIndex {
+        if self.alias_stale {
+            self.rebuild_alias();
+        }
+        &self.index
+    }
+
+    /// The cube (corner, edge) of the light in `slot`, if the slot is live.
+    pub fn cube(&self, slot: u32) -> Option<(IVec3, i32)> {
+        self.slots.get(slot as usize)?.light.as_ref().map(|l| (l.min, l.size))
+    }
+
     /// Whether the alias table is out of date (it is rebuilt by `alias`).
     pub fn alias_is_stale(&self) -> bool {
         self.alias_stale
     }
 
-    /// Rebuilds the alias table, in time linear in the number of lights.
+    /// Rebuilds the alias table and the light index, in time linear in the number of lights.
     pub fn rebuild_alias(&mut self) {
         let lights: Vec<(u32, f32)> = self.lights().map(|(slot, l)| (slot, l.power)).collect();
         self.alias = AliasTable::build(&lights);
+        self.index = LightIndex::build(&self.alias, |slot| self.cube(slot));
         self.alias_stale = false;
     }
 }

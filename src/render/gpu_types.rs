@@ -247,6 +247,8 @@ pub const RESTIR_SPATIAL: u32 = 2;
 pub const RESTIR_POINT: u32 = 4;
 pub const RESTIR_UNBIASED: u32 = 8;
 pub const RESTIR_ONE_RAY: u32 = 16;
+/// Some candidates are drawn among the lights beside the shaded face (`local_lights`).
+pub const RESTIR_LOCAL: u32 = 32;
 /// `FrameParams::denoise`: the denoiser runs this frame.
 pub const DENOISE_ON: u32 = 1;
 /// `FrameParams::denoise`: last frame's denoiser history is valid (same size, nothing in the scene changed).
@@ -320,6 +322,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("RESTIR_POINT", U32(RESTIR_POINT)),
         ("RESTIR_UNBIASED", U32(RESTIR_UNBIASED)),
         ("RESTIR_ONE_RAY", U32(RESTIR_ONE_RAY)),
+        ("RESTIR_LOCAL", U32(RESTIR_LOCAL)),
         ("DENOISE_ON", U32(DENOISE_ON)),
         ("DENOISE_HISTORY", U32(DENOISE_HISTORY)),
         ("MAX_TAPS", U32(MAX_TAPS)),

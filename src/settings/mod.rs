@@ -192,6 +192,9 @@ pub struct RestirSettings {
     pub spatial: bool,
     pub sample: LightSample,
     pub reuse: Reuse,
+    /// A share of the candidates is drawn among the lights beside the shaded face (a lamp lying on a floor is
+    /// otherwise a 1-in-N find for the power pick, and a firefly when found).
+    pub local_lights: bool,
 }
 
 impl Default for RestirSettings {
@@ -204,6 +207,7 @@ impl Default for RestirSettings {
             spatial: true,
             sample: LightSample::Area,
             reuse: Reuse::OneRay,
+            local_lights: true,
         }
     }
 }

@@ -308,6 +308,12 @@ pub static SETTINGS: &[Setting] = &[
         field: &Choice { get: |s| s.restir.reuse, set: |s, v| s.restir.reuse = v },
     },
     Setting {
+        key: "local_lights",
+        section: Section::Restir,
+        about: "Draw a quarter of the candidates among the lights touching the air in front of the shaded face.",
+        field: &Choice { get: |s| s.restir.local_lights, set: |s, v| s.restir.local_lights = v },
+    },
+    Setting {
         key: "gi",
         section: Section::General,
         about: "Indirect light from the per-face GI cache (play turns it on); off, no GI memory or pass.",

@@ -65,6 +65,22 @@ proptest! {
         let rescan = LightPool::from_world(&world);
         prop_assert_eq!(as_set(&pool), as_set(&rescan));
         prop_assert_eq!(pool.counts(), rescan.counts());
+        // The light index (what ReSTIR's local candidates look up) finds every light at its own slot after the
+        // edits, and nothing where there is no light.
+        let index = pool.light_index().clone();
+        let alias = pool.alias().clone();
+        let cube = |slot: u32| pool.cube(slot);
+        for (slot, light) in pool.lights() {
+            let column = index.find(&alias, cube, light.min, light.size);
+            prop_assert_eq!(column.map(|c| alias.entries[c as usize].slot), Some(slot));
+        }
+        for x in 0..24 {
+            for y in 0..24 {
+                let p = IVec3::new(x, y, 7);
+                let is_light = pool.find(LightKey::Voxel(p)).is_some();
+                prop_assert_eq!(index.find(&alias, cube, p, 1).is_some(), is_light);
+            }
+        }
     }
 }
 

@@ -1,5 +1,5 @@
 //! The scene's lighting on the GPU (group 2 of every voxel pass, `shaders/lib/lights.wgsl`): the light pool's
-//! changed slots, its alias table when it changed, and this frame's `SceneLighting` (sun, sky, mode, light
+//! changed slots, its alias table and light index when they changed, and this frame's `SceneLighting` (sun, sky, mode, light
 //! count). Staged in the main world (PostUpdate), written to GPU buffers in the render world (PrepareResources).
 
 use super::storage_buffer;
@@ -91,6 +91,8 @@ pub struct LightUpload {
     pub slots: Vec<(u32, GpuLight)>,
     /// The alias table, when it changed.
     pub alias: Option<Arc<Vec<AliasEntry>>>,
+    /// The light index (light cube -> alias column), with the alias table.
+    pub index: Option<Arc<Vec<u32>>>,
     pub light_count: u32,
 }
 
@@ -136,6 +138,7 @@ pub fn stage_light_upload(
     if pool.alias_is_stale() || upload.full.is_some() {
         let entries = pool.alias().entries.clone();
         upload.alias = Some(Arc::new(entries));
+        upload.index = Some(Arc::new(pool.light_index().entries.clone()));
     }
 }
 
@@ -145,9 +148,11 @@ pub struct GpuLights {
     pub lights: Buffer,
     pub alias: Buffer,
     pub alias_capacity: u32,
+    pub index: Buffer,
+    pub index_capacity: u32,
     pub light_count: u32,
     pub has_lights: bool,
-    /// Group 2 of the voxel passes: slots, alias table, scene lighting.
+    /// Group 2 of the voxel passes: slots, alias table, scene lighting, light index.
     pub bind_group: BindGroup,
     /// Whether the lights changed this frame (accumulation restarts).
     pub changed: bool,
@@ -167,6 +172,7 @@ impl Default for LightsLayout {
                     storage_buffer_read_only_sized(false, None),
                     storage_buffer_read_only_sized(false, None),
                     uniform_buffer_sized(false, NonZeroU64::new(size_of::<SceneLighting>() as u64)),
+                    storage_buffer_read_only_sized(false, None),
                 ),
             ),
         ))
@@ -177,9 +183,9 @@ fn lights_bind_group(
     device: &RenderDevice,
     cache: &PipelineCache,
     layout: &LightsLayout,
-    buffers: [&Buffer; 3],
+    buffers: [&Buffer; 4],
 ) -> BindGroup {
-    let [lights, alias, scene] = buffers;
+    let [lights, alias, scene, index] = buffers;
     device.create_bind_group(
         "glowbrick_lights",
         &cache.get_bind_group_layout(&layout.0),
@@ -187,6 +193,7 @@ fn lights_bind_group(
             lights.as_entire_binding(),
             alias.as_entire_binding(),
             scene.as_entire_binding(),
+            index.as_entire_binding(),
         )),
     )
 }
@@ -206,6 +213,12 @@ pub fn extract_light_upload(upload: Extract<Option<Res<LightUpload>>>, mut pendi
 fn alias_bytes(entries: &[AliasEntry]) -> Vec<u8> {
     let padded: Vec<AliasEntry> = if entries.is_empty() { vec![AliasEntry::default()] } else { entries.to_vec() };
     bytemuck::cast_slice(&padded).to_vec()
+}
+
+/// The light index, one empty entry when there is none yet.
+fn index_bytes(entries: &[u32]) -> Vec<u8> {
+    let padded: &[u32] = if entries.is_empty() { &[crate::lights::index::NO_COLUMN] } else { entries };
+    bytemuck::cast_slice(padded).to_vec()
 }
 
 /// Applies the queued light uploads and writes this frame's scene lighting.
@@ -232,11 +245,15 @@ pub fn prepare_gpu_lights(
             let lights = storage_buffer(&device, "glowbrick_lights", bytemuck::cast_slice(all));
             let entries = upload.alias.as_deref().map_or(&[][..], |a| a.as_slice());
             let alias = storage_buffer(&device, "glowbrick_light_alias", &alias_bytes(entries));
-            let bind_group = lights_bind_group(&device, &cache, &layout, [&lights, &alias, &scene.0]);
+            let index_entries = upload.index.as_deref().map_or(&[][..], |i| i.as_slice());
+            let index = storage_buffer(&device, "glowbrick_light_index", &index_bytes(index_entries));
+            let bind_group = lights_bind_group(&device, &cache, &layout, [&lights, &alias, &scene.0, &index]);
             let fresh = GpuLights {
                 lights,
                 alias,
                 alias_capacity: entries.len().max(1) as u32,
+                index,
+                index_capacity: index_entries.len().max(1) as u32,
                 light_count: upload.light_count,
                 has_lights: upload.light_count > 0,
                 bind_group,
@@ -253,14 +270,29 @@ pub fn prepare_gpu_lights(
         for (slot, light) in &upload.slots {
             queue.write_buffer(&gpu.lights, *slot as u64 * size_of::<GpuLight>() as u64, bytemuck::bytes_of(light));
         }
+        let mut rebind = false;
         if let Some(entries) = &upload.alias {
             if entries.len() as u32 > gpu.alias_capacity {
                 gpu.alias = storage_buffer(&device, "glowbrick_light_alias", &alias_bytes(entries));
                 gpu.alias_capacity = entries.len() as u32;
-                gpu.bind_group = lights_bind_group(&device, &cache, &layout, [&gpu.lights, &gpu.alias, &scene.0]);
+                rebind = true;
             } else if !entries.is_empty() {
                 queue.write_buffer(&gpu.alias, 0, bytemuck::cast_slice(entries));
             }
+        }
+        if let Some(entries) = &upload.index {
+            // The shader masks with arrayLength - 1: the buffer is exactly the table, never larger.
+            if entries.len() as u32 != gpu.index_capacity {
+                gpu.index = storage_buffer(&device, "glowbrick_light_index", &index_bytes(entries));
+                gpu.index_capacity = entries.len().max(1) as u32;
+                rebind = true;
+            } else {
+                queue.write_buffer(&gpu.index, 0, &index_bytes(entries));
+            }
+        }
+        if rebind {
+            gpu.bind_group =
+                lights_bind_group(&device, &cache, &layout, [&gpu.lights, &gpu.alias, &scene.0, &gpu.index]);
         }
         gpu.light_count = upload.light_count;
         gpu.has_lights = upload.light_count > 0;
