@@ -150,7 +150,7 @@ fn ms(v: Option<f64>) -> String {
 pub fn run_gi_bench(config: &BenchConfig, out: &Path) -> Result<String, String> {
     // `--gi --game-sizes` runs the game-size section alone.
     if config.only.iter().any(|s| s == "game-sizes") {
-        let text = format!("# GI cache at game sizes\n{}", super::gi_scale::markdown(&super::gi_scale::measure_all()?));
+        let text = format!("# GI cache at game sizes\n{}", super::gi_scale::markdown(&super::gi_scale::measure_all(&sizes_of(config))?));
         std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
         let path = out.join("gi-scale.md");
         std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -189,7 +189,7 @@ pub fn run_gi_bench(config: &BenchConfig, out: &Path) -> Result<String, String> 
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     plot::write_plot(&[], &curves, &out.join("gi-plot.svg"))?;
     let mut text = markdown(&rows, &edit_costs, config);
-    text += &super::gi_scale::markdown(&super::gi_scale::measure_all()?);
+    text += &super::gi_scale::markdown(&super::gi_scale::measure_all(super::gi_scale::SIZES)?);
     text += &format!(
         "\n## Convergence with and without the cache\n\nA still camera accumulating frames from a cold cache \
          (`accumulate=on`), error against the {REFERENCE_BOUNCES}-bounce reference after about 1, 2, 4, ... {} \
@@ -283,4 +283,15 @@ fn markdown(rows: &[GiRow], edits: &[EditCost], config: &BenchConfig) -> String 
             / (1024.0 * 1024.0)
     );
     text
+}
+
+/// The game sizes `--sizes` named (carried in `only` as "WxH"), or all of them.
+fn sizes_of(config: &BenchConfig) -> Vec<(u32, u32)> {
+    let named: Vec<(u32, u32)> = config
+        .only
+        .iter()
+        .filter_map(|s| s.split_once('x'))
+        .filter_map(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
+        .collect();
+    if named.is_empty() { super::gi_scale::SIZES.to_vec() } else { named }
 }

@@ -77,10 +77,10 @@ pub fn measure(scene: &'static str, view: &str, size: (u32, u32)) -> Result<Scal
     })
 }
 
-/// Every scene at every size.
-pub fn measure_all() -> Result<Vec<ScaleRow>, String> {
+/// Every scene at each of `sizes`.
+pub fn measure_all(sizes: &[(u32, u32)]) -> Result<Vec<ScaleRow>, String> {
     let mut rows = Vec::new();
-    for &size in SIZES {
+    for &size in sizes {
         for &(scene, view) in SCENES {
             let row = measure(scene, view, size)?;
             eprintln!(

@@ -59,6 +59,7 @@ pub const SETTINGS: &[BenchSetting] = &[
     BenchSetting { name: "restir-biased", pairs: &["lighting=restir", "reuse=biased"] },
     BenchSetting { name: "restir-unbiased", pairs: &["lighting=restir", "reuse=unbiased"] },
     BenchSetting { name: "restir-uniform", pairs: &["lighting=restir", "pick=uniform"] },
+    BenchSetting { name: "restir-no-local", pairs: &["lighting=restir", "local_lights=off"] },
 ];
 
 /// The setting whose frame time sets the NEE frame budget of the equal-time row.

@@ -58,6 +58,9 @@ pub struct BenchArgs {
     /// ms per pass, the table's load); writes gi-scale.md.
     #[arg(long, requires = "gi")]
     game_sizes: bool,
+    /// With --game-sizes: only these sizes (WxH, comma-separated; default 320x180,1280x720).
+    #[arg(long, value_delimiter = ',', value_parser = parse_size, requires = "game_sizes")]
+    sizes: Vec<(u32, u32)>,
     /// With --thesis: image size as a fraction of the thesis' 1600x1024.
     #[arg(long, default_value_t = 0.2, requires = "thesis", conflicts_with_all = ["gi", "daylight", "denoise", "scenes", "quick", "settings", "camera"])]
     scale: f32,
@@ -93,7 +96,7 @@ enum BenchMode {
     /// The thesis protocol: thesis.md.
     Thesis(ThesisOptions),
     /// The GI cache bench: gi.md.
-    Gi { spp: u32, game_sizes: bool },
+    Gi { spp: u32, game_sizes: bool, sizes: Vec<(u32, u32)> },
     /// The game's lighting at three times of day: daylight.md.
     Daylight { spp: u32 },
     /// The denoiser: denoise.md (or its motion section alone).
@@ -110,13 +113,20 @@ impl BenchArgs {
         match self.mode() {
             BenchMode::Settings { scenes, quick, only, camera } => run_settings(scenes, quick, only, camera, &out),
             BenchMode::Thesis(options) => on_gpu(|| run_thesis_bench(&options, &out)).map(|text| println!("{text}")),
-            BenchMode::Gi { spp, game_sizes } => {
+            BenchMode::Gi { spp, game_sizes, sizes } => {
                 let config = BenchConfig {
                     width: 128,
                     height: 72,
                     reference_spp: spp,
                     curve_frames: 128,
-                    only: if game_sizes { vec!["game-sizes".into()] } else { Vec::new() },
+                    // The game-size section alone, and its sizes as "WxH".
+                    only: if game_sizes {
+                        std::iter::once("game-sizes".to_string())
+                            .chain(sizes.iter().map(|(w, h)| format!("{w}x{h}")))
+                            .collect()
+                    } else {
+                        Vec::new()
+                    },
                     ..BenchConfig::full()
                 };
                 on_gpu(|| run_gi_bench(&config, &out)).map(|text| println!("{text}"))
@@ -144,7 +154,7 @@ impl BenchArgs {
                 area_only: self.area_only,
             })
         } else if self.gi {
-            BenchMode::Gi { spp: self.spp, game_sizes: self.game_sizes }
+            BenchMode::Gi { spp: self.spp, game_sizes: self.game_sizes, sizes: self.sizes.clone() }
         } else if self.daylight {
             BenchMode::Daylight { spp: self.spp }
         } else if self.denoise {
@@ -179,4 +189,13 @@ fn run_settings(
     let rows = on_gpu(|| run_bench(&scenes, &config, out))?;
     println!("wrote {} rows to {}/results.csv, report.md, plot.svg, strip-*.png", rows.len(), out.display());
     Ok(())
+}
+
+/// `WxH`, both at least 1.
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let parsed = text.split_once('x').and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)));
+    match parsed {
+        Some((w, h)) if w > 0 && h > 0 => Ok((w, h)),
+        _ => Err(format!("'{text}' is not a size WxH such as 320x180")),
+    }
 }
