@@ -150,7 +150,10 @@ fn ms(v: Option<f64>) -> String {
 pub fn run_gi_bench(config: &BenchConfig, out: &Path) -> Result<String, String> {
     // `--gi --game-sizes` runs the game-size section alone.
     if config.only.iter().any(|s| s == "game-sizes") {
-        let text = format!("# GI cache at game sizes\n{}", super::gi_scale::markdown(&super::gi_scale::measure_all(&sizes_of(config))?));
+        let text = format!(
+            "# GI cache at game sizes\n{}",
+            super::gi_scale::markdown(&super::gi_scale::measure_all(&sizes_of(config))?)
+        );
         std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
         let path = out.join("gi-scale.md");
         std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;

@@ -15,7 +15,8 @@
 use super::gi::{self, GiCache};
 use super::gpu_types::{
     ACCUMULATION_TEXEL_BYTES, DENOISE_HISTORY, DENOISE_ON, DENOISE_TEXEL_BYTES, FrameParams, GBUFFER_TEXEL_BYTES,
-    RESERVOIR_BYTES, RESTIR_LOCAL, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL, RESTIR_TEMPORAL, RESTIR_UNBIASED, shader_defs,
+    RESERVOIR_BYTES, RESTIR_LOCAL, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL, RESTIR_TEMPORAL, RESTIR_UNBIASED,
+    shader_defs,
 };
 use super::scene::lights::{GpuLights, LightsLayout};
 use super::scene::objects::GpuObjects;
@@ -565,8 +566,7 @@ mod tests {
         // Default: temporal, spatial, one ray per neighbour, local candidates.
         assert_eq!((scene_lighting(&default, 3).power_pick, params.restir_flags), (1, 1 | 2 | 16 | 32));
         assert_eq!(frame_params(&settings(&["reuse=biased"]), &Highlight::default(), 0).restir_flags, 1 | 2 | 32);
-        let changed =
-            settings(&["pick=uniform", "sample=point", "reuse=unbiased", "temporal=off", "local_lights=off"]);
+        let changed = settings(&["pick=uniform", "sample=point", "reuse=unbiased", "temporal=off", "local_lights=off"]);
         let params = frame_params(&changed, &Highlight::default(), 0);
         assert_eq!((scene_lighting(&changed, 3).power_pick, params.restir_flags), (0, 2 | 4 | 8));
         assert_eq!(scene_lighting(&changed, 3).light_count, 3);

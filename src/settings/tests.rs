@@ -143,7 +143,11 @@ fn the_summary_shows_the_sections_that_apply() {
     let s = s.with_pairs(&["lighting=restir".to_string(), "gi=on".to_string(), "sample=point".to_string()]);
     let summary = s.unwrap().summary();
     assert_eq!(summary.lines().count(), 3, "{summary}");
-    assert!(summary.contains("candidates=32 taps=5 radius=30 temporal=on spatial=on sample=point reuse=one-ray local_lights=on"));
+    assert!(
+        summary.contains(
+            "candidates=32 taps=5 radius=30 temporal=on spatial=on sample=point reuse=one-ray local_lights=on"
+        )
+    );
     assert!(summary.contains("gi_rays=64 gi_update=8 gi_alpha=0.03 gi_table=262144 gi_filter=on"), "{summary}");
 }
 

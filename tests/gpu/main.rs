@@ -99,6 +99,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             unbiased_restir_converges_to_the_reference_on_the_cornell_box,
             unbiased_restir_converges_to_the_reference_on_the_letters,
             restir_with_temporal_reuse_converges_on_the_thesis_scenes_and_apartments,
+            restir_with_temporal_reuse_converges_on_the_mountain,
             the_reservoir_view_of_a_world_without_lights_shows_empty_reservoirs,
             without_lights_no_restir_pass_runs,
         ],
