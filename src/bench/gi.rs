@@ -152,7 +152,11 @@ pub fn run_gi_bench(config: &BenchConfig, out: &Path) -> Result<String, String> 
     if config.only.iter().any(|s| s == "game-sizes") {
         let text = format!(
             "# GI cache at game sizes\n{}",
-            super::gi_scale::markdown(&super::gi_scale::measure_all(&sizes_of(config))?)
+            super::gi_scale::markdown(&super::gi_scale::measure_all(if config.game_sizes.is_empty() {
+                super::gi_scale::SIZES
+            } else {
+                &config.game_sizes
+            })?)
         );
         std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
         let path = out.join("gi-scale.md");
@@ -286,15 +290,4 @@ fn markdown(rows: &[GiRow], edits: &[EditCost], config: &BenchConfig) -> String 
             / (1024.0 * 1024.0)
     );
     text
-}
-
-/// The game sizes `--sizes` named (carried in `only` as "WxH"), or all of them.
-fn sizes_of(config: &BenchConfig) -> Vec<(u32, u32)> {
-    let named: Vec<(u32, u32)> = config
-        .only
-        .iter()
-        .filter_map(|s| s.split_once('x'))
-        .filter_map(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
-        .collect();
-    if named.is_empty() { super::gi_scale::SIZES.to_vec() } else { named }
 }

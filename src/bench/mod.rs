@@ -96,6 +96,8 @@ pub struct BenchConfig {
     pub camera: Option<CameraView>,
     /// Only these settings (by name); empty: all.
     pub only: Vec<String>,
+    /// `--gi --game-sizes`: the sizes of its table (empty: `gi_scale::SIZES`).
+    pub game_sizes: Vec<(u32, u32)>,
 }
 
 impl BenchConfig {
@@ -109,6 +111,7 @@ impl BenchConfig {
             curve_frames: 64,
             camera: None,
             only: Vec::new(),
+            game_sizes: Vec::new(),
         }
     }
 
@@ -122,6 +125,7 @@ impl BenchConfig {
             curve_frames: 16,
             camera: None,
             only: Vec::new(),
+            game_sizes: Vec::new(),
         }
     }
 }

@@ -162,8 +162,7 @@ pub fn run_thesis_bench(options: &ThesisOptions, out: &Path) -> Result<String, S
         timed_frames: 0,
         reference_spp: spp / 2,
         curve_frames: 0,
-        camera: None,
-        only: Vec::new(),
+        ..BenchConfig::full()
     };
     if lattice == 0 || lattice > config.width.min(config.height) / 4 {
         return Err(format!("--lattice {lattice} must be within 1..={}", config.width.min(config.height) / 4));

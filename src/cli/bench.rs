@@ -119,14 +119,8 @@ impl BenchArgs {
                     height: 72,
                     reference_spp: spp,
                     curve_frames: 128,
-                    // The game-size section alone, and its sizes as "WxH".
-                    only: if game_sizes {
-                        std::iter::once("game-sizes".to_string())
-                            .chain(sizes.iter().map(|(w, h)| format!("{w}x{h}")))
-                            .collect()
-                    } else {
-                        Vec::new()
-                    },
+                    only: if game_sizes { vec!["game-sizes".into()] } else { Vec::new() },
+                    game_sizes: sizes,
                     ..BenchConfig::full()
                 };
                 on_gpu(|| run_gi_bench(&config, &out)).map(|text| println!("{text}"))
