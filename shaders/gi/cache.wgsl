@@ -28,6 +28,8 @@ struct GiParams {
     frame: u32,
     // This frame's update iteration (more than one only after a change of light).
     iteration: u32,
+    // `gi_cell`: the width in pixels a camera's cells have at least.
+    cell_pixels: f32,
 }
 
 // One (voxel, face) entry. The key lives in gi_keys (0 = empty); this is its payload.
@@ -284,16 +286,16 @@ fn bilinear(point: vec3<f32>, voxel: vec3<i32>, face: u32, level: u32) -> Biline
     return Bilinear(unit(t.x, select(size, -size, fu < 0.0)), unit(t.y, select(size, -size, fv < 0.0)), vec2(abs(fu), abs(fv)));
 }
 
-// The level a camera reads a surface at, from its pixel footprint (voxels across one pixel there): cells at
-// least CELL_PIXELS pixels wide, so a far or low-resolution view keeps few entries. Moving objects stay at 0.
-const CELL_PIXELS: f32 = 2.0;
-
+// The level a camera reads a surface at, from its pixel footprint (voxels across one pixel there): the finest
+// whose cells are at least `gi.cell_pixels` pixels wide (up to MAX_LEVEL), so a far or low-resolution view keeps
+// few entries. (Until 2026-11-26 the coarsest at most 2 pixels wide, which `gi_cell=1` reproduces.) Moving
+// objects stay at 0.
 fn camera_level(voxels_per_pixel: f32, object: u32) -> u32 {
-    let cells = voxels_per_pixel * CELL_PIXELS;
-    if object != 0u || !(cells >= 2.0) {
+    let cells = voxels_per_pixel * gi.cell_pixels;
+    if object != 0u || !(cells > 1.0) {
         return 0u;
     }
-    return min(u32(log2(cells)), MAX_LEVEL);
+    return min(u32(ceil(log2(cells))), MAX_LEVEL);
 }
 
 // Whether (local voxel, face) is a surface of moving object `index`: solid, with the object's air in front.

@@ -441,6 +441,8 @@ pub fn prepare_gi(
         dynamic_capacity: shape.dynamic_entries,
         frame: cache.frame,
         iteration: 0,
+        cell_pixels: gi.cell_pixels as f32,
+        _pad: [0; 3],
     };
     queue.write_buffer(&cache.params, 0, bytemuck::bytes_of(&params));
     queue.write_buffer(&cache.tables.work, 0, bytemuck::cast_slice(&EMPTY_WORK));

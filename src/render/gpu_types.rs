@@ -130,6 +130,9 @@ pub struct GiParams {
     /// Which of this frame's update iterations runs (0 but in the frames after a change of light); the GPU
     /// copies it in between the iterations.
     pub iteration: u32,
+    /// `gi_cell`: a camera's cells span at least this many pixels.
+    pub cell_pixels: f32,
+    pub _pad: [u32; 3],
 }
 
 /// One GI cache entry's payload (`GiEntry` in `shaders/gi/cache.wgsl`); only the GPU writes it, Rust sizes it.
@@ -173,7 +176,7 @@ pub const DENOISE_TEXEL_BYTES: u64 = 16;
 /// A GI entry's radiance (blended or filtered, `vec4<f32>`) and a GI table key (`u32`).
 pub const GI_RADIANCE_BYTES: u64 = 16;
 pub const GI_KEY_BYTES: u64 = 4;
-/// A cached GI ray hit (face and distance packed in a u32, `GI_DISTANCE_SCALE` steps per voxel).
+/// A cached GI ray (face hit, starting voxel in its cell and distance packed in a u32: `shaders/gi/cache.wgsl`).
 pub const GI_RAY_BYTES: u64 = 4;
 
 // The shaders read these structs at exactly these sizes (WGSL alignment rules included).
@@ -184,7 +187,7 @@ const _: () = assert!(size_of::<GpuLight>() == 32);
 const _: () = assert!(size_of::<crate::lights::AliasEntry>() == 16);
 const _: () = assert!(size_of::<SceneLighting>() == 80);
 const _: () = assert!(size_of::<FrameParams>() == 176);
-const _: () = assert!(size_of::<GiParams>() == 48);
+const _: () = assert!(size_of::<GiParams>() == 64);
 const _: () = assert!(size_of::<GiEntry>() == 64);
 const _: () = assert!(size_of::<GiEdit>() == 32);
 

@@ -369,6 +369,19 @@ pub static SETTINGS: &[Setting] = &[
         },
     },
     Setting {
+        key: "gi_cell",
+        section: Section::Gi,
+        about: "Width in pixels the cache's cells have at least on screen (a cell is 2^k voxels, k from the pixel \
+                footprint): 1 keeps one entry per voxel face up close, larger values fewer, cheaper, blurrier entries.",
+        field: &Range {
+            range: GI_CELL_RANGE,
+            step: Step::Double,
+            unit: "",
+            get: |s| s.gi.cell_pixels,
+            set: |s, v| s.gi.cell_pixels = v,
+        },
+    },
+    Setting {
         key: "gi_filter",
         section: Section::Gi,
         about: "Average each entry with its same-orientation neighbours in a 3x3x3 block.",

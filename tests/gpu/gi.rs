@@ -103,7 +103,9 @@ fn walled_floor() -> (VoxelWorld, CameraView) {
 
 pub fn an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_follows() {
     let (world, view) = walled_floor();
-    let pairs = ["lighting=nee", "gi=on"];
+    // One entry per voxel face up close (`gi_cell=1`): the counts below need more entries than this 96x64 view
+    // keeps with the default 4-pixel cells (about 70).
+    let pairs = ["lighting=nee", "gi=on", "gi_cell=1"];
     let mut r = renderer(&world, &view, &pairs);
     r.render(8).unwrap();
     let quiet = r.counters().unwrap();
@@ -155,6 +157,22 @@ pub fn an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_foll
     );
     assert!(b > 3.0 * before && b > 0.1 * direct, "the doorway brings indirect light: {b} (closed {before})");
     assert!((a - b).abs() < 0.1 * b, "the cache follows the edit: {a} vs {b}");
+}
+
+/// `gi_cell`: a camera reads the cache in cells at least that many pixels wide, so wider cells keep fewer entries
+/// (seed 002's adaptive cells; the GI passes' cost follows the entries).
+pub fn wider_camera_cells_keep_fewer_entries() {
+    let (world, view) = walled_floor();
+    let live = |cell: &str| {
+        let mut r = renderer(&world, &view, &["lighting=nee", "gi=on", cell]);
+        r.render(12).unwrap();
+        r.counters().unwrap()[GpuCounter::GiLive as usize]
+    };
+    let (fine, default, wide) = (live("gi_cell=1"), live("gi_cell=4"), live("gi_cell=16"));
+    eprintln!("live entries: gi_cell=1 {fine}, 4 {default}, 16 {wide}");
+    assert!(fine > 300, "one entry per face up close: {fine}");
+    assert!(default * 3 < fine, "4-pixel cells keep under a third of the entries: {default} of {fine}");
+    assert!(wide < default, "16-pixel cells keep fewer still: {wide} of {default}");
 }
 
 pub fn with_gi_off_no_gi_pass_runs() {
@@ -279,8 +297,10 @@ pub fn freeing_entries_keeps_the_rest_of_their_probe_chains_reachable() {
         ..there.clone()
     };
     // A small table (load about 0.15), so the entries of both views share probe chains; smaller, some inserts
-    // find their window full and succeed only once slots are freed, which this test would count as lost.
-    let mut r = common::renderer_with(&world, &there, 48, 32, &["lighting=nee", "gi=on", "gi_table=16384"]);
+    // find their window full and succeed only once slots are freed, which this test would count as lost. One
+    // entry per voxel face up close (`gi_cell=1`): the counts need them.
+    let mut r =
+        common::renderer_with(&world, &there, 48, 32, &["lighting=nee", "gi=on", "gi_table=16384", "gi_cell=1"]);
     r.render(16).unwrap();
     r.set_view(&back);
     let (mut evicted, mut inserted_after_eviction, mut live, mut full) = (0u64, 0u64, 0u32, 0u64);
@@ -372,6 +392,11 @@ pub fn an_opened_doorway_lights_the_far_side_within_thirty_frames() {
         share(63)
     );
     assert!(within <= 30, "the indirect light beyond a new doorway is within 5% by frame {within}");
+    // Where it settles is printed, not bound: a coarse cell's rays start from the face that inserted it, so a cache
+    // that lived through the edit can settle apart from a fresh one (91% here with 4-pixel camera cells;
+    // docs/bench/gi.md, "Camera cells at least 4 pixels wide").
+    let settled = indirect[29..].iter().sum::<f64>() / indirect[29..].len() as f64;
+    eprintln!("doorway: frames 30-64 settle at {:.1}% of a fresh renderer's", 100.0 * settled / truth);
 }
 
 /// A coarse entry (a cell of 2^level voxels' faces of one orientation, away from the camera) starts its rays from
@@ -382,7 +407,8 @@ pub fn an_opened_doorway_lights_the_far_side_within_thirty_frames() {
 pub fn a_coarse_entry_whose_face_an_edit_covers_is_freed_and_inserted_again() {
     let (world, view) = walled_floor();
     let freed_after = |edit: Option<Edit>| -> (u32, u32) {
-        let mut r = renderer(&world, &view, &["lighting=nee", "gi=on"]);
+        // Fine camera cells (`gi_cell=1`), so the coarse entries counted are the rays' far hits.
+        let mut r = renderer(&world, &view, &["lighting=nee", "gi=on", "gi_cell=1"]);
         r.render(16).unwrap();
         let before = r.counters().unwrap()[GpuCounter::GiFreedTotal as usize];
         if let Some(edit) = edit {
