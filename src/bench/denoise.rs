@@ -406,13 +406,15 @@ fn frame_markdown(rows: &[SceneRow], config: &BenchConfig) -> String {
             corrected
         );
     }
-    text += "\n## What the filter does to the mean, and flicker\n\nBias of the accumulated images against the \
-             reference; the filter's own bias is the difference, as a share of the reference's mean. Flicker: the \
-             mean absolute luminance change between consecutive frames of the still view. The accumulated raw \
-             image's relMSE is the renderer's error with most of its frame-to-frame noise averaged away: what is \
-             left is its bias, slow noise (the GI cache's) and a 64th of its fireflies, so a denoised frame may \
-             read lower.\n\n| scene | raw bias (accumulated) | denoised bias | added by the filter | raw \
-             flicker | denoised flicker | raw relMSE (accumulated) |\n|---|---|---|---|---|---|---|\n";
+    text += &format!(
+        "\n## What the filter does to the mean, and flicker\n\nBias of the accumulated images against the \
+         reference; the filter's own bias is the difference, as a share of the reference's mean. Flicker: the \
+         mean absolute luminance change between consecutive frames of the still view. The accumulated raw \
+         image's relMSE is the renderer's error with most of its frame-to-frame noise averaged away: what is \
+         left is its bias, slow noise (the GI cache's) and 1/{ACCUMULATED_FRAMES} of its fireflies, so a \
+         denoised frame may read lower.\n\n| scene | raw bias (accumulated) | denoised bias | added by the \
+         filter | raw flicker | denoised flicker | raw relMSE (accumulated) |\n|---|---|---|---|---|---|---|\n"
+    );
     for r in rows {
         text += &format!(
             "| {} | {:+.5} | {:+.5} | {:+.2}% | {:.5} | {:.5} | {:.5} |\n",
