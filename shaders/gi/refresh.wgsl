@@ -2,10 +2,9 @@
 // to date. A new entry traces all K; after an edit, only the rays whose segments cross an edited brick are traced
 // again, and entries whose rays cannot reach any edit keep every hit (counted: COUNT_GI_RETRACED, COUNT_GI_RAYS_TRACED).
 
-#import glowbrick::world::world_info
 #import glowbrick::traversal::{trace, box_entry, INF}
 #import glowbrick::gi::cache::{gi, gi_entries, gi_rays, gi_edits, gi_direct, GiEntry, listed_slot, ray_direction,
-    ray_origin, slot_seed, encode_hit, hit_face, hit_distance, is_surface, NEVER_TRACED, LOST_FACE, MISS_FACE, NOT_FOUND,
+    ray_origin, slot_seed, world_exit, encode_hit, hit_face, hit_distance, is_surface, NEVER_TRACED, LOST_FACE, MISS_FACE, NOT_FOUND,
     WORK_STATIC}
 #import glowbrick::gi::direct::update_direct
 #import glowbrick::counters::counters
@@ -46,7 +45,7 @@ fn segment_length(origin: vec3<f32>, dir: vec3<f32>, code: u32) -> f32 {
     if hit_face(code) != MISS_FACE {
         return hit_distance(code);
     }
-    return max(box_entry(origin, dir, vec3(0.0), vec3<f32>(world_info.size.xyz)).y, 0.0);
+    return world_exit(origin, dir);
 }
 
 // Brings an entry's K cached static hits up to date: all of them when it was never traced (or edits it cannot
@@ -114,10 +113,23 @@ fn refresh_static(@builtin(global_invocation_id) id: vec3<u32>) {
         gi_entries[slot].traced_epoch = LOST_FACE;
         return;
     }
-    if (gi.flags & GI_CACHE) != 0u && refresh(slot, e, ray_origin(e.voxel, e.face, vec3(0.0))) > 0u {
-        // What it blended so far saw the old world: start over, its direct light too (an edit reached it).
-        gi_entries[slot].samples = 0u;
-        gi_direct[slot] = vec4(0.0);
+    if (gi.flags & GI_CACHE) != 0u {
+        if refresh(slot, e, ray_origin(e.voxel, e.face, vec3(0.0))) > 0u {
+            // What it blended so far saw the old world: start over, its direct light too (an edit reached it).
+            gi_entries[slot].samples = 0u;
+            gi_direct[slot] = vec4(0.0);
+        }
+    } else if e.traced_epoch != gi.epoch {
+        // Fresh directions (nothing cached): an edit inside the bounds of the segments traced so far restarts the
+        // blend as a retraced hit does (one sample marks it for update.wgsl's GI_EDIT_RESTART), counted as
+        // retraced. Setting the blend back only part way (to the weights of a 6-frame-old entry) left an opened
+        // doorway's far side at 79% of its new light by frame 4 and 90% by frame 30: each bounce lagged the last.
+        let forgotten = e.traced_epoch < gi.lost_epoch;
+        if e.samples > 1u && e.traced_epoch != NEVER_TRACED && (forgotten || maybe_stale(e)) {
+            gi_entries[slot].samples = 1u;
+            atomicAdd(&counters[COUNT_GI_RETRACED], 1u);
+        }
+        gi_entries[slot].traced_epoch = gi.epoch;
     }
     update_direct(slot, e);
 }

@@ -14,7 +14,7 @@
 #import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, COUNT_GI_BORROWED,
     COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
 #import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_touch, gi_find,
-    listed_slot, hit_level, used_within, slot_seed, ray_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
+    listed_slot, hit_level, used_within, slot_seed, world_exit, ray_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
     WORK_STATIC, WORK_DYNAMIC}
 #import glowbrick::gi::direct::direct_at
 
@@ -127,14 +127,25 @@ fn update_entry(slot: u32) {
     let seen = used_within(e.last_seen, 1u) && !dynamic;
     let own = select(vec3(0.0), gi_filtered[slot].rgb, samples > 0u);
     let seed = slot_seed(slot);
-    var rng = Rng(pcg(seed ^ pcg(gi.frame ^ (gi.iteration << 28u))));
-    // Each frame re-shades the next `update_rays` of the K directions; a frame's further iterations (after a
-    // change of light) start 3 groups further on each, other directions at the game's K = 64 and 8 rays.
+    let frame_seed = pcg(gi.frame ^ (gi.iteration << 28u));
+    var rng = Rng(pcg(seed ^ frame_seed));
+    // With cached hits, each frame re-shades the next `update_rays` of the entry's K fixed directions; a frame's
+    // further iterations (after a change of light) start 3 groups further on each, other directions at the
+    // game's K = 64 and 8 rays. Without, each frame draws `update_rays` fresh stratified directions: a fixed set
+    // of 64 leaves each entry a quadrature error of its own that no blend averages (the window room's sky seen
+    // through a few of them; docs/bench/gi.md, "Fresh directions").
     let first = pcg(seed ^ 0x5bd1e995u) + (gi.frame + gi.iteration * 3u) * gi.update_rays;
+    var lo = select(origin, e.lo, samples > 0u);
+    var hi = select(origin, e.hi, samples > 0u);
     var sum = vec3(0.0);
     for (var j = 0u; j < gi.update_rays; j++) {
         let i = (first + j) % gi.rays;
-        let dir = ray_direction(e.face, i, gi.rays, seed);
+        var dir: vec3<f32>;
+        if cached {
+            dir = ray_direction(e.face, i, gi.rays, seed);
+        } else {
+            dir = ray_direction(e.face, j, gi.update_rays, seed ^ frame_seed);
+        }
         var found: bool;
         var face: u32;
         var distance: f32;
@@ -148,6 +159,13 @@ fn update_entry(slot: u32) {
             found = hit.found;
             face = hit.face;
             distance = hit.distance;
+            if !dynamic {
+                // The bounds of every segment traced so far: an edit inside them restarts the blend
+                // (refresh.wgsl), as a retraced cached hit does.
+                let end = origin + dir * select(world_exit(origin, dir), distance, found);
+                lo = min(lo, end);
+                hi = max(hi, end);
+            }
         }
         // A moving object in front of the static hit replaces it for this frame.
         let object = trace_objects(origin, dir, select(INF, distance, found));
@@ -171,6 +189,10 @@ fn update_entry(slot: u32) {
     let weight = max(gi.alpha, 2.0 / f32(age + 2u));
     let blended = select(mix(gi_irradiance[slot].rgb, estimate, weight), estimate, age == 0u);
     gi_irradiance[slot] = vec4(blended, 1.0);
+    if !cached && !dynamic {
+        gi_entries[slot].lo = lo;
+        gi_entries[slot].hi = hi;
+    }
     gi_entries[slot].samples = min(age + 1u, 1u << 20u);
 }
 

@@ -1,7 +1,7 @@
 //! The GI cache at the sizes a game renders (`glowbrick bench --gi`, section "Cost at game sizes", or alone with
 //! `bench --gi --game-sizes`): with Voxel ReSTIR lighting the emitters (the thesis protocol), a frame with `gi=on` against
 //! the same frame with `gi=off`, per-pass GPU times, the entries the table holds, its load and the inserts that
-//! found it full. The cache runs at the game's settings (alpha 0.03, K = 64, the default table).
+//! found it full. The cache runs at the game's settings (alpha 0.03, fresh directions, the default table).
 
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::render::gi::{GI_PASS_NAMES, static_capacity};
@@ -105,7 +105,7 @@ pub fn markdown(rows: &[ScaleRow]) -> String {
     let ms = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.1}"));
     let mut text = format!(
         "\n## Cost at game sizes\n\nVoxel ReSTIR lighting the emitters (`lighting=emitters`), the cache at the game's \
-         settings (K = 64, 8 rays re-shaded per entry, alpha 0.03), {WARM_FRAMES} frames to warm up, {TIMED_FRAMES} \
+         settings (8 fresh rays per entry and frame, alpha 0.03), {WARM_FRAMES} frames to warm up, {TIMED_FRAMES} \
          timed. Frame ms is wall clock (gi=off, gi=on); the pass columns are GPU timestamps with gi=on; direct = \
          primary + ReSTIR's three passes. Load = live entries / static table slots; full = inserts that found their \
          probe window full in the last frame.\n\n\

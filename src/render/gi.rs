@@ -136,12 +136,14 @@ impl Shape {
     /// `gi_rays=128` needs 136 MB; lavapipe binds 128 MiB).
     fn of(settings: &GiSettings, max_binding: u64) -> Shape {
         if settings.enabled {
-            let bytes = |entries: u32| (entries + DYNAMIC_CAPACITY) as u64 * settings.rays as u64 * RAY_BYTES;
+            // Without the static visibility cache no hit is kept: one placeholder ray per entry.
+            let rays = if settings.cache { settings.rays } else { 1 };
+            let bytes = |entries: u32| (entries + DYNAMIC_CAPACITY) as u64 * rays as u64 * RAY_BYTES;
             let mut static_entries = static_capacity(settings);
             while bytes(static_entries) > max_binding && static_entries > 4096 {
                 static_entries /= 2;
             }
-            Shape { static_entries, dynamic_entries: DYNAMIC_CAPACITY, rays: settings.rays }
+            Shape { static_entries, dynamic_entries: DYNAMIC_CAPACITY, rays }
         } else {
             // Bindings need a non-empty buffer: one entry, one ray and the work buffers cost 188 bytes.
             Shape { static_entries: 1, dynamic_entries: 0, rays: 1 }
@@ -432,7 +434,8 @@ pub fn prepare_gi(
             | flag(restart, GI_RESTART)
             | flag(edit_restart, GI_EDIT_RESTART),
         rays: shape.rays,
-        update_rays: gi.update_rays.clamp(1, shape.rays),
+        // With cached hits an entry re-shades at most its K directions a frame; fresh ones are drawn as many as asked.
+        update_rays: if gi.cache { gi.update_rays.clamp(1, shape.rays) } else { gi.update_rays.max(1) },
         alpha: gi.alpha,
         epoch: cache.epoch,
         lost_epoch: cache.lost_epoch,
@@ -493,7 +496,7 @@ mod tests {
     /// A table whose rays would not fit one binding halves until they do; one that fits keeps its setting.
     #[test]
     fn the_table_shrinks_to_what_the_device_binds() {
-        let settings = |rays: u32| GiSettings { enabled: true, rays, ..GiSettings::default() };
+        let settings = |rays: u32| GiSettings { enabled: true, rays, cache: true, ..GiSettings::default() };
         let lavapipe = 128 << 20;
         assert_eq!(Shape::of(&settings(64), lavapipe).static_entries, 1 << 18);
         let shrunk = Shape::of(&settings(128), lavapipe);
@@ -501,6 +504,10 @@ mod tests {
         assert!((shrunk.entries() as u64) * 128 * RAY_BYTES <= lavapipe);
         assert_eq!(Shape::of(&settings(128), 1 << 10).static_entries, 4096, "never below 4,096 slots");
         assert!(shrunk.halved(&settings(128)) && !Shape::of(&settings(64), lavapipe).halved(&settings(64)));
+        // Without the visibility cache no hits are kept: the whole table fits whatever K.
+        let fresh = GiSettings { enabled: true, rays: 128, cache: false, ..GiSettings::default() };
+        assert_eq!(Shape::of(&fresh, lavapipe).static_entries, 1 << 18);
+        assert_eq!(Shape::of(&fresh, lavapipe).rays, 1);
         // GI off holds a one-slot placeholder: not a table cut to fit (the soak warned "holds 1 slots").
         let off = GiSettings { enabled: false, ..GiSettings::default() };
         assert!(!Shape::of(&off, lavapipe).halved(&off));

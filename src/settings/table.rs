@@ -322,7 +322,7 @@ pub static SETTINGS: &[Setting] = &[
     Setting {
         key: "gi_rays",
         section: Section::Gi,
-        about: "Fixed directions per face entry (K), traced against the static world once and cached.",
+        about: "Fixed directions per face entry (K) with gi_cache=on, traced against the static world once and cached.",
         field: &Range {
             range: GI_RAYS_RANGE,
             step: Step::Double,
@@ -358,7 +358,7 @@ pub static SETTINGS: &[Setting] = &[
     Setting {
         key: "gi_table",
         section: Section::Gi,
-        about: "Slots in the GI cache's table (rounded up to a power of two; 372 bytes each at gi_rays=64). A full \
+        about: "Slots in the GI cache's table (rounded up to a power of two; 124 bytes each, 376 with gi_cache=on at gi_rays=64). A full \
                 table leaves new faces without indirect light, counted as gi_full.",
         field: &Range {
             range: GI_TABLE_RANGE,
@@ -396,7 +396,8 @@ pub static SETTINGS: &[Setting] = &[
     Setting {
         key: "gi_cache",
         section: Section::Gi,
-        about: "Keep each entry's static hits until an edit can reach them; off retraces every ray every frame.",
+        about: "Cache each entry's static hits along K fixed directions until an edit reaches them (cheaper, but \
+                each entry keeps the error of its fixed set); off traces fresh directions every frame.",
         field: &Choice { get: |s| s.gi.cache, set: |s, v| s.gi.cache = v },
     },
 ];
