@@ -1,10 +1,11 @@
 //! The per-voxel-face GI cache (DESIGN.md "GI cache"; seed 001 adapted to voxels with seed 002's hash table).
 //!
 //! Entries are (surface voxel, face) pairs in a fixed-capacity GPU hash table (`shaders/gi/cache.wgsl`). The primary
-//! pass inserts the entries of the faces it sees; `shaders/gi/refresh.wgsl` keeps K static ray hits per entry, traced once
-//! and traced again only for rays that cross a brick edited since (the edit log below), and the entry's own direct
-//! light (one shadow ray a frame, `direct.wgsl`); `update.wgsl` re-shades a few of them per frame (a ray reads the
-//! direct light of the face it hits from that face's entry) (and traces moving objects' entries outright); `filter.wgsl` averages
+//! pass inserts the entries of the faces it sees; `shaders/gi/refresh.wgsl` keeps the entry's own direct light (one
+//! shadow ray a frame, `direct.wgsl`) and restarts entries an edit reached (the edit log below); `update.wgsl`
+//! traces a few fresh directions per entry and frame (a ray reads the direct light of the face it hits from that
+//! face's entry). With `gi_cache=on` refresh instead keeps K fixed directions' static hits per entry, traced once and
+//! again only for rays that cross a brick edited since, and update re-shades a few of them; `filter.wgsl` averages
 //! same-orientation neighbours; the shading passes interpolate. With GI off the buffers
 //! shrink to a placeholder and no GI pass is dispatched; without moving objects their passes are not either.
 //! The passes run once per frame before every camera (`frame::world_frame`), in the order listed there.
