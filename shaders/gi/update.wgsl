@@ -144,7 +144,9 @@ fn update_entry(slot: u32) {
         if cached {
             dir = ray_direction(e.face, i, gi.rays, seed);
         } else {
-            dir = ray_direction(e.face, j, gi.update_rays, seed ^ frame_seed);
+            // A seed of its own: the rng's stream (direct light at the hits) starts from pcg(seed ^ frame_seed),
+            // and directions drawn from the same numbers would be correlated with it.
+            dir = ray_direction(e.face, j, gi.update_rays, pcg(seed ^ frame_seed ^ 0x68BC21EBu));
         }
         var found: bool;
         var face: u32;
