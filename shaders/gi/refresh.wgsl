@@ -1,6 +1,9 @@
 // GI cache refresh, one thread per static entry due this frame (listed by compact.wgsl), before the update: brings a due entry's K cached static hits up
 // to date. A new entry traces all K; after an edit, only the rays whose segments cross an edited brick are traced
 // again, and entries whose rays cannot reach any edit keep every hit (counted: COUNT_GI_RETRACED, COUNT_GI_RAYS_TRACED).
+// Without the static visibility cache (gi_cache=off, the default) nothing is kept: an entry an edit may reach
+// (inside the box of the segments update.wgsl traced for it) restarts its blend. Then, either way, the entry's
+// own direct light.
 
 #import glowbrick::traversal::{trace, box_entry, INF}
 #import glowbrick::gi::cache::{gi, gi_entries, gi_rays, gi_edits, gi_direct, GiEntry, listed_slot, ray_direction,
