@@ -33,31 +33,37 @@ fn direct_at(point: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<functio
     return vec3(0.0);
 }
 
-// One direct-light sample at a uniform point of the entry's face (of a uniform voxel of its cell's plane for a
-// coarse entry).
-fn face_sample(e: GiEntry, id: u32, rng: ptr<function, Rng>) -> vec3<f32> {
-    let n = face_normal(e.face);
-    let t = tangent_axes(e.face);
-    // A coarse entry averages its cell: a uniform voxel of the cell in the inserting face's plane, when that
-    // voxel's face is a surface too (else the inserting face itself).
-    var voxel = e.voxel;
-    var albedo = materials[id].albedo.rgb;
-    if e.level > 0u {
-        let size = 1u << e.level;
-        var other = cell_of(e.voxel, e.level) << vec3(e.level);
-        other[e.face / 2u] = e.voxel[e.face / 2u];
-        other[t.x] += i32(min(u32(rng_next(rng) * f32(size)), size - 1u));
-        other[t.y] += i32(min(u32(rng_next(rng) * f32(size)), size - 1u));
-        if is_surface(other, e.face) {
-            voxel = other;
-            albedo = materials[voxel_at(other)].albedo.rgb;
-        }
+// A uniform surface face of the entry's cell in the inserting face's plane (the entry's own at level 0, and where
+// the drawn voxel's face is not a surface): what a coarse entry's value stands for is its cell's average.
+fn cell_face(e: GiEntry, rng: ptr<function, Rng>) -> vec3<i32> {
+    if e.level == 0u {
+        return e.voxel;
     }
-    // Inside the face by a hair: a point exactly on a neighbour's plane could start its shadow ray in that voxel.
-    var point = vec3<f32>(voxel) + vec3(0.5) + n * 0.5;
+    let t = tangent_axes(e.face);
+    let size = 1u << e.level;
+    var other = cell_of(e.voxel, e.level) << vec3(e.level);
+    other[e.face / 2u] = e.voxel[e.face / 2u];
+    other[t.x] += i32(min(u32(rng_next(rng) * f32(size)), size - 1u));
+    other[t.y] += i32(min(u32(rng_next(rng) * f32(size)), size - 1u));
+    return select(e.voxel, other, is_surface(other, e.face));
+}
+
+// A uniform point on a voxel's face, inside it by a hair: a point exactly on a neighbour's plane could start its
+// ray in that voxel.
+fn face_point(voxel: vec3<i32>, face: u32, rng: ptr<function, Rng>) -> vec3<f32> {
+    let t = tangent_axes(face);
+    var point = vec3<f32>(voxel) + vec3(0.5) + face_normal(face) * 0.5;
     point[t.x] += (rng_next(rng) - 0.5) * 0.98;
     point[t.y] += (rng_next(rng) - 0.5) * 0.98;
-    let estimate = direct_at(point, n, albedo, rng);
+    return point;
+}
+
+// One direct-light sample at a uniform point of the entry's face (of a uniform face of its cell for a coarse
+// entry).
+fn face_sample(e: GiEntry, rng: ptr<function, Rng>) -> vec3<f32> {
+    let voxel = cell_face(e, rng);
+    let albedo = materials[voxel_at(voxel)].albedo.rgb;
+    let estimate = direct_at(face_point(voxel, e.face, rng), face_normal(e.face), albedo, rng);
     return select(vec3(0.0), estimate, finite3(estimate));
 }
 
@@ -67,8 +73,7 @@ fn face_sample(e: GiEntry, id: u32, rng: ptr<function, Rng>) -> vec3<f32> {
 // the light reaches first (every entry's bounces read them), a lamp switched off left the room at 70-200% of its
 // new light for several frames.
 fn update_direct(slot: u32, e: GiEntry) {
-    let id = voxel_at(e.voxel);
-    if id == 0u {
+    if voxel_at(e.voxel) == 0u {
         gi_direct[slot] = vec4(0.0);
         return;
     }
@@ -76,12 +81,12 @@ fn update_direct(slot: u32, e: GiEntry) {
     if (gi.flags & GI_RESTART) != 0u {
         var sum = vec3(0.0);
         for (var i = 0u; i < GI_RESTART_SAMPLES; i++) {
-            sum += face_sample(e, id, &rng);
+            sum += face_sample(e, &rng);
         }
         gi_direct[slot] = vec4(sum / f32(GI_RESTART_SAMPLES), f32(GI_RESTART_SAMPLES));
         return;
     }
-    let estimate = face_sample(e, id, &rng);
+    let estimate = face_sample(e, &rng);
     let old = gi_direct[slot];
     let count = old.w;
     let weight = max(DIRECT_ALPHA, 1.0 / (count + 1.0));

@@ -108,8 +108,9 @@ fn refresh_static(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let e = gi_entries[slot];
-    // A coarse entry stays in use while any face of its cell is hit, but its rays start from the face that
-    // inserted it: once an edit removes that face, mark it for the next compaction to free (the next hit inserts
+    // A coarse entry stays in use while any face of its cell is hit, but it is kept by the face that inserted it
+    // (the fallback when a face drawn across its cell is not a surface, and with cached hits its rays' origin):
+    // once an edit removes that face, mark it for the next compaction to free (the next hit inserts
     // it again from a face that exists; until then it keeps its value). A fine entry whose face went is simply
     // no longer touched.
     if e.level > 0u && !is_surface(e.voxel, e.face) {

@@ -11,12 +11,12 @@
 #import glowbrick::random::{Rng, pcg}
 #import glowbrick::guards::finite3
 #import glowbrick::counters::counters
-#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, COUNT_GI_BORROWED,
+#import glowbrick::constants::{RAY_OFFSET, LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, COUNT_GI_BORROWED,
     COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
 #import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_touch, gi_find,
     listed_slot, hit_level, used_within, slot_seed, world_exit, ray_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
     WORK_STATIC, WORK_DYNAMIC}
-#import glowbrick::gi::direct::direct_at
+#import glowbrick::gi::direct::{direct_at, cell_face, face_point}
 
 // The indirect light a hit face's entry holds (last frame's filtered value), or `fallback` (the shooting entry's
 // own) where it has none yet or no room in a full table: counted as borrowed.
@@ -134,47 +134,53 @@ fn update_entry(slot: u32) {
     // game's K = 64 and 8 rays. Without, each frame draws `update_rays` fresh stratified directions: a fixed set
     // of 64 leaves each entry a quadrature error of its own that no blend averages (the window room's sky seen
     // through a few of them; docs/bench/gi.md, "Fresh directions").
-    let first = pcg(seed ^ 0x5bd1e995u) + (gi.frame + gi.iteration * 3u) * gi.update_rays;
+    let first = select(0u, pcg(seed ^ 0x5bd1e995u) + (gi.frame + gi.iteration * 3u) * gi.update_rays, cached);
+    // Fresh rays of a static entry start from a uniform point of a uniform face of its cell (its own face at level
+    // 0): the entry's value is then its cell's average, as its direct light is, whichever face inserted it (a
+    // cache that lived through an edit settles where a fresh one does). Cached hits and a moving object's rays
+    // start from the face's centre.
+    let spread = !cached && !dynamic;
     var lo = select(origin, e.lo, samples > 0u);
     var hi = select(origin, e.hi, samples > 0u);
     var sum = vec3(0.0);
     for (var j = 0u; j < gi.update_rays; j++) {
-        let i = (first + j) % gi.rays;
         var dir: vec3<f32>;
-        if cached {
-            dir = ray_direction(e.face, i, gi.rays, seed);
-        } else {
-            // A seed of its own: the rng's stream (direct light at the hits) starts from pcg(seed ^ frame_seed),
-            // and directions drawn from the same numbers would be correlated with it.
-            dir = ray_direction(e.face, j, gi.update_rays, pcg(seed ^ frame_seed ^ 0x68BC21EBu));
-        }
         var found: bool;
         var face: u32;
         var distance: f32;
+        var start = origin;
         if cached {
+            let i = (first + j) % gi.rays;
+            dir = ray_direction(e.face, i, gi.rays, seed);
             let code = gi_rays[slot * gi.rays + i];
             face = hit_face(code);
             found = face != MISS_FACE;
             distance = hit_distance(code);
         } else {
-            let hit = trace(origin, dir, INF);
+            // A seed of its own: the rng's stream (direct light at the hits) starts from pcg(seed ^ frame_seed),
+            // and directions drawn from the same numbers would be correlated with it.
+            dir = ray_direction(e.face, j, gi.update_rays, pcg(seed ^ frame_seed ^ 0x68BC21EBu));
+            if spread {
+                start = face_point(cell_face(e, &rng), e.face, &rng) + face_normal(e.face) * RAY_OFFSET;
+            }
+            let hit = trace(start, dir, INF);
             found = hit.found;
             face = hit.face;
             distance = hit.distance;
-            if !dynamic {
+            if spread {
                 // The bounds of every segment traced so far: an edit inside them restarts the blend
                 // (refresh.wgsl), as a retraced cached hit does.
-                let end = origin + dir * select(world_exit(origin, dir), distance, found);
-                lo = min(lo, end);
-                hi = max(hi, end);
+                let end = start + dir * select(world_exit(start, dir), distance, found);
+                lo = min(lo, min(start, end));
+                hi = max(hi, max(start, end));
             }
         }
         // A moving object in front of the static hit replaces it for this frame.
-        let object = trace_objects(origin, dir, select(INF, distance, found));
+        let object = trace_objects(start, dir, select(INF, distance, found));
         if object.found {
-            sum += object_hit_radiance(object, origin + dir * object.distance, seen, own, &rng);
+            sum += object_hit_radiance(object, start + dir * object.distance, seen, own, &rng);
         } else if found {
-            sum += hit_radiance(origin + dir * distance, face, hit_level(distance, e.level), seen, own, &rng);
+            sum += hit_radiance(start + dir * distance, face, hit_level(distance, e.level), seen, own, &rng);
         } else {
             sum += miss_radiance(dir);
         }
@@ -191,7 +197,7 @@ fn update_entry(slot: u32) {
     let weight = max(gi.alpha, 2.0 / f32(age + 2u));
     let blended = select(mix(gi_irradiance[slot].rgb, estimate, weight), estimate, age == 0u);
     gi_irradiance[slot] = vec4(blended, 1.0);
-    if !cached && !dynamic {
+    if spread {
         gi_entries[slot].lo = lo;
         gi_entries[slot].hi = hi;
     }

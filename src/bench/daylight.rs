@@ -6,6 +6,7 @@
 use super::{BenchConfig, Reference, cached_reference_of, reference_noise_of};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::lights::daylight::Daylight;
+use crate::reference::REFERENCE_BOUNCES;
 use crate::reference::metrics::{Metrics, compare};
 use crate::settings::RenderSettings;
 use crate::world::scene::{generated_world, load_scene};
@@ -16,9 +17,6 @@ use std::time::Instant;
 
 /// The times of day measured: noon, a low sun before sunset, and night (moon and lamps).
 pub const TIMES: [(&str, f32); 3] = [("noon", 12.0), ("dusk", 17.5), ("night", 0.0)];
-/// Diffuse bounces of the reference, as the GI cache's own bench (the cache keeps bouncing through its own
-/// entries; a room lit through its window keeps several percent of its light after 3 bounces).
-pub const REFERENCE_BOUNCES: u32 = 8;
 /// Frames for the GI cache to settle before accumulating, frames timed, frames averaged.
 const SETTLE_FRAMES: u32 = 100;
 const TIMED_FRAMES: u32 = 16;

@@ -10,6 +10,7 @@ use crate::colour::luminance;
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::LinearImage;
 use crate::lights::daylight::{DEFAULT_HOURS, Daylight};
+use crate::reference::REFERENCE_BOUNCES;
 use crate::reference::metrics::{Metrics, compare};
 use crate::render::denoise::DENOISE_PASS_NAMES;
 use crate::settings::RenderSettings;
@@ -23,7 +24,6 @@ use std::time::Instant;
 /// Scenes and views: the window room, the cornell box, the letters, the apartments (first view where `None`).
 const SCENES: [(&str, Option<&str>); 4] =
     [("window-room", Some("inside")), ("cornell", Some("front")), ("letters", None), ("apartments", None)];
-const REFERENCE_BOUNCES: u32 = 8;
 /// Frames for the GI cache (and the denoiser's history) to settle, frames whose changes are averaged for the
 /// flicker, frames accumulated for the bias.
 const SETTLE_FRAMES: u32 = 64;

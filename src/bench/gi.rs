@@ -8,6 +8,7 @@
 use super::convergence::{CurvePoint, CurveSpec, equal_time_table, measure_curve};
 use super::{BenchConfig, cached_path_reference, plot};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::reference::REFERENCE_BOUNCES;
 use crate::reference::metrics::{Metrics, compare};
 use crate::render::gi::{ENTRY_BYTES, GI_PASS_NAMES, RAY_BYTES, cache_bytes};
 use crate::render::gpu_types::GpuCounter;
@@ -42,7 +43,6 @@ const CURVES: &[(&str, &str)] = &[("nee, direct only", "direct only"), ("nee + G
 const SETTLE_FRAMES: u32 = 100;
 const TIMED_FRAMES: u32 = 24;
 const AVERAGED_FRAMES: u32 = 64;
-const REFERENCE_BOUNCES: u32 = 8;
 
 struct GiRow {
     scene: &'static str,

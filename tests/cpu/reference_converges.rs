@@ -1,14 +1,46 @@
-//! The CPU reference is right (an emissive brick against the analytic form factor), converges like 1/spp, and
-//! is deterministic; the metrics give known values and refuse bad input.
+//! The CPU reference is right (an emissive brick against the analytic form factor, a glowing room against the
+//! sum of its bounces, with and without Russian roulette), converges like 1/spp, and is deterministic; the metrics give known values and refuse bad input.
 
 use bevy::math::{IVec3, UVec3, Vec3};
 use glowbrick::image_io::LinearImage;
 use glowbrick::reference::metrics::compare;
 use glowbrick::reference::objects::ReferenceObjects;
 use glowbrick::reference::sampling::Pcg;
-use glowbrick::reference::{ReferenceLights, ReferenceOptions, Scene, render_reference};
+use glowbrick::reference::{ReferenceLights, ReferenceOptions, Scene, SurfaceHit, render_reference};
 use glowbrick::world::scene::load_scene;
 use glowbrick::world::{Edit, Material, Palette, VoxelWorld};
+
+/// A closed room whose every wall glows with radiance 1 and reflects half of what it receives: every surface
+/// sees emitters over its whole hemisphere, so a path's vertex k adds 0.5^(k+1) through next-event estimation and
+/// the radiance leaving a wall with `bounces` bounces is 1 + 0.5 + ... + 0.5^(bounces + 1), 2 with every bounce.
+/// The 32-bounce path ends by Russian roulette after its second bounce, and still meets 2 (unbiased).
+#[test]
+fn a_glowing_room_sums_its_bounces_with_russian_roulette() {
+    let palette = Palette::new(vec![Material::emissive("glow", [0.5; 3], [1.0; 3], 1.0)]);
+    let mut world = VoxelWorld::new(UVec3::splat(8), palette);
+    world.apply(Edit::FillBox { min: IVec3::ZERO, max: IVec3::splat(7), material: 1 }).unwrap();
+    world.apply(Edit::FillBox { min: IVec3::ONE, max: IVec3::splat(6), material: 0 }).unwrap();
+    let (lights, objects) = (ReferenceLights::of(&world), ReferenceObjects::default());
+    let scene = Scene::new(&world, &lights, &objects);
+    let floor = SurfaceHit {
+        position: Vec3::new(3.3, 1.0, 4.6),
+        normal: Vec3::Y,
+        albedo: [0.5; 3],
+        emission: Vec3::ONE,
+        on_object: false,
+    };
+    let (mut rng, mut rays) = (Pcg::new(11, 0), 0);
+    for (bounces, expected) in [(1u32, 1.75f32), (32, 2.0)] {
+        let options = ReferenceOptions { bounces, ..Default::default() };
+        let samples = 20_000;
+        let mut sum = 0.0f64;
+        for _ in 0..samples {
+            sum += f64::from(scene.path_sample(&floor, &options, &mut rng, &mut rays).x);
+        }
+        let mean = (sum / f64::from(samples)) as f32;
+        assert!((mean - expected).abs() < 0.02 * expected, "{bounces} bounces: {mean}, expected {expected}");
+    }
+}
 
 /// Form factor from a point to a parallel rectangle a x b whose corner is straight above it at height h.
 fn corner_form_factor(a: f64, b: f64, h: f64) -> f64 {
