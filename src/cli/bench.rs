@@ -29,12 +29,12 @@ pub struct BenchArgs {
     /// box with brick lights on and off; writes thesis.md beside the thesis' Table 3.
     #[arg(long)]
     thesis: bool,
-    /// The GI cache bench instead: K, the static cache, the filter and bounces against an 8-bounce reference,
+    /// The GI cache bench instead: K, the static cache, the filter and bounces against a 32-bounce reference,
     /// the cost of edits, memory; writes gi.md.
     #[arg(long)]
     gi: bool,
     /// The game's lighting bench instead: lighting=full with the GI cache at noon, dusk and night against a
-    /// reference with the same sun, sky and lamps and 8 bounces, and the cost of the sun and sky at 10^3 and
+    /// reference with the same sun, sky and lamps and 32 bounces, and the cost of the sun and sky at 10^3 and
     /// 10^5 lamps; writes daylight.md.
     #[arg(long)]
     daylight: bool,
