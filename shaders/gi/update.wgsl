@@ -134,7 +134,10 @@ fn update_entry(slot: u32) {
     // game's K = 64 and 8 rays. Without, each frame draws `update_rays` fresh stratified directions: a fixed set
     // of 64 leaves each entry a quadrature error of its own that no blend averages (the window room's sky seen
     // through a few of them; docs/bench/gi.md, "Fresh directions").
-    let first = select(0u, pcg(seed ^ 0x5bd1e995u) + (gi.frame + gi.iteration * 3u) * gi.update_rays, cached);
+    var first = 0u;
+    if cached {
+        first = pcg(seed ^ 0x5bd1e995u) + (gi.frame + gi.iteration * 3u) * gi.update_rays;
+    }
     // Fresh rays of a static entry start from a uniform point of a uniform face of its cell (its own face at level
     // 0): the entry's value is then its cell's average, as its direct light is, whichever face inserted it (a
     // cache that lived through an edit settles where a fresh one does). Cached hits and a moving object's rays

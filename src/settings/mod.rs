@@ -230,7 +230,7 @@ pub struct GiSettings {
     /// Fixed directions per face entry (K) with the static visibility cache (`cache`), traced against the static
     /// world once and cached; without it each frame draws `update_rays` fresh ones.
     pub rays: u32,
-    /// Of those, how many each visible entry re-shades per frame (round robin).
+    /// Rays each entry traces per frame: fresh directions, or with `cache` the next of its K (round robin).
     pub update_rays: u32,
     /// Weight of a new frame in the temporal blend (a fresh entry averages its first 1/alpha frames evenly).
     pub alpha: f32,
@@ -239,9 +239,10 @@ pub struct GiSettings {
     /// Read last frame's indirect light at ray hits (multiple bounces); off gives one bounce.
     pub bounces: bool,
     /// Keep each entry's static hits along K fixed directions until an edit can reach them. Off (the default),
-    /// every frame traces fresh stratified directions: at 320x180 the GI passes cost 0.03-0.07 of the direct frame
-    /// more, but a fixed set of 64 directions leaves every entry an error of its own that no blend averages (the
-    /// window room's denoised frame: relMSE 0.0031 with it, 0.0016 without; docs/bench/gi.md "Fresh directions").
+    /// every frame traces fresh stratified directions from faces across the entry's cell: at 320x180 the GI passes
+    /// cost up to 0.16 of the direct frame more, but a fixed set of 64 directions leaves every entry an error of its
+    /// own that no blend averages (the window room's denoised frame against 8-bounce references: relMSE 0.0031 with
+    /// it, 0.0020 without; docs/bench/gi.md "Fresh directions", "Rays from across the cell").
     pub cache: bool,
     /// Slots in the static world's table (rounded up to a power of two). A full table fails inserts, which the
     /// `GiFull` counter, the bench and the HUD report.

@@ -334,7 +334,7 @@ pub static SETTINGS: &[Setting] = &[
     Setting {
         key: "gi_update",
         section: Section::Gi,
-        about: "Of those, how many each visible entry re-shades per frame (round robin).",
+        about: "Rays each entry traces per frame: fresh directions, or with gi_cache=on the next of its K (round robin).",
         field: &Range {
             range: GI_UPDATE_RAYS_RANGE,
             step: Step::Double,
