@@ -380,10 +380,15 @@ fn ray_direction(face: u32, i: u32, k: u32, seed: u32) -> vec3<f32> {
     let rotation = vec2(f32(pcg(seed) >> 8u), f32(pcg(seed ^ 0x68E31DA4u) >> 8u)) * (1.0 / 16777216.0);
     let u = fract((f32(i) + 0.5) / f32(k) + rotation.x);
     let v = fract(f32(reverseBits(i)) * 2.3283064e-10 + rotation.y);
-    let r = sqrt(u);
-    let phi = 6.2831853 * v;
+    return cosine_direction(face, vec2(u, v));
+}
+
+// The cosine-weighted direction around the face normal at `u` of the unit square.
+fn cosine_direction(face: u32, u: vec2<f32>) -> vec3<f32> {
+    let r = sqrt(u.x);
+    let phi = 6.2831853 * u.y;
     let t = tangent_axes(face);
-    var d = face_normal(face) * sqrt(max(1.0 - u, 0.0));
+    var d = face_normal(face) * sqrt(max(1.0 - u.x, 0.0));
     d[t.x] = r * cos(phi);
     d[t.y] = r * sin(phi);
     return normalize(d);

@@ -8,15 +8,15 @@
 #import glowbrick::world::{materials, voxel_at, objects, object_index, object_count}
 #import glowbrick::traversal::{Hit, trace, trace_objects, trace_scene, face_normal, INF}
 #import glowbrick::lights::{scene, sky}
-#import glowbrick::random::{Rng, pcg}
+#import glowbrick::random::{Rng, pcg, rng_next, r4_point, rotation4}
 #import glowbrick::guards::finite3
 #import glowbrick::counters::counters
-#import glowbrick::constants::{RAY_OFFSET, LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, COUNT_GI_BORROWED,
+#import glowbrick::constants::{RAY_OFFSET, LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, GI_QMC, COUNT_GI_BORROWED,
     COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
 #import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_touch, gi_find,
-    listed_slot, hit_level, used_within, slot_seed, world_exit, ray_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
+    listed_slot, hit_level, used_within, slot_seed, world_exit, ray_direction, cosine_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
     WORK_STATIC, WORK_DYNAMIC}
-#import glowbrick::gi::direct::{direct_at, cell_face, face_point}
+#import glowbrick::gi::direct::{direct_at, cell_point}
 
 // The indirect light a hit face's entry holds (last frame's filtered value), or `fallback` (the shooting entry's
 // own) where it has none yet or no room in a full table: counted as borrowed.
@@ -131,18 +131,23 @@ fn update_entry(slot: u32) {
     var rng = Rng(pcg(seed ^ frame_seed));
     // With cached hits, each frame re-shades the next `update_rays` of the entry's K fixed directions; a frame's
     // further iterations (after a change of light) start 3 groups further on each, other directions at the
-    // game's K = 64 and 8 rays. Without, each frame draws `update_rays` fresh stratified directions: a fixed set
-    // of 64 leaves each entry a quadrature error of its own that no blend averages (the window room's sky seen
-    // through a few of them; docs/bench/gi.md, "Fresh directions").
+    // game's K = 64 and 8 rays. Without, each frame draws `update_rays` fresh directions: a fixed set of 64
+    // leaves each entry a quadrature error of its own that no blend averages (the window room's sky seen through
+    // a few of them; docs/bench/gi.md, "Fresh directions").
     var first = 0u;
     if cached {
         first = pcg(seed ^ 0x5bd1e995u) + (gi.frame + gi.iteration * 3u) * gi.update_rays;
     }
-    // Fresh rays of a static entry start from a uniform point of a uniform face of its cell (its own face at level
-    // 0): the entry's value is then its cell's average, as its direct light is, whichever face inserted it (a
-    // cache that lived through an edit settles where a fresh one does). Cached hits and a moving object's rays
-    // start from the face's centre.
+    // Fresh rays of a static entry start from a point of its cell (its own face at level 0): the entry's value is
+    // then its cell's average, as its direct light is, whichever face inserted it (a cache that lived through an
+    // edit settles where a fresh one does). Cached hits and a moving object's rays start from the face's centre.
+    // Fresh directions and start points are the entry's own shifted 4D Kronecker sequence (direction and point, random.wgsl),
+    // frame after frame, so the blend of the last frames' rays covers the hemisphere and the cell evenly (with
+    // independent random rays the blend kept a slow noise of its own). A change of light's extra iterations
+    // jump elsewhere in it.
     let spread = !cached && !dynamic;
+    let rotation = rotation4(seed ^ 0x68BC21EBu);
+    let run = (gi.frame + gi.iteration * 0x9E3779B9u) * gi.update_rays;
     var lo = select(origin, e.lo, samples > 0u);
     var hi = select(origin, e.hi, samples > 0u);
     var sum = vec3(0.0);
@@ -160,11 +165,16 @@ fn update_entry(slot: u32) {
             found = face != MISS_FACE;
             distance = hit_distance(code);
         } else {
-            // A seed of its own: the rng's stream (direct light at the hits) starts from pcg(seed ^ frame_seed),
-            // and directions drawn from the same numbers would be correlated with it.
-            dir = ray_direction(e.face, j, gi.update_rays, pcg(seed ^ frame_seed ^ 0x68BC21EBu));
+            var u = r4_point(run + j, rotation);
+            dir = cosine_direction(e.face, u.xy);
+            if (gi.flags & GI_QMC) == 0u {
+                // As before gi_qmc: this frame's directions stratified (a Hammersley set turned by a seed of the
+                // frame's, not the rng's stream, which the hits' direct light draws from), random points.
+                dir = ray_direction(e.face, j, gi.update_rays, pcg(seed ^ frame_seed ^ 0x68BC21EBu));
+                u = vec4(u.xy, rng_next(&rng), rng_next(&rng));
+            }
             if spread {
-                start = face_point(cell_face(e, &rng), e.face, &rng) + face_normal(e.face) * RAY_OFFSET;
+                start = cell_point(e, u.zw).point + face_normal(e.face) * RAY_OFFSET;
             }
             let hit = trace(start, dir, INF);
             found = hit.found;

@@ -48,6 +48,7 @@ const GI_BOUNCES: u32 = #{GI_BOUNCES}u;
 const GI_CACHE: u32 = #{GI_CACHE}u;
 const GI_RESTART: u32 = #{GI_RESTART}u;
 const GI_EDIT_RESTART: u32 = #{GI_EDIT_RESTART}u;
+const GI_QMC: u32 = #{GI_QMC}u;
 // Direct-light samples an entry starts over with after a change of light (gi/direct.wgsl).
 const GI_RESTART_SAMPLES: u32 = #{GI_RESTART_SAMPLES}u;
 

@@ -83,7 +83,8 @@ fn flicker(r: &mut HeadlessRenderer, frames: u32) -> Result<f64, String> {
     Ok(sum / frames as f64)
 }
 
-/// One frame, the flicker and the accumulated image of one setting against `truth`.
+/// One frame, the flicker and the accumulated image of one setting against `truth`: each the mean over the
+/// config's seeds (independent realisations).
 fn measure(
     world: &VoxelWorld,
     view: &CameraView,
@@ -91,13 +92,32 @@ fn measure(
     truth: &LinearImage,
     denoise: &str,
 ) -> Result<(Metrics, f64, Metrics), String> {
-    let mut r = renderer(world, view, (config.width, config.height), &[denoise])?;
-    r.render(SETTLE_FRAMES)?;
-    let single = compare(&r.render_next()?, truth)?;
-    let flicker = flicker(&mut r, FLICKER_FRAMES)?;
-    r.app_mut().world_mut().resource_mut::<RenderSettings>().accumulate = true;
-    let accumulated = compare(&r.render(ACCUMULATED_FRAMES)?, truth)?;
-    Ok((single, flicker, accumulated))
+    let mut singles = Vec::new();
+    let mut flickers = 0.0;
+    let mut accumulated = Vec::new();
+    for seed in 0..config.seeds {
+        let seed = format!("seed={seed}");
+        let mut r = renderer(world, view, (config.width, config.height), &[denoise, &seed])?;
+        r.render(SETTLE_FRAMES)?;
+        singles.push(compare(&r.render_next()?, truth)?);
+        flickers += flicker(&mut r, FLICKER_FRAMES)?;
+        r.app_mut().world_mut().resource_mut::<RenderSettings>().accumulate = true;
+        accumulated.push(compare(&r.render(ACCUMULATED_FRAMES)?, truth)?);
+    }
+    Ok((mean_metrics(&singles), flickers / config.seeds.max(1) as f64, mean_metrics(&accumulated)))
+}
+
+/// The mean of each metric over realisations.
+fn mean_metrics(all: &[Metrics]) -> Metrics {
+    let n = all.len().max(1) as f64;
+    let mean = |f: fn(&Metrics) -> f64| all.iter().map(f).sum::<f64>() / n;
+    Metrics {
+        mae: mean(|m| m.mae),
+        mse: mean(|m| m.mse),
+        relmse: mean(|m| m.relmse),
+        bias: mean(|m| m.bias),
+        fireflies: (all.iter().map(|m| m.fireflies).sum::<u64>() as f64 / n).round() as u64,
+    }
 }
 
 fn measure_scene(scene: &'static str, view: Option<&str>, config: &BenchConfig) -> Result<SceneRow, String> {
@@ -209,7 +229,38 @@ fn reaction(
     when: &'static str,
     denoise: &'static str,
 ) -> Result<Reaction, String> {
-    let mut r = renderer(&scene.world, &scene.view, (config.width, config.height), &[scene.time, denoise])?;
+    // Each realisation (seed) follows the same edits; their trajectories and targets are averaged: one
+    // realisation's dark room swings by 10-15% over tens of frames with the GI cache's slow noise.
+    let seeds = config.seeds.max(1);
+    let (mut off, mut on) = (vec![0.0; REACTION_FRAMES], vec![0.0; REACTION_FRAMES]);
+    let (mut unlit, mut lit, mut restart_ms, mut frame_ms) = (0.0, 0.0, 0.0, 0.0);
+    for seed in 0..seeds {
+        let run = follow_edits(config, scene, denoise, seed)?;
+        for i in 0..REACTION_FRAMES {
+            off[i] += run.off[i] / seeds as f64;
+            on[i] += run.on[i] / seeds as f64;
+        }
+        unlit += run.unlit / seeds as f64;
+        lit += run.lit / seeds as f64;
+        restart_ms += run.restart_ms / seeds as f64;
+        frame_ms += run.frame_ms / seeds as f64;
+    }
+    Ok(Reaction { when, denoise, pixels: scene.affected.len(), lit, unlit, off, on, restart_ms, frame_ms })
+}
+
+/// One realisation of `reaction`: trajectories, targets and wall times.
+struct Followed {
+    off: Vec<f64>,
+    on: Vec<f64>,
+    unlit: f64,
+    lit: f64,
+    restart_ms: f64,
+    frame_ms: f64,
+}
+
+fn follow_edits(config: &BenchConfig, scene: &LampScene, denoise: &'static str, seed: u32) -> Result<Followed, String> {
+    let seed = format!("seed={seed}");
+    let mut r = renderer(&scene.world, &scene.view, (config.width, config.height), &[scene.time, denoise, &seed])?;
     r.render(SETTLE_FRAMES)?;
     // The means of the frames after an edit, and the first one's wall time (the cache's restart).
     let follow = |r: &mut HeadlessRenderer, edit: Edit| -> Result<(Vec<f64>, f64), String> {
@@ -236,26 +287,17 @@ fn reaction(
     let (unlit, _) = settled(&mut r)?;
     let (on, on_ms) = follow(&mut r, LampScene::edit(scene.lamp))?;
     let (lit, frame_ms) = settled(&mut r)?;
-    Ok(Reaction {
-        when,
-        denoise,
-        pixels: scene.affected.len(),
-        lit,
-        unlit,
-        off,
-        on,
-        restart_ms: (off_ms + on_ms) / 2.0,
-        frame_ms,
-    })
+    Ok(Followed { off, on, unlit, lit, restart_ms: (off_ms + on_ms) / 2.0, frame_ms })
 }
 
-fn reaction_markdown(reactions: &[Reaction]) -> String {
+fn reaction_markdown(reactions: &[Reaction], seeds: u32) -> String {
     let frames = |f: Option<usize>| f.map_or(format!("more than {REACTION_FRAMES}"), |f| f.to_string());
     let mut text = format!(
         "\n## Reaction\n\nThe test room, the game's frame: its lamp switched off after {SETTLE_FRAMES} frames, then \
          on again after {SETTLE_FRAMES} more; the mean over the pixels it lights (where it more than doubles the \
          light), frame by frame after the edit, as a share of the value the same renderer's frames settle to (the \
-         mean of frames {SETTLE_FRAMES} to {} after the edit). At night the lamp is nearly all the light: unlit, \
+         mean of frames {SETTLE_FRAMES} to {} after the edit), both averaged over {seeds} seed(s) (independent \
+         realisations: one realisation's dark room swings by 10-15% over tens of frames). At night the lamp is nearly all the light: unlit, \
          the room is the moon's faint bounce light. Restart: the wall time of the frame after the edit (the GI \
          cache starts over: its update runs {} times, each entry's direct light takes {} samples) against a \
          settled frame's.\n\n| time | denoiser | pixels | unlit | lit | lit / unlit | frames to within 10%, off | \
@@ -331,8 +373,10 @@ fn cost(size: (u32, u32)) -> Result<CostRow, String> {
 pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     if config.only.iter().any(|o| o == "reaction") {
-        let text =
-            format!("# The denoiser's reaction to a change of light\n{}", reaction_markdown(&reactions(config)?));
+        let text = format!(
+            "# The denoiser's reaction to a change of light\n{}",
+            reaction_markdown(&reactions(config)?, config.seeds)
+        );
         let path = out.join("denoise-reaction.md");
         std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
         return Ok(text);
@@ -360,7 +404,7 @@ pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, Str
         return Ok(text);
     }
     let reaction = reactions(config)?;
-    eprintln!("denoise bench: reaction {}", reaction_markdown(&reaction));
+    eprintln!("denoise bench: reaction {}", reaction_markdown(&reaction, config.seeds));
     let costs = [cost((320, 180))?, cost((1280, 720))?];
     let motion = run_motion(config)?;
     let text = markdown(&rows, &reaction, &costs, config) + &motion_markdown(&motion);
@@ -375,14 +419,15 @@ fn frame_markdown(rows: &[SceneRow], config: &BenchConfig) -> String {
         "`glowbrick bench --denoise`: {}x{}, the game's \
          frame (`lighting=full gi=on`, time {DEFAULT_HOURS} h), {SETTLE_FRAMES} frames to settle, then one frame, \
          {FLICKER_FRAMES} frame-to-frame changes and {ACCUMULATED_FRAMES} accumulated frames, raw (`denoise=off`) \
-         and denoised, against a CPU reference with {REFERENCE_BOUNCES} bounces: the mean of two of {} spp with \
+         and denoised, each the mean over {} seed(s) (`seed=0..`: independent realisations of the renderer's \
+         noise), against a CPU reference with {REFERENCE_BOUNCES} bounces: the mean of two of {} spp with \
          different seeds. The reference's own error is estimated from their difference (MAE halved, relMSE \
          quartered); the last column is the ratio of the two relMSEs with that share taken out of both (the \
          frame's and the reference's errors are independent, so their squared errors add).\n\n## One frame\n\n\
          | scene | raw MAE | raw relMSE | raw bias | denoised MAE | denoised relMSE | denoised bias | relMSE raw / \
          denoised | reference's MAE | reference's relMSE | raw / denoised, reference's share out |\n\
          |---|---|---|---|---|---|---|---|---|---|---|\n",
-        config.width, config.height, config.reference_spp
+        config.width, config.height, config.seeds, config.reference_spp
     );
     for r in rows {
         let own = r.noise.relmse;
@@ -433,7 +478,7 @@ fn frame_markdown(rows: &[SceneRow], config: &BenchConfig) -> String {
 fn markdown(rows: &[SceneRow], reaction: &[Reaction], costs: &[CostRow], config: &BenchConfig) -> String {
     let mut text =
         format!("# The denoiser: error, bias, flicker, reaction and cost\n\n{}", frame_markdown(rows, config));
-    text += &reaction_markdown(reaction);
+    text += &reaction_markdown(reaction, config.seeds);
     text += "\n## Cost\n\ncornell, the game's frame, mean wall time of 8 frames (lavapipe), and the GPU time of each \
              denoiser pass (timestamp queries).\n\n| size | frame ms raw | frame ms denoised | share of the frame | \
              temporal | wavelet 1 | 2 | 4 | 8 + write |\n|---|---|---|---|---|---|---|---|---|\n";

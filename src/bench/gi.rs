@@ -25,6 +25,7 @@ use std::time::Instant;
 const ROWS: &[(&str, &[&str])] = &[
     ("direct only", &["gi=off"]),
     ("fresh directions", &["gi=on"]),
+    ("fresh, random rays", &["gi=on", "gi_qmc=off"]),
     ("cached, K=16", &["gi=on", "gi_cache=on", "gi_rays=16"]),
     ("cached, K=32", &["gi=on", "gi_cache=on", "gi_rays=32"]),
     ("cached, K=64", &["gi=on", "gi_cache=on", "gi_rays=64"]),

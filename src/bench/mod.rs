@@ -98,6 +98,8 @@ pub struct BenchConfig {
     pub only: Vec<String>,
     /// `--gi --game-sizes`: the sizes of its table (empty: `gi_scale::SIZES`).
     pub game_sizes: Vec<(u32, u32)>,
+    /// `--denoise --seeds N`: independent realisations (the `seed` setting 0..N) each measure averages.
+    pub seeds: u32,
 }
 
 impl BenchConfig {
@@ -112,6 +114,7 @@ impl BenchConfig {
             camera: None,
             only: Vec::new(),
             game_sizes: Vec::new(),
+            seeds: 1,
         }
     }
 
@@ -126,6 +129,7 @@ impl BenchConfig {
             camera: None,
             only: Vec::new(),
             game_sizes: Vec::new(),
+            seeds: 1,
         }
     }
 }

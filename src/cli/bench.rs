@@ -54,6 +54,11 @@ pub struct BenchArgs {
     /// the bias the filter adds, flicker); writes denoise-frame.md.
     #[arg(long, requires = "denoise", conflicts_with_all = ["motion", "reaction"])]
     one_frame: bool,
+    /// With --denoise: average its one-frame and reaction measures over this many independent realisations
+    /// (the `seed` setting 0, 1, ..): one realisation's GI cache carries a slow noise of its own (a room's mean
+    /// moves by a percent or two between seeds, more at night), which this averages.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16), requires = "denoise", conflicts_with = "motion")]
+    seeds: u32,
     /// With --gi: only its section at game sizes (320x180 and 1280x720: frame with and without the cache, GPU
     /// ms per pass, the table's load); writes gi-scale.md.
     #[arg(long, requires = "gi")]
@@ -101,7 +106,7 @@ enum BenchMode {
     Daylight { spp: u32 },
     /// The denoiser: denoise.md (or its motion section alone).
     /// `section`: one section alone ("motion" or "reaction"), or all of them.
-    Denoise { spp: u32, section: Option<&'static str> },
+    Denoise { spp: u32, section: Option<&'static str>, seeds: u32 },
 }
 
 impl BenchArgs {
@@ -129,9 +134,10 @@ impl BenchArgs {
                 let config = BenchConfig { width: 160, height: 90, reference_spp: spp, ..BenchConfig::full() };
                 on_gpu(|| run_daylight_bench(&config, &out)).map(|text| println!("{text}"))
             }
-            BenchMode::Denoise { spp, section } => {
+            BenchMode::Denoise { spp, section, seeds } => {
                 let only = section.map(|s| vec![s.to_string()]).unwrap_or_default();
-                let config = BenchConfig { width: 160, height: 90, reference_spp: spp, only, ..BenchConfig::full() };
+                let config =
+                    BenchConfig { width: 160, height: 90, reference_spp: spp, only, seeds, ..BenchConfig::full() };
                 on_gpu(|| run_denoise_bench(&config, &out)).map(|text| println!("{text}"))
             }
         }
@@ -161,7 +167,7 @@ impl BenchArgs {
             } else {
                 None
             };
-            BenchMode::Denoise { spp: self.spp, section }
+            BenchMode::Denoise { spp: self.spp, section, seeds: self.seeds }
         } else {
             BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }
         }

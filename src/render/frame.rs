@@ -23,7 +23,7 @@ use super::scene::objects::GpuObjects;
 use super::scene::world::{GpuWorld, WorldLayout};
 use super::shaders::GlowbrickShaders;
 use super::{FramesRendered, Highlight, VoxelCamera, denoise, primary, restir};
-use crate::settings::{DebugView, LightSample, RenderSettings, Reuse};
+use crate::settings::{DebugView, LightSample, RenderSettings, Reuse, SEED_FRAMES};
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy::render::diagnostic::RecordDiagnostics;
@@ -79,7 +79,7 @@ pub fn frame_params(settings: &RenderSettings, highlight: &Highlight, frame: u32
         prev_camera: [0.0; 4],
         debug_view: settings.debug.shader_index(),
         exposure: settings.exposure,
-        frame,
+        frame: frame.wrapping_add(settings.seed.wrapping_mul(SEED_FRAMES)),
         accumulated: 1,
         highlight_target: highlight.target.map_or([0; 4], |(v, face)| [v.x, v.y, v.z, face as i32 + 1]),
         selection_min: highlight.selection.map_or([0; 4], |(a, _)| [a.x, a.y, a.z, 1]),

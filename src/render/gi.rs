@@ -12,14 +12,14 @@
 
 use super::frame::{Dispatch, VoxelPass};
 use super::gpu_types::{
-    GI_BOUNCES, GI_CACHE, GI_EDIT_RESTART, GI_FILTER, GI_KEY_BYTES, GI_RADIANCE_BYTES, GI_RAY_BYTES, GI_RESTART,
-    GiEdit, GiEntry, GiParams,
+    GI_BOUNCES, GI_CACHE, GI_EDIT_RESTART, GI_FILTER, GI_KEY_BYTES, GI_QMC, GI_RADIANCE_BYTES, GI_RAY_BYTES,
+    GI_RESTART, GiEdit, GiEntry, GiParams,
 };
 use super::scene::SceneUploaded;
 use super::scene::lights::GpuLights;
 use super::scene::objects::GpuObjects;
 use super::scene::world::GpuWorld;
-use crate::settings::{GiSettings, RenderSettings};
+use crate::settings::{GiSettings, RenderSettings, SEED_FRAMES};
 use bevy::prelude::*;
 use bevy::render::render_resource::binding_types::{
     storage_buffer_read_only_sized, storage_buffer_sized, uniform_buffer_sized,
@@ -238,6 +238,8 @@ pub struct GiCache {
     epoch: u32,
     lost_epoch: u32,
     frame: u32,
+    /// The `seed` the entries were blended under: their frame stamps count from it, so a change starts over.
+    seed: u32,
     /// The lighting the entries were blended under (mode, time of day, sun, shadows); a change restarts them.
     lighting: Option<(crate::settings::Lighting, u32, bool, bool)>,
     /// Frames left in which the entries an edit reached restart theirs.
@@ -319,6 +321,7 @@ pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
         epoch: 1,
         lost_epoch: 0,
         frame: FIRST_FRAME,
+        seed: 0,
         lighting: None,
         edit_restart_frames: 0,
         bind_group: None,
@@ -407,7 +410,8 @@ pub fn prepare_gi(
             shape.static_entries
         );
     }
-    if shape != cache.shape || gpu_world.as_ref().is_some_and(|w| w.replaced) {
+    if shape != cache.shape || gpu_world.as_ref().is_some_and(|w| w.replaced) || cache.seed != settings.seed {
+        cache.seed = settings.seed;
         cache.reset(&device, shape);
     }
     // The edit log reaches the GPU only in frames that add to it (a reset empties it: edit_count 0 reads none).
@@ -433,7 +437,8 @@ pub fn prepare_gi(
             | flag(gi.bounces, GI_BOUNCES)
             | flag(gi.cache, GI_CACHE)
             | flag(restart, GI_RESTART)
-            | flag(edit_restart, GI_EDIT_RESTART),
+            | flag(edit_restart, GI_EDIT_RESTART)
+            | flag(gi.qmc, GI_QMC),
         rays: shape.rays,
         // With cached hits an entry re-shades at most its K directions a frame; fresh ones are drawn as many as asked.
         update_rays: if gi.cache { gi.update_rays.clamp(1, shape.rays) } else { gi.update_rays.max(1) },
@@ -443,7 +448,7 @@ pub fn prepare_gi(
         edit_count: cache.log.len() as u32,
         static_capacity: shape.static_entries,
         dynamic_capacity: shape.dynamic_entries,
-        frame: cache.frame,
+        frame: cache.frame.wrapping_add(cache.seed.wrapping_mul(SEED_FRAMES)),
         iteration: 0,
         cell_pixels: gi.cell_pixels as f32,
         _pad: [0; 3],

@@ -270,6 +270,8 @@ pub const GI_RESTART: u32 = 8;
 /// them with one sample) take this frame's estimate alone, so their average starts once the new light has
 /// travelled the bounces, not with the frames in between.
 pub const GI_EDIT_RESTART: u32 = 16;
+/// `GiParams::flags`: fresh rays and direct-light points from each entry's low-discrepancy sequence (`gi_qmc`).
+pub const GI_QMC: u32 = 32;
 
 /// The G-buffer's packed hit: bit 0 hit, bits 1-3 face, bits 4-19 material, bits 20-31 the moving object's id.
 pub const GBUFFER_FACE_SHIFT: u32 = 1;
@@ -334,6 +336,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("GI_CACHE", U32(GI_CACHE)),
         ("GI_RESTART", U32(GI_RESTART)),
         ("GI_EDIT_RESTART", U32(GI_EDIT_RESTART)),
+        ("GI_QMC", U32(GI_QMC)),
         ("GI_RESTART_SAMPLES", U32(super::gi::RESTART_DIRECT_SAMPLES)),
         // The G-buffer's packed hit.
         ("GBUFFER_FACE_SHIFT", U32(GBUFFER_FACE_SHIFT)),

@@ -244,6 +244,11 @@ pub struct GiSettings {
     /// own that no blend averages (the window room's denoised frame against 8-bounce references: relMSE 0.0031 with
     /// it, 0.0020 without; docs/bench/gi.md "Fresh directions", "Rays from across the cell").
     pub cache: bool,
+    /// Draw each entry's fresh rays (direction and start point) and its direct light's points on the cell from
+    /// the entry's own low-discrepancy sequence, frame after frame; off, independent random ones. A blend over
+    /// frames then covers the hemisphere and the cell evenly: the slow swing a few half-lit cells gave a whole
+    /// room's bounce light falls (docs/bench/gi.md, "Low-discrepancy rays").
+    pub qmc: bool,
     /// Slots in the static world's table (rounded up to a power of two). A full table fails inserts, which the
     /// `GiFull` counter, the bench and the HUD report.
     pub table: u32,
@@ -264,6 +269,7 @@ impl Default for GiSettings {
             filter: true,
             bounces: true,
             cache: false,
+            qmc: true,
             table: GI_TABLE_DEFAULT,
             cell_pixels: 4,
         }
@@ -280,6 +286,10 @@ pub const GI_ALPHA_RANGE: (f32, f32) = (0.001, 1.0);
 pub const GI_TABLE_RANGE: (u32, u32) = (1 << 12, 1 << 22);
 pub const GI_TABLE_DEFAULT: u32 = 1 << 18;
 pub const GI_CELL_RANGE: (u32, u32) = (1, 16);
+/// `seed`'s range, and the frames one seed moves the passes' frame counters by (their random numbers hash the
+/// frame): a thousand seeds of 2^16 frames each stay clear of the counters' wrap for 4 billion frames.
+pub const SEED_RANGE: (u32, u32) = (0, 1000);
+pub const SEED_FRAMES: u32 = 1 << 16;
 pub const CANDIDATES_RANGE: (u32, u32) = (1, 64);
 pub const TAPS_RANGE: (u32, u32) = (0, MAX_TAPS);
 pub const RADIUS_RANGE: (f32, f32) = (0.0, 100.0);
@@ -306,6 +316,10 @@ pub struct RenderSettings {
     /// The spatiotemporal denoiser (`render::denoise`): on in `play`, off by default so `render`, the bench and
     /// the thesis protocol measure raw frames.
     pub denoise: bool,
+    /// Where the random sequences start (0 by default): renders with different seeds are independent
+    /// realisations of the same image, for measuring the spread of a result (the GI cache's slow noise moves a
+    /// room's mean by a percent or two between them).
+    pub seed: u32,
     pub restir: RestirSettings,
     pub gi: GiSettings,
 }
@@ -322,6 +336,7 @@ impl Default for RenderSettings {
             shadows: true,
             exposure: 1.0,
             denoise: false,
+            seed: 0,
             restir: RestirSettings::default(),
             gi: GiSettings::default(),
         }

@@ -240,6 +240,13 @@ pub static SETTINGS: &[Setting] = &[
         },
     },
     Setting {
+        key: "seed",
+        section: Section::General,
+        about: "Where the random sequences start: renders with different seeds are independent, to measure a result's \
+                spread. A change starts the GI cache over.",
+        field: &Range { range: SEED_RANGE, step: Step::Add(1), unit: "", get: |s| s.seed, set: |s, v| s.seed = v },
+    },
+    Setting {
         key: "denoise",
         section: Section::General,
         about: "Spatiotemporal denoiser (SVGF family) on the lit image; play turns it on (debug=variance|history \
@@ -399,6 +406,13 @@ pub static SETTINGS: &[Setting] = &[
         about: "Cache each entry's static hits along K fixed directions until an edit reaches them (cheaper, but \
                 each entry keeps the error of its fixed set); off traces fresh directions every frame.",
         field: &Choice { get: |s| s.gi.cache, set: |s, v| s.gi.cache = v },
+    },
+    Setting {
+        key: "gi_qmc",
+        section: Section::Gi,
+        about: "Draw each entry's fresh rays and direct-light points from its own low-discrepancy sequence, frame \
+                after frame (off: independent random ones, which leave a slow swing in the bounce light).",
+        field: &Choice { get: |s| s.gi.qmc, set: |s, v| s.gi.qmc = v },
     },
 ];
 

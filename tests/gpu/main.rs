@@ -76,6 +76,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             an_opened_doorway_lights_the_far_side_within_thirty_frames,
             a_coarse_entry_whose_face_an_edit_covers_is_freed_and_inserted_again,
             a_sky_seen_through_a_small_hole_is_averaged_over_fresh_directions,
+            low_discrepancy_rays_hold_each_entrys_light_steadier,
             wider_camera_cells_keep_fewer_entries,
             with_gi_off_no_gi_pass_runs,
         ],
