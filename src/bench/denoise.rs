@@ -58,8 +58,10 @@ fn renderer(
     view: &CameraView,
     size: (u32, u32),
     pairs: &[&str],
+    extra: &[String],
 ) -> Result<HeadlessRenderer, String> {
-    let pairs: Vec<String> = GAME.iter().chain(pairs).map(|p| p.to_string()).collect();
+    // The game's frame, then the measure's own pairs, then the run's `--set` pairs.
+    let pairs: Vec<String> = GAME.iter().chain(pairs).map(|p| p.to_string()).chain(extra.iter().cloned()).collect();
     let settings = RenderSettings::default().with_pairs(&pairs)?;
     let options = HeadlessOptions { width: size.0, height: size.1, settings, ..Default::default() };
     HeadlessRenderer::new(world.clone(), view, &options)
@@ -97,7 +99,7 @@ fn measure(
     let mut accumulated = Vec::new();
     for seed in 0..config.seeds {
         let seed = format!("seed={seed}");
-        let mut r = renderer(world, view, (config.width, config.height), &[denoise, &seed])?;
+        let mut r = renderer(world, view, (config.width, config.height), &[denoise, &seed], &config.settings)?;
         r.render(SETTLE_FRAMES)?;
         singles.push(compare(&r.render_next()?, truth)?);
         flickers += flicker(&mut r, FLICKER_FRAMES)?;
@@ -202,7 +204,7 @@ impl LampScene {
         dark.apply(Self::edit(0)).map_err(|e| e.to_string())?;
         let size = (config.width, config.height);
         let accumulated = |w: &VoxelWorld| -> Result<LinearImage, String> {
-            let mut r = renderer(w, &view, size, &[time])?;
+            let mut r = renderer(w, &view, size, &[time], &config.settings)?;
             r.render(SETTLE_FRAMES)?;
             r.app_mut().world_mut().resource_mut::<RenderSettings>().accumulate = true;
             r.render(ACCUMULATED_FRAMES)
@@ -260,7 +262,13 @@ struct Followed {
 
 fn follow_edits(config: &BenchConfig, scene: &LampScene, denoise: &'static str, seed: u32) -> Result<Followed, String> {
     let seed = format!("seed={seed}");
-    let mut r = renderer(&scene.world, &scene.view, (config.width, config.height), &[scene.time, denoise, &seed])?;
+    let mut r = renderer(
+        &scene.world,
+        &scene.view,
+        (config.width, config.height),
+        &[scene.time, denoise, &seed],
+        &config.settings,
+    )?;
     r.render(SETTLE_FRAMES)?;
     // The means of the frames after an edit, and the first one's wall time (the cache's restart).
     let follow = |r: &mut HeadlessRenderer, edit: Edit| -> Result<(Vec<f64>, f64), String> {
@@ -355,7 +363,7 @@ fn cost(size: (u32, u32)) -> Result<CostRow, String> {
     let world = load_scene("cornell").map_err(|e| e.to_string())?;
     let view = world.view(Some("front")).cloned().ok_or("cornell: no view 'front'")?;
     let time = |denoise: &str| -> Result<(f64, Vec<Option<f64>>), String> {
-        let mut r = renderer(&world, &view, size, &[denoise])?;
+        let mut r = renderer(&world, &view, size, &[denoise], &[])?;
         r.render(8)?;
         let start = Instant::now();
         for _ in 0..8 {

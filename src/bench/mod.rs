@@ -100,6 +100,8 @@ pub struct BenchConfig {
     pub game_sizes: Vec<(u32, u32)>,
     /// `--denoise --seeds N`: independent realisations (the `seed` setting 0..N) each measure averages.
     pub seeds: u32,
+    /// `--denoise --set KEY=VALUE`: settings on top of each measure's own (e.g. `gi_qmc=off` to compare).
+    pub settings: Vec<String>,
 }
 
 impl BenchConfig {
@@ -115,6 +117,7 @@ impl BenchConfig {
             only: Vec::new(),
             game_sizes: Vec::new(),
             seeds: 1,
+            settings: Vec::new(),
         }
     }
 
@@ -130,6 +133,7 @@ impl BenchConfig {
             only: Vec::new(),
             game_sizes: Vec::new(),
             seeds: 1,
+            settings: Vec::new(),
         }
     }
 }

@@ -59,6 +59,9 @@ pub struct BenchArgs {
     /// moves by a percent or two between seeds, more at night), which this averages.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16), requires = "denoise", conflicts_with = "motion")]
     seeds: u32,
+    /// With --denoise: a setting on top of the game's frame for every measure (repeatable), e.g. `gi_qmc=off`.
+    #[arg(long = "set", value_name = "KEY=VALUE", requires = "denoise")]
+    set: Vec<String>,
     /// With --denoise: the image size of its one-frame and reaction measures (WxH, default 160x90), e.g. a game's
     /// 320x180 (the references' cost grows with the pixels).
     #[arg(long, value_parser = parse_size, requires = "denoise")]
@@ -110,7 +113,7 @@ enum BenchMode {
     Daylight { spp: u32 },
     /// The denoiser: denoise.md (or its motion section alone).
     /// `section`: one section alone ("motion" or "reaction"), or all of them.
-    Denoise { spp: u32, section: Option<&'static str>, seeds: u32, size: (u32, u32) },
+    Denoise { spp: u32, section: Option<&'static str>, seeds: u32, size: (u32, u32), set: Vec<String> },
 }
 
 impl BenchArgs {
@@ -138,9 +141,17 @@ impl BenchArgs {
                 let config = BenchConfig { width: 160, height: 90, reference_spp: spp, ..BenchConfig::full() };
                 on_gpu(|| run_daylight_bench(&config, &out)).map(|text| println!("{text}"))
             }
-            BenchMode::Denoise { spp, section, seeds, size: (width, height) } => {
+            BenchMode::Denoise { spp, section, seeds, size: (width, height), set } => {
                 let only = section.map(|s| vec![s.to_string()]).unwrap_or_default();
-                let config = BenchConfig { width, height, reference_spp: spp, only, seeds, ..BenchConfig::full() };
+                let config = BenchConfig {
+                    width,
+                    height,
+                    reference_spp: spp,
+                    only,
+                    seeds,
+                    settings: set,
+                    ..BenchConfig::full()
+                };
                 on_gpu(|| run_denoise_bench(&config, &out)).map(|text| println!("{text}"))
             }
         }
@@ -170,7 +181,13 @@ impl BenchArgs {
             } else {
                 None
             };
-            BenchMode::Denoise { spp: self.spp, section, seeds: self.seeds, size: self.size.unwrap_or((160, 90)) }
+            BenchMode::Denoise {
+                spp: self.spp,
+                section,
+                seeds: self.seeds,
+                size: self.size.unwrap_or((160, 90)),
+                set: self.set,
+            }
         } else {
             BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }
         }
