@@ -88,9 +88,8 @@ fn update_direct(slot: u32, e: GiEntry) {
         return;
     }
     var rng = Rng(pcg(slot_seed(slot) ^ pcg(gi.frame ^ 0x2545F491u)));
-    // Where on the cell: frame k samples point k of the entry's own shifted R2 sequence, so the last frames'
-    // points cover the cell evenly. A cell the window's moonlight half covers, read by every bounce in the room,
-    // swung the whole room's light by 10-15% over tens of frames with independent random points.
+    // Where on the cell: frame k samples point k of the entry's own shifted R2 sequence (gi_qmc), so the last
+    // frames' points cover the cell evenly, as a half-lit coarse cell needs.
     let rotation = rotation2(slot_seed(slot) ^ 0x51ED270Bu);
     if (gi.flags & GI_RESTART) != 0u {
         // The points of the frames up to this one: the next frames' continue the run.

@@ -141,10 +141,10 @@ fn update_entry(slot: u32) {
     // Fresh rays of a static entry start from a point of its cell (its own face at level 0): the entry's value is
     // then its cell's average, as its direct light is, whichever face inserted it (a cache that lived through an
     // edit settles where a fresh one does). Cached hits and a moving object's rays start from the face's centre.
-    // Fresh directions and start points are the entry's own shifted 4D Kronecker sequence (direction and point, random.wgsl),
-    // frame after frame, so the blend of the last frames' rays covers the hemisphere and the cell evenly (with
-    // independent random rays the blend kept a slow noise of its own). A change of light's extra iterations
-    // jump elsewhere in it.
+    // With gi_qmc (the default) fresh directions and start points are the entry's own shifted 4D Kronecker
+    // sequence (random.wgsl), frame after frame, so the blend of the last frames' rays covers the hemisphere and
+    // the cell evenly: a third less spread between realisations than independent rays (docs/bench/gi.md,
+    // "Low-discrepancy rays"). A change of light's extra iterations jump elsewhere in it.
     let spread = !cached && !dynamic;
     let rotation = rotation4(seed ^ 0x68BC21EBu);
     let run = (gi.frame + gi.iteration * 0x9E3779B9u) * gi.update_rays;
@@ -165,16 +165,20 @@ fn update_entry(slot: u32) {
             found = face != MISS_FACE;
             distance = hit_distance(code);
         } else {
-            var u = r4_point(run + j, rotation);
-            dir = cosine_direction(e.face, u.xy);
-            if (gi.flags & GI_QMC) == 0u {
+            // The start point's place on the cell.
+            var across: vec2<f32>;
+            if (gi.flags & GI_QMC) != 0u {
+                let u = r4_point(run + j, rotation);
+                dir = cosine_direction(e.face, u.xy);
+                across = u.zw;
+            } else {
                 // As before gi_qmc: this frame's directions stratified (a Hammersley set turned by a seed of the
                 // frame's, not the rng's stream, which the hits' direct light draws from), random points.
                 dir = ray_direction(e.face, j, gi.update_rays, pcg(seed ^ frame_seed ^ 0x68BC21EBu));
-                u = vec4(u.xy, rng_next(&rng), rng_next(&rng));
+                across = vec2(rng_next(&rng), rng_next(&rng));
             }
             if spread {
-                start = cell_point(e, u.zw).point + face_normal(e.face) * RAY_OFFSET;
+                start = cell_point(e, across).point + face_normal(e.face) * RAY_OFFSET;
             }
             let hit = trace(start, dir, INF);
             found = hit.found;

@@ -31,7 +31,7 @@ fn rng_next(rng: ptr<function, Rng>) -> f32 {
 // (first, for a direction) then the golden ratio's and sqrt(2)'s: every 1D and 2D projection of that set
 // integrates boxes better than random points, while Roberts' own R4 has 7 a1 within 0.003 of 6, so its first
 // coordinate repeats every 7 points and a run of 64 frames of 8 rays drew its elevations from 7 values (the
-// window room's cache read 2% darker).
+// doorway test missed its 30 frames).
 fn r2_point(k: u32, rotation: vec2<u32>) -> vec2<f32> {
     let x = vec2(k * 3242174889u, k * 2447445414u) + rotation;
     return vec2<f32>(x >> vec2(8u)) * (1.0 / 16777216.0);

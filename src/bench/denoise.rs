@@ -5,7 +5,7 @@
 //! `denoise.md` (with `--motion` only the last, `denoise-motion.md`).
 
 use super::motion::{motion_markdown, run_motion};
-use super::{BenchConfig, Reference, two_seed_reference};
+use super::{BenchConfig, Reference, mean_metrics, two_seed_reference};
 use crate::colour::luminance;
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::LinearImage;
@@ -107,19 +107,6 @@ fn measure(
         accumulated.push(compare(&r.render(ACCUMULATED_FRAMES)?, truth)?);
     }
     Ok((mean_metrics(&singles), flickers / config.seeds.max(1) as f64, mean_metrics(&accumulated)))
-}
-
-/// The mean of each metric over realisations.
-fn mean_metrics(all: &[Metrics]) -> Metrics {
-    let n = all.len().max(1) as f64;
-    let mean = |f: fn(&Metrics) -> f64| all.iter().map(f).sum::<f64>() / n;
-    Metrics {
-        mae: mean(|m| m.mae),
-        mse: mean(|m| m.mse),
-        relmse: mean(|m| m.relmse),
-        bias: mean(|m| m.bias),
-        fireflies: (all.iter().map(|m| m.fireflies).sum::<u64>() as f64 / n).round() as u64,
-    }
 }
 
 fn measure_scene(scene: &'static str, view: Option<&str>, config: &BenchConfig) -> Result<SceneRow, String> {
