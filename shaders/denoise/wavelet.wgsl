@@ -1,11 +1,12 @@
 // Denoiser passes 2-5 (render::denoise): the edge-aware a-trous wavelet, a 5x5 B3-spline kernel spread 1, 2, 4
 // and 8 pixels apart, ping-ponging between the two halves of `wavelet`. A tap counts only on the pixel's own
 // voxel-face plane (exact geometry edges) and is weighted down by its luminance difference against the
-// variance. The last iteration remodulates, draws the highlight and writes the image.
+// variance, and by how much farther it lies in the world than its offset in pixels says (a plane seen at a
+// grazing angle). The last iteration remodulates, draws the highlight and writes the image.
 
 #import glowbrick::world::materials
 #import glowbrick::frame::{frame, view, gbuffer, history, wavelet, unpack_surface, pixel_index, present, draw_highlight,
-    surface_voxel, luminance}
+    surface_voxel, luminance, pixel_footprint}
 #import glowbrick::constants::{DEBUG_VARIANCE, DEBUG_HISTORY}
 #import glowbrick::denoise::common::{MAX_HISTORY, ALBEDO_FLOOR, same_plane}
 
@@ -31,6 +32,7 @@ fn filtered(pixel: vec2<u32>, step: i32, source: u32) -> vec4<f32> {
         return centre;
     }
     let l = luminance(centre.rgb);
+    let footprint = pixel_footprint(s.point) * f32(step);
     var sum = vec3(0.0);
     var variance = 0.0;
     var weights = 0.0;
@@ -41,15 +43,24 @@ fn filtered(pixel: vec2<u32>, step: i32, source: u32) -> vec4<f32> {
                 continue;
             }
             let qi = pixel_index(vec2<u32>(q));
-            if !same_plane(s, unpack_surface(gbuffer[qi])) {
+            let sq = unpack_surface(gbuffer[qi]);
+            if !same_plane(s, sq) {
                 continue;
             }
+            // Distance in the world in units of this iteration's step at the centre's pixel footprint: its offset
+            // in pixels on a plane facing the camera, far more on one seen edge-on (the far ground), where a
+            // screen-space kernel mixed light from voxels far apart and left streaks along the rows. Only the
+            // excess is weighted down.
+            let reach = distance(s.point, sq.point) / footprint;
+            let stretch = max(reach * reach - f32(dx * dx + dy * dy), 0.0);
             let tap = wavelet[source + qi];
             // The pair's larger deviation, so a dark pixel with no variance of its own still gathers from a
             // bright neighbour that spreads: with each pixel's own, bright samples lost energy to neighbours that
-            // never took it (measured -5% on the test room's mean).
+            // never took it (measured -5% on the test room's mean). Tried and not kept (docs/bench/denoise.md): the
+            // centre's variance smoothed over 3x3 as in SVGF (alone: -1.3% there; with a brighter tap's: +1.2%)
+            // and the pair's smaller one (the lamp-lit room kept three times the noise).
             let sigma = SIGMA_LUMINANCE * sqrt(max(max(centre.a, tap.a), 0.0)) + 1e-4;
-            let w = kernel(dx) * kernel(dy) * exp(-abs(luminance(tap.rgb) - l) / sigma);
+            let w = kernel(dx) * kernel(dy) * exp(-abs(luminance(tap.rgb) - l) / sigma - 0.5 * stretch);
             sum += w * tap.rgb;
             variance += w * w * max(tap.a, 0.0);
             weights += w;
