@@ -386,6 +386,12 @@ pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, Str
         std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
         return Ok(text);
     }
+    if config.only.iter().any(|o| o == "cost") {
+        let text = format!("# The denoiser's cost\n{}", cost_markdown(&[cost((320, 180))?, cost((1280, 720))?]));
+        let path = out.join("denoise-cost.md");
+        std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
+        return Ok(text);
+    }
     let mut rows = Vec::new();
     for (scene, view) in SCENES {
         let row = measure_scene(scene, view, config)?;
@@ -406,6 +412,28 @@ pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, Str
     let path = out.join("denoise.md");
     std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(text)
+}
+
+/// The cost section: the frame with and without the filter, and each pass's GPU time.
+fn cost_markdown(costs: &[CostRow]) -> String {
+    let mut text = String::from(
+        "\n## Cost\n\ncornell, the game's frame, mean wall time of 8 frames (lavapipe), and the GPU time of each \
+         denoiser pass (timestamp queries).\n\n| size | frame ms raw | frame ms denoised | share of the frame | \
+         temporal | wavelet 1 | 2 | 4 | 8 + write |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for c in costs {
+        let passes: Vec<String> = c.passes.iter().map(|p| p.map_or("-".into(), |ms| format!("{ms:.1}"))).collect();
+        text += &format!(
+            "| {}x{} | {:.1} | {:.1} | {:.0}% | {} |\n",
+            c.size.0,
+            c.size.1,
+            c.raw_ms,
+            c.denoised_ms,
+            100.0 * (c.denoised_ms - c.raw_ms) / c.denoised_ms.max(1e-9),
+            passes.join(" | ")
+        );
+    }
+    text
 }
 
 /// The one-frame section: error raw and denoised, the bias the filter adds, flicker.
@@ -474,20 +502,6 @@ fn markdown(rows: &[SceneRow], reaction: &[Reaction], costs: &[CostRow], config:
     let mut text =
         format!("# The denoiser: error, bias, flicker, reaction and cost\n\n{}", frame_markdown(rows, config));
     text += &reaction_markdown(reaction, config.seeds);
-    text += "\n## Cost\n\ncornell, the game's frame, mean wall time of 8 frames (lavapipe), and the GPU time of each \
-             denoiser pass (timestamp queries).\n\n| size | frame ms raw | frame ms denoised | share of the frame | \
-             temporal | wavelet 1 | 2 | 4 | 8 + write |\n|---|---|---|---|---|---|---|---|---|\n";
-    for c in costs {
-        let passes: Vec<String> = c.passes.iter().map(|p| p.map_or("-".into(), |ms| format!("{ms:.1}"))).collect();
-        text += &format!(
-            "| {}x{} | {:.1} | {:.1} | {:.0}% | {} |\n",
-            c.size.0,
-            c.size.1,
-            c.raw_ms,
-            c.denoised_ms,
-            100.0 * (c.denoised_ms - c.raw_ms) / c.denoised_ms.max(1e-9),
-            passes.join(" | ")
-        );
-    }
+    text += &cost_markdown(costs);
     text
 }

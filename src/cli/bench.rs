@@ -54,6 +54,10 @@ pub struct BenchArgs {
     /// the bias the filter adds, flicker); writes denoise-frame.md.
     #[arg(long, requires = "denoise", conflicts_with_all = ["motion", "reaction"])]
     one_frame: bool,
+    /// With --denoise: only its cost section (the cornell box's frame with and without the filter at 320x180 and
+    /// 1280x720, GPU ms per pass); writes denoise-cost.md.
+    #[arg(long, requires = "denoise", conflicts_with_all = ["motion", "reaction", "one_frame"])]
+    cost: bool,
     /// With --denoise: average its one-frame and reaction measures over this many independent realisations
     /// (the `seed` setting 0, 1, ..): one realisation's GI cache carries a slow noise of its own (a room's mean
     /// moves by a percent or two between seeds, more at night), which this averages.
@@ -178,6 +182,8 @@ impl BenchArgs {
                 Some("reaction")
             } else if self.one_frame {
                 Some("frame")
+            } else if self.cost {
+                Some("cost")
             } else {
                 None
             };

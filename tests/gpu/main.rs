@@ -53,6 +53,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             a_lamp_switched_off_leaves_no_ghost,
             a_moving_object_keeps_its_history,
             a_sliding_block_is_neither_brightened_nor_smeared,
+            shadows_on_ground_seen_edge_on_stay_sharp,
             with_the_denoiser_off_none_of_its_passes_runs,
         ],
         extreme_scenes: [
