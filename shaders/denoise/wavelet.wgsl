@@ -32,7 +32,9 @@ fn filtered(pixel: vec2<u32>, step: i32, source: u32) -> vec4<f32> {
         return centre;
     }
     let l = luminance(centre.rgb);
-    let footprint = pixel_footprint(s.point) * f32(step);
+    // One over the squared world distance of one step of this iteration at the centre's pixel footprint.
+    let per_step = 1.0 / pixel_footprint(s.point) / f32(step);
+    let per_step_squared = per_step * per_step;
     var sum = vec3(0.0);
     var variance = 0.0;
     var weights = 0.0;
@@ -51,8 +53,8 @@ fn filtered(pixel: vec2<u32>, step: i32, source: u32) -> vec4<f32> {
             // in pixels on a plane facing the camera, far more on one seen edge-on (the far ground), where a
             // screen-space kernel mixed light from voxels far apart and left streaks along the rows. Only the
             // excess is weighted down.
-            let reach = distance(s.point, sq.point) / footprint;
-            let stretch = max(reach * reach - f32(dx * dx + dy * dy), 0.0);
+            let apart = s.point - sq.point;
+            let stretch = max(dot(apart, apart) * per_step_squared - f32(dx * dx + dy * dy), 0.0);
             let tap = wavelet[source + qi];
             // The pair's larger deviation, so a dark pixel with no variance of its own still gathers from a
             // bright neighbour that spreads: with each pixel's own, bright samples lost energy to neighbours that

@@ -367,30 +367,21 @@ fn cost(size: (u32, u32)) -> Result<CostRow, String> {
 /// Runs the bench at the config's size, writes `denoise.md` into `out` and returns its text.
 pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
-    if config.only.iter().any(|o| o == "reaction") {
+    let only = |section: &str| config.only.iter().any(|o| o == section);
+    if only("reaction") {
         let text = format!(
             "# The denoiser's reaction to a change of light\n{}",
             reaction_markdown(&reactions(config)?, config.seeds)
         );
-        let path = out.join("denoise-reaction.md");
-        std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
-        return Ok(text);
+        return write_report(out, "denoise-reaction.md", text);
     }
-    if config.only.iter().any(|o| o == "motion") {
-        let text = format!(
-            "# The denoiser under motion
-{}",
-            motion_markdown(&run_motion(config)?)
-        );
-        let path = out.join("denoise-motion.md");
-        std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
-        return Ok(text);
+    if only("motion") {
+        let text = format!("# The denoiser under motion\n{}", motion_markdown(&run_motion(config)?));
+        return write_report(out, "denoise-motion.md", text);
     }
-    if config.only.iter().any(|o| o == "cost") {
-        let text = format!("# The denoiser's cost\n{}", cost_markdown(&[cost((320, 180))?, cost((1280, 720))?]));
-        let path = out.join("denoise-cost.md");
-        std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
-        return Ok(text);
+    let costs = || -> Result<[CostRow; 2], String> { Ok([cost((320, 180))?, cost((1280, 720))?]) };
+    if only("cost") {
+        return write_report(out, "denoise-cost.md", format!("# The denoiser's cost\n{}", cost_markdown(&costs()?)));
     }
     let mut rows = Vec::new();
     for (scene, view) in SCENES {
@@ -398,18 +389,21 @@ pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, Str
         eprintln!("denoise bench: {scene}: raw {} / denoised {}", row.raw, row.denoised);
         rows.push(row);
     }
-    if config.only.iter().any(|o| o == "frame") {
+    if only("frame") {
         let text = format!("# The denoiser on one frame\n\n{}", frame_markdown(&rows, config));
-        let path = out.join("denoise-frame.md");
-        std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
-        return Ok(text);
+        return write_report(out, "denoise-frame.md", text);
     }
     let reaction = reactions(config)?;
     eprintln!("denoise bench: reaction {}", reaction_markdown(&reaction, config.seeds));
-    let costs = [cost((320, 180))?, cost((1280, 720))?];
+    let costs = costs()?;
     let motion = run_motion(config)?;
     let text = markdown(&rows, &reaction, &costs, config) + &motion_markdown(&motion);
-    let path = out.join("denoise.md");
+    write_report(out, "denoise.md", text)
+}
+
+/// Writes a report into `out` and returns its text.
+fn write_report(out: &Path, name: &str, text: String) -> Result<String, String> {
+    let path = out.join(name);
     std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(text)
 }

@@ -32,17 +32,22 @@ fn room() -> (VoxelWorld, CameraView) {
     (world, view)
 }
 
-pub fn a_denoised_frame_is_closer_to_the_reference_and_adds_little_bias() {
-    let (world, view) = room();
-    let keep = common::comparable_pixels(&world, &view, W, H);
+/// The CPU's direct light (sun, sky, lamps) at `hours`, 1024 spp, over the pixels kept.
+fn direct_light_reference(world: &VoxelWorld, view: &CameraView, hours: f32, keep: &[bool]) -> LinearImage {
     let options = ReferenceOptions {
         width: W,
         height: H,
         spp: 1024,
-        daylight: Some(Daylight::at(12.0, true)),
+        daylight: Some(Daylight::at(hours, true)),
         ..Default::default()
     };
-    let truth = common::masked(&render_reference(&world, &view, &options).unwrap().image, &keep);
+    common::masked(&render_reference(world, view, &options).unwrap().image, keep)
+}
+
+pub fn a_denoised_frame_is_closer_to_the_reference_and_adds_little_bias() {
+    let (world, view) = room();
+    let keep = common::comparable_pixels(&world, &view, W, H);
+    let truth = direct_light_reference(&world, &view, 12.0, &keep);
     let mean = truth.mean_luminance();
     let frame = |pairs: &[&str]| -> LinearImage {
         let mut all = vec!["time=12", "gi=off"];
@@ -89,14 +94,7 @@ pub fn shadows_on_ground_seen_edge_on_stay_sharp() {
     let keep = ground_seen_edge_on(&world, &view, 12.0);
     let pixels = keep.iter().filter(|k| **k).count();
     assert!(pixels >= 300, "only {pixels} pixels of ground seen edge-on");
-    let options = ReferenceOptions {
-        width: W,
-        height: H,
-        spp: 1024,
-        daylight: Some(Daylight::at(10.0, true)),
-        ..Default::default()
-    };
-    let truth = common::masked(&render_reference(&world, &view, &options).unwrap().image, &keep);
+    let truth = direct_light_reference(&world, &view, 10.0, &keep);
     let frame = |on: &str| {
         let image = common::renderer_with(&world, &view, W, H, &["time=10", "gi=off", on]).render(16).unwrap();
         compare(&common::masked(&image, &keep), &truth).unwrap()
