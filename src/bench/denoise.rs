@@ -97,14 +97,19 @@ fn measure(
     let mut singles = Vec::new();
     let mut flickers = 0.0;
     let mut accumulated = Vec::new();
+    // The frames are whole; the reference may hold only the lattice's pixels (flicker needs no reference).
+    let against_truth = |image: LinearImage| {
+        let measured = if config.lattice > 1 { image.lattice(config.lattice) } else { image };
+        compare(&measured, truth)
+    };
     for seed in 0..config.seeds {
         let seed = format!("seed={seed}");
         let mut r = renderer(world, view, (config.width, config.height), &[denoise, &seed], &config.settings)?;
         r.render(SETTLE_FRAMES)?;
-        singles.push(compare(&r.render_next()?, truth)?);
+        singles.push(against_truth(r.render_next()?)?);
         flickers += flicker(&mut r, FLICKER_FRAMES)?;
         r.app_mut().world_mut().resource_mut::<RenderSettings>().accumulate = true;
-        accumulated.push(compare(&r.render(ACCUMULATED_FRAMES)?, truth)?);
+        accumulated.push(against_truth(r.render(ACCUMULATED_FRAMES)?)?);
     }
     Ok((mean_metrics(&singles), flickers / config.seeds.max(1) as f64, mean_metrics(&accumulated)))
 }
@@ -112,8 +117,11 @@ fn measure(
 fn measure_scene(scene: &'static str, view: Option<&str>, config: &BenchConfig) -> Result<SceneRow, String> {
     let world = load_scene(scene).map_err(|e| e.to_string())?;
     let view = world.view(view).cloned().ok_or_else(|| format!("{scene}: no such view"))?;
-    let what =
-        Reference { bounces: REFERENCE_BOUNCES, daylight: Some(Daylight::at(DEFAULT_HOURS, true)), lattice: None };
+    let what = Reference {
+        bounces: REFERENCE_BOUNCES,
+        daylight: Some(Daylight::at(DEFAULT_HOURS, true)),
+        lattice: (config.lattice > 1).then_some(config.lattice),
+    };
     let (truth, noise) = two_seed_reference(&world, &view, config, &what)?;
     let (raw, raw_flicker, raw_accumulated) = measure(&world, &view, config, &truth, "denoise=off")?;
     let (denoised, denoised_flicker, denoised_accumulated) = measure(&world, &view, config, &truth, "denoise=on")?;
@@ -430,6 +438,22 @@ fn cost_markdown(costs: &[CostRow]) -> String {
     text
 }
 
+/// Where the one-frame errors were measured, when not on every pixel.
+fn lattice_note(config: &BenchConfig) -> String {
+    if config.lattice <= 1 {
+        return String::new();
+    }
+    let step = config.lattice;
+    format!(
+        " Errors (and the reference) on every {step}th pixel in each direction only (`--lattice {step}`: {}x{} \
+         pixels, an unbiased estimate of the whole frame's error at 1/{} of the reference's cost); the frames and \
+         the flicker are whole.",
+        config.width / step,
+        config.height / step,
+        step * step
+    )
+}
+
 /// The one-frame section: error raw and denoised, the bias the filter adds, flicker.
 fn frame_markdown(rows: &[SceneRow], config: &BenchConfig) -> String {
     let mut text = format!(
@@ -440,11 +464,15 @@ fn frame_markdown(rows: &[SceneRow], config: &BenchConfig) -> String {
          noise), against a CPU reference with {REFERENCE_BOUNCES} bounces: the mean of two of {} spp with \
          different seeds. The reference's own error is estimated from their difference (MAE halved, relMSE \
          quartered); the last column is the ratio of the two relMSEs with that share taken out of both (the \
-         frame's and the reference's errors are independent, so their squared errors add).\n\n## One frame\n\n\
+         frame's and the reference's errors are independent, so their squared errors add).{}\n\n## One frame\n\n\
          | scene | raw MAE | raw relMSE | raw bias | denoised MAE | denoised relMSE | denoised bias | relMSE raw / \
          denoised | reference's MAE | reference's relMSE | raw / denoised, reference's share out |\n\
          |---|---|---|---|---|---|---|---|---|---|---|\n",
-        config.width, config.height, config.seeds, config.reference_spp
+        config.width,
+        config.height,
+        config.seeds,
+        config.reference_spp,
+        lattice_note(config)
     );
     for r in rows {
         let own = r.noise.relmse;

@@ -102,6 +102,9 @@ pub struct BenchConfig {
     pub seeds: u32,
     /// `--denoise --set KEY=VALUE`: settings on top of each measure's own (e.g. `gi_qmc=off` to compare).
     pub settings: Vec<String>,
+    /// `--denoise --lattice N`: the one-frame measure's reference and errors at every n-th pixel in each
+    /// direction only (`Reference::lattice`; 1: every pixel), so a game's size stays affordable.
+    pub lattice: u32,
 }
 
 impl BenchConfig {
@@ -118,6 +121,7 @@ impl BenchConfig {
             game_sizes: Vec::new(),
             seeds: 1,
             settings: Vec::new(),
+            lattice: 1,
         }
     }
 
@@ -134,6 +138,7 @@ impl BenchConfig {
             game_sizes: Vec::new(),
             seeds: 1,
             settings: Vec::new(),
+            lattice: 1,
         }
     }
 }

@@ -80,10 +80,11 @@ pub struct BenchArgs {
     /// With --thesis: image size as a fraction of the thesis' 1600x1024.
     #[arg(long, default_value_t = 0.2, requires = "thesis", conflicts_with_all = ["gi", "daylight", "denoise", "scenes", "quick", "settings", "camera"])]
     scale: f32,
-    /// With --thesis: integrate the reference only at every n-th pixel in each direction and measure the error
-    /// there (an unbiased estimate of the whole image's error at 1/n^2 of the reference's cost), e.g. the
-    /// thesis' full size with `--scale 1 --lattice 5`.
-    #[arg(long, default_value_t = 1, requires = "thesis")]
+    /// With --thesis or --denoise: integrate the reference only at every n-th pixel in each direction and
+    /// measure the error there (an unbiased estimate of the whole image's error at 1/n^2 of the reference's
+    /// cost), e.g. the thesis' full size with `--scale 1 --lattice 5`, or the denoiser's one frame at a game's
+    /// size with `--one-frame --size 1280x720 --lattice 4`.
+    #[arg(long, default_value_t = 1, conflicts_with_all = ["gi", "daylight", "motion", "reaction", "cost"])]
     lattice: u32,
     /// With --thesis: only the views whose label contains one of these, e.g. `letters` (default: all four).
     #[arg(long, value_delimiter = ',', requires = "thesis")]
@@ -117,7 +118,7 @@ enum BenchMode {
     Daylight { spp: u32 },
     /// The denoiser: denoise.md (or its motion section alone).
     /// `section`: one section alone ("motion" or "reaction"), or all of them.
-    Denoise { spp: u32, section: Option<&'static str>, seeds: u32, size: (u32, u32), set: Vec<String> },
+    Denoise { spp: u32, section: Option<&'static str>, seeds: u32, size: (u32, u32), set: Vec<String>, lattice: u32 },
 }
 
 impl BenchArgs {
@@ -125,6 +126,9 @@ impl BenchArgs {
         let out = self.out.clone();
         if out.exists() && !out.is_dir() {
             return Err(format!("{}: --out names a folder for the report, and this is a file", out.display()));
+        }
+        if self.lattice != 1 && !(self.thesis || self.denoise) {
+            return Err("--lattice needs --thesis or --denoise".into());
         }
         match self.mode() {
             BenchMode::Settings { scenes, quick, only, camera } => run_settings(scenes, quick, only, camera, &out),
@@ -145,7 +149,10 @@ impl BenchArgs {
                 let config = BenchConfig { width: 160, height: 90, reference_spp: spp, ..BenchConfig::full() };
                 on_gpu(|| run_daylight_bench(&config, &out)).map(|text| println!("{text}"))
             }
-            BenchMode::Denoise { spp, section, seeds, size: (width, height), set } => {
+            BenchMode::Denoise { spp, section, seeds, size: (width, height), set, lattice } => {
+                if lattice == 0 || lattice > width.min(height) / 4 {
+                    return Err(format!("--lattice {lattice} must be within 1..={}", width.min(height) / 4));
+                }
                 let only = section.map(|s| vec![s.to_string()]).unwrap_or_default();
                 let config = BenchConfig {
                     width,
@@ -154,6 +161,7 @@ impl BenchArgs {
                     only,
                     seeds,
                     settings: set,
+                    lattice,
                     ..BenchConfig::full()
                 };
                 on_gpu(|| run_denoise_bench(&config, &out)).map(|text| println!("{text}"))
@@ -193,6 +201,7 @@ impl BenchArgs {
                 seeds: self.seeds,
                 size: self.size.unwrap_or((160, 90)),
                 set: self.set,
+                lattice: self.lattice,
             }
         } else {
             BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }

@@ -191,6 +191,8 @@ fn conflicting_flags_are_refused() {
         (&["bench", "--daylight", "--quick"], "--daylight", "--quick"),
         (&["bench", "--daylight", "--gi"], "--daylight", "--gi"),
         (&["bench", "--denoise", "--settings", "restir"], "--denoise", "--settings"),
+        (&["bench", "--gi", "--lattice", "4"], "--gi", "--lattice"),
+        (&["bench", "--denoise", "--cost", "--lattice", "4"], "--cost", "--lattice"),
         (&["bench", "--scale", "0.5", "--settings", "restir"], "--scale", "--settings"),
         (&["bench", "--quick", "--spp", "4"], "--spp", "--quick"),
         (&["bench", "--scale", "0.5", "--out", NOWHERE], "--thesis", "required"),
@@ -219,6 +221,14 @@ fn each_bench_mode_takes_its_own_flags() {
     let out = glowbrick(&[&["bench"][..], &args, &["--out", NOWHERE]].concat());
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("unknown bench setting 'bogus'"), "{}", text(&out.stderr));
+    // The reference's lattice: the denoiser's one frame takes it (within a quarter of the image's side), the
+    // default sweep does not.
+    let out = glowbrick(&["bench", "--denoise", "--one-frame", "--lattice", "40", "--out", NOWHERE]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("--lattice 40 must be within 1..=22"), "{}", text(&out.stderr));
+    let out = glowbrick(&["bench", "--lattice", "4", "--out", NOWHERE]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("--lattice needs --thesis or --denoise"), "{}", text(&out.stderr));
 }
 
 /// `src/main.rs` only parses and dispatches; the commands live in `src/cli/`.
