@@ -244,6 +244,8 @@ pub struct GiCache {
     lighting: Option<(crate::settings::Lighting, u32, bool, bool)>,
     /// Frames left in which the entries an edit reached restart theirs.
     edit_restart_frames: u32,
+    /// Frames left of a fresh cache's warm-up, which runs WARM_UP_ITERATIONS update iterations a frame.
+    warm_up_frames: u32,
     /// Frames that restarted the entries (after a change of light).
     restarts: u32,
     /// Update iterations this frame (RESTART_ITERATIONS in the first frame after a change of light, else 1).
@@ -324,6 +326,7 @@ pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
         seed: 0,
         lighting: None,
         edit_restart_frames: 0,
+        warm_up_frames: WARM_UP_FRAMES,
         bind_group: None,
         enabled: false,
     });
@@ -337,6 +340,7 @@ impl GiCache {
         self.log.clear();
         self.epoch = 1;
         self.lost_epoch = 0;
+        self.warm_up_frames = WARM_UP_FRAMES;
     }
 
     /// Records this frame's edited bricks under a new epoch. Many bricks in one frame become one box.
@@ -397,7 +401,6 @@ pub fn prepare_gi(
     let objects_came_or_went = gpu_objects.as_ref().is_some_and(|o| o.set_changed);
     let restart = gpu_lights.as_ref().is_some_and(|l| l.changed) || objects_came_or_went || cache.lighting != lighting;
     cache.lighting = lighting;
-    cache.iterations = if restart { RESTART_ITERATIONS } else { 1 };
     cache.restarts += restart as u32;
     let max_binding = device.limits().max_storage_buffer_binding_size;
     let shape = Shape::of(&gi, max_binding);
@@ -414,6 +417,17 @@ pub fn prepare_gi(
         cache.seed = settings.seed;
         cache.reset(&device, shape);
     }
+    // A fresh cache's entries are all young: each frame's light has travelled one bounce more, and their
+    // blends average what came before it (update.wgsl), so a room lit over many bounces starts dark. Two
+    // iterations a frame while it warms up bring the next bounce within the same frame.
+    cache.iterations = if restart {
+        RESTART_ITERATIONS
+    } else if cache.warm_up_frames > 0 {
+        WARM_UP_ITERATIONS
+    } else {
+        1
+    };
+    cache.warm_up_frames = cache.warm_up_frames.saturating_sub(1);
     // The edit log reaches the GPU only in frames that add to it (a reset empties it: edit_count 0 reads none).
     let mut log_changed = false;
     if let Some(world) = &gpu_world {
@@ -481,6 +495,10 @@ pub fn prepare_gi(
 /// Update iterations (update + filter, each one bounce more) in the frame after a change of light, started from
 /// zero indirect light (GI_RESTART): the frame shows the new light with this many bounces and none of the old.
 pub const RESTART_ITERATIONS: u32 = 4;
+/// Frames of a fresh cache's warm-up (a world loaded, the cache's shape or seed changed), and its update
+/// iterations a frame.
+const WARM_UP_FRAMES: u32 = 64;
+const WARM_UP_ITERATIONS: u32 = 4;
 /// Direct-light samples an entry starts over with after a change of light (`RESTART_SAMPLES` in
 /// shaders/gi/direct.wgsl, a shader def).
 pub const RESTART_DIRECT_SAMPLES: u32 = 8;

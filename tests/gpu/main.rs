@@ -67,6 +67,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             lamps_lying_on_a_floor,
         ],
         gi: [
+            a_fresh_cache_brings_in_the_bounces_during_its_warm_up,
             a_glowing_object_behind_a_wall_does_not_leak_through_it,
             an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_follows,
             the_gi_cache_converges_to_the_path_traced_reference_in_the_cornell_box,
