@@ -107,6 +107,15 @@ pub struct BenchConfig {
     pub lattice: u32,
 }
 
+/// A reference lattice (`Reference::lattice`) must be at least 1 and leave at least 4 pixels each way.
+pub fn check_lattice(lattice: u32, width: u32, height: u32) -> Result<(), String> {
+    let most = width.min(height) / 4;
+    if lattice == 0 || lattice > most {
+        return Err(format!("--lattice {lattice} must be within 1..={most}"));
+    }
+    Ok(())
+}
+
 impl BenchConfig {
     pub fn full() -> Self {
         BenchConfig {

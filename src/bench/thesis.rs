@@ -164,9 +164,7 @@ pub fn run_thesis_bench(options: &ThesisOptions, out: &Path) -> Result<String, S
         curve_frames: 0,
         ..BenchConfig::full()
     };
-    if lattice == 0 || lattice > config.width.min(config.height) / 4 {
-        return Err(format!("--lattice {lattice} must be within 1..={}", config.width.min(config.height) / 4));
-    }
+    super::check_lattice(lattice, config.width, config.height)?;
     let views: Vec<&ThesisView> = THESIS_VIEWS
         .iter()
         .filter(|t| options.views.is_empty() || options.views.iter().any(|v| t.label.contains(v.as_str())))

@@ -150,9 +150,7 @@ impl BenchArgs {
                 on_gpu(|| run_daylight_bench(&config, &out)).map(|text| println!("{text}"))
             }
             BenchMode::Denoise { spp, section, seeds, size: (width, height), set, lattice } => {
-                if lattice == 0 || lattice > width.min(height) / 4 {
-                    return Err(format!("--lattice {lattice} must be within 1..={}", width.min(height) / 4));
-                }
+                crate::bench::check_lattice(lattice, width, height)?;
                 let only = section.map(|s| vec![s.to_string()]).unwrap_or_default();
                 let config = BenchConfig {
                     width,

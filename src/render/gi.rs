@@ -418,8 +418,8 @@ pub fn prepare_gi(
         cache.reset(&device, shape);
     }
     // A fresh cache's entries are all young: each frame's light has travelled one bounce more, and their
-    // blends average what came before it (update.wgsl), so a room lit over many bounces starts dark. Two
-    // iterations a frame while it warms up bring the next bounce within the same frame.
+    // blends average what came before it (update.wgsl), so a room lit over many bounces starts dark. More
+    // iterations a frame while it warms up bring the next bounces within the same frame.
     cache.iterations = if restart {
         RESTART_ITERATIONS
     } else if cache.warm_up_frames > 0 {
