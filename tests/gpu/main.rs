@@ -9,6 +9,11 @@
 //!
 //! Unlike the standard harness this one does not capture a test's output: the tests' measurements are printed as
 //! they run.
+//!
+//! Each test runs in a child process of this binary (the same executable, told which test by `CHILD_TEST_VAR`):
+//! a Bevy app and its software-Vulkan device do not hand all their memory back when dropped, and one process
+//! running every test grew past this machine's 24 GiB (CI was killed by the OOM killer in the ReSTIR group).
+//! A child's memory is freed when it exits, so the suite's peak is that of its two largest tests at once.
 
 // A test function left out of `tests()` below would never run: make that a compile error.
 #![deny(dead_code)]
@@ -30,7 +35,11 @@ mod vox_scene;
 mod world_after_edits;
 
 use libtest_mimic::{Arguments, Completion, Failed, Trial};
+use std::process::Command;
 use std::sync::OnceLock;
+
+/// Set in a child process to the one test (`module::test`) it runs.
+const CHILD_TEST_VAR: &str = "GLOWBRICK_GPU_TEST_CHILD";
 
 /// `(module::test, test)` for each listed test; a test left out of the list is a dead-code error.
 macro_rules! gpu_tests {
@@ -126,17 +135,49 @@ fn adapter() -> &'static Result<String, String> {
     })
 }
 
+/// The child's side: run one test in this process (a panic fails it with a non-zero exit), then say how much
+/// memory it took at its peak so a test that grows shows in the log.
+fn run_child(name: &str) {
+    let Some((_, test)) = tests().into_iter().find(|(n, _)| *n == name) else {
+        eprintln!("no GPU test named {name}");
+        std::process::exit(2);
+    };
+    test();
+    if let Some(peak) = peak_memory_mib() {
+        eprintln!("{name}: peak memory {peak} MiB");
+    }
+}
+
+/// This process's peak resident memory (Linux's `VmHWM`), when the system says.
+fn peak_memory_mib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024)
+}
+
+/// The parent's side: run `name` in a child process of this binary, its output going straight to ours.
+fn run_in_child(name: &str) -> Result<(), Failed> {
+    let exe = std::env::current_exe().map_err(|e| Failed::from(format!("cannot find the test binary: {e}")))?;
+    let status = Command::new(exe)
+        .env(CHILD_TEST_VAR, name)
+        .status()
+        .map_err(|e| Failed::from(format!("cannot start the test's process: {e}")))?;
+    if status.success() { Ok(()) } else { Err(Failed::from(format!("the test's process ended with {status}"))) }
+}
+
 fn main() {
+    if let Ok(name) = std::env::var(CHILD_TEST_VAR) {
+        run_child(&name);
+        return;
+    }
     let args = Arguments::from_args();
     let require = common::require_gpu();
     let trials = tests()
         .into_iter()
-        .map(|(name, test)| {
+        .map(|(name, _)| {
             Trial::ignorable_test(name, move || match adapter() {
-                Ok(_) => {
-                    test();
-                    Ok(Completion::Completed)
-                }
+                Ok(_) => run_in_child(name).map(|()| Completion::Completed),
                 Err(why) if require => Err(Failed::from(format!("no GPU adapter and GLOWBRICK_REQUIRE_GPU=1: {why}"))),
                 Err(_) => Ok(Completion::ignored_with("no GPU adapter")),
             })
