@@ -24,6 +24,17 @@ use std::time::Instant;
 /// Scenes and views: the window room, the cornell box, the letters, the apartments (first view where `None`).
 const SCENES: [(&str, Option<&str>); 4] =
     [("window-room", Some("inside")), ("cornell", Some("front")), ("letters", None), ("apartments", None)];
+/// `--scenes`: each must be one of `SCENES` (a typo would otherwise measure nothing).
+pub fn check_scenes(scenes: &[String]) -> Result<(), String> {
+    match scenes.iter().find(|s| !SCENES.iter().any(|(known, _)| known == s)) {
+        Some(unknown) => {
+            let known: Vec<&str> = SCENES.iter().map(|(s, _)| *s).collect();
+            Err(format!("the denoiser bench has no scene '{unknown}' (it measures {})", known.join(", ")))
+        }
+        None => Ok(()),
+    }
+}
+
 /// Frames for the GI cache (and the denoiser's history) to settle, frames whose changes are averaged for the
 /// flicker, frames accumulated for the bias.
 const SETTLE_FRAMES: u32 = 64;
@@ -392,7 +403,9 @@ pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, Str
         return write_report(out, "denoise-cost.md", format!("# The denoiser's cost\n{}", cost_markdown(&costs()?)));
     }
     let mut rows = Vec::new();
-    for (scene, view) in SCENES {
+    for (scene, view) in
+        SCENES.into_iter().filter(|(s, _)| config.scenes.is_empty() || config.scenes.iter().any(|c| c == s))
+    {
         let row = measure_scene(scene, view, config)?;
         eprintln!("denoise bench: {scene}: raw {} / denoised {}", row.raw, row.denoised);
         rows.push(row);

@@ -105,6 +105,8 @@ pub struct BenchConfig {
     /// `--denoise --lattice N`: the one-frame measure's reference and errors at every n-th pixel in each
     /// direction only (`Reference::lattice`; 1: every pixel), so a game's size stays affordable.
     pub lattice: u32,
+    /// `--denoise --scenes A,B`: only these of its one-frame scenes (empty: all four).
+    pub scenes: Vec<String>,
 }
 
 /// A reference lattice (`Reference::lattice`) must be at least 1 and leave at least 4 pixels each way.
@@ -131,6 +133,7 @@ impl BenchConfig {
             seeds: 1,
             settings: Vec::new(),
             lattice: 1,
+            scenes: Vec::new(),
         }
     }
 
@@ -148,6 +151,7 @@ impl BenchConfig {
             seeds: 1,
             settings: Vec::new(),
             lattice: 1,
+            scenes: Vec::new(),
         }
     }
 }

@@ -19,8 +19,9 @@ const MODES: [&str; 4] = ["thesis", "gi", "daylight", "denoise"];
 #[derive(Args)]
 #[command(group(ArgGroup::new("mode").args(MODES)))]
 pub struct BenchArgs {
-    /// Comma-separated scene names (default: all thesis-like scenes, or a small set with --quick).
-    #[arg(long, value_delimiter = ',', conflicts_with_all = MODES)]
+    /// Comma-separated scene names (default: all thesis-like scenes, or a small set with --quick). With
+    /// --denoise: only these of its one-frame scenes (window-room, cornell, letters, apartments).
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["thesis", "gi", "daylight", "motion", "reaction", "cost"])]
     scenes: Vec<String>,
     /// A small, fast run (96x64, few frames, 256-spp references) for CI.
     #[arg(long, conflicts_with_all = MODES)]
@@ -118,7 +119,15 @@ enum BenchMode {
     Daylight { spp: u32 },
     /// The denoiser: denoise.md (or its motion section alone).
     /// `section`: one section alone ("motion" or "reaction"), or all of them.
-    Denoise { spp: u32, section: Option<&'static str>, seeds: u32, size: (u32, u32), set: Vec<String>, lattice: u32 },
+    Denoise {
+        spp: u32,
+        section: Option<&'static str>,
+        seeds: u32,
+        size: (u32, u32),
+        set: Vec<String>,
+        lattice: u32,
+        scenes: Vec<String>,
+    },
 }
 
 impl BenchArgs {
@@ -149,8 +158,9 @@ impl BenchArgs {
                 let config = BenchConfig { width: 160, height: 90, reference_spp: spp, ..BenchConfig::full() };
                 on_gpu(|| run_daylight_bench(&config, &out)).map(|text| println!("{text}"))
             }
-            BenchMode::Denoise { spp, section, seeds, size: (width, height), set, lattice } => {
+            BenchMode::Denoise { spp, section, seeds, size: (width, height), set, lattice, scenes } => {
                 crate::bench::check_lattice(lattice, width, height)?;
+                crate::bench::denoise::check_scenes(&scenes)?;
                 let only = section.map(|s| vec![s.to_string()]).unwrap_or_default();
                 let config = BenchConfig {
                     width,
@@ -160,6 +170,7 @@ impl BenchArgs {
                     seeds,
                     settings: set,
                     lattice,
+                    scenes,
                     ..BenchConfig::full()
                 };
                 on_gpu(|| run_denoise_bench(&config, &out)).map(|text| println!("{text}"))
@@ -200,6 +211,7 @@ impl BenchArgs {
                 size: self.size.unwrap_or((160, 90)),
                 set: self.set,
                 lattice: self.lattice,
+                scenes: self.scenes,
             }
         } else {
             BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }

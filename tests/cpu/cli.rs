@@ -193,6 +193,7 @@ fn conflicting_flags_are_refused() {
         (&["bench", "--denoise", "--settings", "restir"], "--denoise", "--settings"),
         (&["bench", "--gi", "--lattice", "4"], "--gi", "--lattice"),
         (&["bench", "--denoise", "--cost", "--lattice", "4"], "--cost", "--lattice"),
+        (&["bench", "--denoise", "--motion", "--scenes", "cornell"], "--motion", "--scenes"),
         (&["bench", "--scale", "0.5", "--settings", "restir"], "--scale", "--settings"),
         (&["bench", "--quick", "--spp", "4"], "--spp", "--quick"),
         (&["bench", "--scale", "0.5", "--out", NOWHERE], "--thesis", "required"),
@@ -226,6 +227,11 @@ fn each_bench_mode_takes_its_own_flags() {
     let out = glowbrick(&["bench", "--denoise", "--one-frame", "--lattice", "40", "--out", NOWHERE]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("--lattice 40 must be within 1..=22"), "{}", text(&out.stderr));
+    // The denoiser's one frame takes a subset of its four scenes, and names them when given another.
+    let out = glowbrick(&["bench", "--denoise", "--one-frame", "--scenes", "cornell,mountain", "--out", NOWHERE]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("no scene 'mountain'") && stderr.contains("window-room, cornell"), "{stderr}");
     let out = glowbrick(&["bench", "--lattice", "4", "--out", NOWHERE]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("--lattice needs --thesis or --denoise"), "{}", text(&out.stderr));
