@@ -104,6 +104,8 @@ pub struct ThesisOptions {
     pub views: Vec<String>,
     /// Area samples only; the point-sample columns read n/a.
     pub area_only: bool,
+    /// `--set KEY=VALUE`: settings on top of the protocol's (e.g. `denoise=on`).
+    pub settings: Vec<String>,
 }
 
 fn render_mode(
@@ -112,6 +114,7 @@ fn render_mode(
     config: &BenchConfig,
     reference: &Lattice,
     sample: &str,
+    extra: &[String],
     (label, out): (&str, &Path),
 ) -> Result<ThesisResult, String> {
     let radius = (30.0 * config.width as f32 / 1600.0).round().max(1.0);
@@ -119,6 +122,7 @@ fn render_mode(
         .iter()
         .map(|p| p.to_string())
         .chain([format!("radius={radius}"), format!("sample={sample}")])
+        .chain(extra.iter().cloned())
         .collect::<Vec<_>>();
     let settings = RenderSettings::default().with_pairs(&pairs)?;
     let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
@@ -155,6 +159,8 @@ pub fn run_thesis_bench(options: &ThesisOptions, out: &Path) -> Result<String, S
     if spp < 2 {
         return Err(format!("--spp {spp}: the reference is the mean of two seeds, so it needs at least 2"));
     }
+    // A bad `--set` is refused before the references' minutes, not after.
+    RenderSettings::default().with_pairs(&options.settings)?;
     let config = BenchConfig {
         width: ((1600.0 * scale).round() as u32).max(16),
         height: ((1024.0 * scale).round() as u32).max(16),
@@ -191,11 +197,11 @@ pub fn run_thesis_bench(options: &ThesisOptions, out: &Path) -> Result<String, S
         std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
         write_image(&image, &out.join(format!("{}-reference.exr", file_stem(t.label))))?;
         let reference = Lattice { image, step: lattice };
-        let area = render_mode(&world, &view, &config, &reference, "area", (t.label, out))?;
+        let area = render_mode(&world, &view, &config, &reference, "area", &options.settings, (t.label, out))?;
         let point = if options.area_only {
             None
         } else {
-            Some(render_mode(&world, &view, &config, &reference, "point", (t.label, out))?)
+            Some(render_mode(&world, &view, &config, &reference, "point", &options.settings, (t.label, out))?)
         };
         let point_text = point.as_ref().map_or("not rendered".to_string(), |p| p.metrics.to_string());
         eprintln!("thesis: {}: area {}, point {point_text}, reference noise {}", t.label, area.metrics, noise);
@@ -236,6 +242,14 @@ fn thesis_markdown(rows: &[ThesisRow], config: &BenchConfig, options: &ThesisOpt
     if options.area_only {
         command += " --area-only";
     }
+    for pair in &options.settings {
+        command += &format!(" --set {pair}");
+    }
+    let on_top = if options.settings.is_empty() {
+        String::new()
+    } else {
+        format!(", with `{}` on top", options.settings.join(" "))
+    };
     let measured_on = if lattice > 1 {
         format!(
             "; errors measured on every {lattice}th pixel in each direction ({}x{} pixels, an unbiased estimate of \
@@ -249,7 +263,7 @@ fn thesis_markdown(rows: &[ThesisRow], config: &BenchConfig, options: &ThesisOpt
     let mut text = format!(
         "# The thesis protocol\n\n`{command}`: seed 000's scenes and views at {}x{} ({scale} of 1600x1024, \
          spatial radius scaled from 30 px), static camera, frame {THESIS_FRAMES} of Voxel ReSTIR (M = 32, temporal \
-         + spatial reuse, 5 taps, biased reuse), against a {}-spp direct-light CPU reference (the mean of two \
+         + spatial reuse, 5 taps, biased reuse{on_top}), against a {}-spp direct-light CPU reference (the mean of two \
          seeds' {} spp; its own noise is their MAE halved){measured_on}. MAE and MSE as seed 000 §3.3. GPU ms: \
          timestamp queries of our passes (primary + the three ReSTIR passes), averaged over the run. What each row \
          means and why some are worse than the thesis: [restir.md](restir.md#against-the-thesis-table-3).\n\n\

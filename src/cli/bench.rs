@@ -12,8 +12,9 @@ use crate::world::CameraView;
 use clap::{ArgGroup, Args};
 use std::path::{Path, PathBuf};
 
-/// The flags of the settings sweep and the flags that pick another mode: each set refuses the other.
-const SWEEP: [&str; 4] = ["scenes", "quick", "settings", "camera"];
+/// The flags of the settings sweep alone (its `--scenes` also picks the denoiser bench's scenes) and the flags
+/// that pick another mode: each set refuses the other.
+const SWEEP: [&str; 3] = ["quick", "settings", "camera"];
 const MODES: [&str; 4] = ["thesis", "gi", "daylight", "denoise"];
 
 #[derive(Args)]
@@ -64,8 +65,9 @@ pub struct BenchArgs {
     /// moves by a percent or two between seeds, more at night), which this averages.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16), requires = "denoise", conflicts_with = "motion")]
     seeds: u32,
-    /// With --denoise: a setting on top of the game's frame for every measure (repeatable), e.g. `gi_qmc=off`.
-    #[arg(long = "set", value_name = "KEY=VALUE", requires = "denoise")]
+    /// With --denoise: a setting on top of the game's frame for every measure (repeatable), e.g. `gi_qmc=off`;
+    /// with --thesis, on top of the protocol's, e.g. `denoise=on`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
     /// With --denoise: the image size of its one-frame and reaction measures (WxH, default 160x90), e.g. a game's
     /// 320x180 (the references' cost grows with the pixels).
@@ -139,6 +141,9 @@ impl BenchArgs {
         if self.lattice != 1 && !(self.thesis || self.denoise) {
             return Err("--lattice needs --thesis or --denoise".into());
         }
+        if !self.set.is_empty() && !(self.thesis || self.denoise) {
+            return Err("--set needs --thesis or --denoise".into());
+        }
         match self.mode() {
             BenchMode::Settings { scenes, quick, only, camera } => run_settings(scenes, quick, only, camera, &out),
             BenchMode::Thesis(options) => on_gpu(|| run_thesis_bench(&options, &out)).map(|text| println!("{text}")),
@@ -187,6 +192,7 @@ impl BenchArgs {
                 lattice: self.lattice,
                 views: self.views,
                 area_only: self.area_only,
+                settings: self.set,
             })
         } else if self.gi {
             BenchMode::Gi { spp: self.spp, game_sizes: self.game_sizes, sizes: self.sizes.clone() }

@@ -232,6 +232,13 @@ fn each_bench_mode_takes_its_own_flags() {
     assert_eq!(out.status.code(), Some(1));
     let stderr = text(&out.stderr);
     assert!(stderr.contains("no scene 'mountain'") && stderr.contains("window-room, cornell"), "{stderr}");
+    // A setting on top of the thesis protocol is checked before the references' minutes.
+    let out = glowbrick(&["bench", "--thesis", "--set", "bogus=1", "--out", NOWHERE]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("unknown setting 'bogus'"), "{}", text(&out.stderr));
+    let out = glowbrick(&["bench", "--gi", "--set", "denoise=on", "--out", NOWHERE]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("--set needs --thesis or --denoise"), "{}", text(&out.stderr));
     let out = glowbrick(&["bench", "--lattice", "4", "--out", NOWHERE]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("--lattice needs --thesis or --denoise"), "{}", text(&out.stderr));
