@@ -30,6 +30,9 @@ struct GiParams {
     iteration: u32,
     // `gi_cell`: the width in pixels a camera's cells have at least.
     cell_pixels: f32,
+    // Update iterations run before this frame's (with an offset per `seed`): fresh rays continue the entries'
+    // low-discrepancy sequences from there, one run across iterations and frames alike.
+    update_run: u32,
 }
 
 // One (voxel, face) entry. The key lives in gi_keys (0 = empty); this is its payload.

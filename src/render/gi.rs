@@ -250,6 +250,8 @@ pub struct GiCache {
     restarts: u32,
     /// Update iterations this frame (RESTART_ITERATIONS in the first frame after a change of light, else 1).
     iterations: u32,
+    /// Update iterations run before this frame: where this frame's fresh rays continue their sequences.
+    update_run: u32,
     /// 0, 1, .. RESTART_ITERATIONS - 1: copied into the parameters' `iteration` between iterations.
     iteration_indices: Buffer,
     pub bind_group: Option<BindGroup>,
@@ -314,6 +316,7 @@ pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
     commands.insert_resource(GiCache {
         params,
         iterations: 1,
+        update_run: 0,
         restarts: 0,
         iteration_indices,
         edits,
@@ -465,8 +468,10 @@ pub fn prepare_gi(
         frame: cache.frame.wrapping_add(cache.seed.wrapping_mul(SEED_FRAMES)),
         iteration: 0,
         cell_pixels: gi.cell_pixels as f32,
-        _pad: [0; 3],
+        update_run: cache.update_run.wrapping_add(cache.seed.wrapping_mul(SEED_FRAMES)),
+        _pad: [0; 2],
     };
+    cache.update_run = cache.update_run.wrapping_add(cache.iterations);
     queue.write_buffer(&cache.params, 0, bytemuck::bytes_of(&params));
     queue.write_buffer(&cache.tables.work, 0, bytemuck::cast_slice(&EMPTY_WORK));
     if log_changed {

@@ -132,7 +132,10 @@ pub struct GiParams {
     pub iteration: u32,
     /// `gi_cell`: a camera's cells span at least this many pixels.
     pub cell_pixels: f32,
-    pub _pad: [u32; 3],
+    /// Update iterations run before this frame's (offset per `seed`): where fresh rays continue the entries'
+    /// low-discrepancy sequences.
+    pub update_run: u32,
+    pub _pad: [u32; 2],
 }
 
 /// One GI cache entry's payload (`GiEntry` in `shaders/gi/cache.wgsl`); only the GPU writes it, Rust sizes it.

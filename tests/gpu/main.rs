@@ -14,7 +14,7 @@
 //! a Bevy app and its software-Vulkan device do not hand all their memory back when dropped, and one process
 //! running every test grew past this machine's 24 GiB (CI was killed by the OOM killer in the ReSTIR group).
 //! A child's memory is freed when it exits, so the suite's peak is that of its two largest tests at once (about
-//! 5 and 4 GiB, the GI convergence tests).
+//! 6.5 and 5.5 GiB, the GI warm-up and convergence tests).
 
 // A test function left out of `tests()` below would never run: make that a compile error.
 #![deny(dead_code)]
