@@ -262,12 +262,14 @@ pub fn parse_recipe(text: &str, location: &str) -> Result<VoxelWorld, LoadError>
     parse_ron::<SceneRecipe>(text, location)?.build(location)
 }
 
-/// Folder of the bundled scene recipes: `$GLOWBRICK_ASSETS/scenes`, else `assets/scenes` next to the crate.
+/// Folder of the bundled scene recipes: `$GLOWBRICK_ASSETS/scenes`, else `assets/scenes` next to the crate
+/// where it was built, else `assets/scenes` in the current folder (a checkout moved or renamed after its build).
 pub fn scenes_dir() -> PathBuf {
-    match std::env::var_os("GLOWBRICK_ASSETS") {
-        Some(dir) => PathBuf::from(dir).join("scenes"),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join("scenes"),
+    if let Some(dir) = std::env::var_os("GLOWBRICK_ASSETS") {
+        return PathBuf::from(dir).join("scenes");
     }
+    let built_beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join("scenes");
+    if built_beside.is_dir() { built_beside } else { PathBuf::from("assets").join("scenes") }
 }
 
 /// Loads `assets/scenes/NAME.ron`. Names are plain identifiers, so `--scene` cannot reach outside the folder.
@@ -278,7 +280,14 @@ pub fn load_scene(name: &str) -> Result<VoxelWorld, LoadError> {
             message: "scene names use letters, digits, '-' and '_'".into(),
         });
     }
-    let path = scenes_dir().join(format!("{name}.ron"));
+    let dir = scenes_dir();
+    if !dir.is_dir() {
+        return Err(LoadError {
+            location: dir.display().to_string(),
+            message: "no scene folder here: run from the checkout, or set GLOWBRICK_ASSETS to its assets folder".into(),
+        });
+    }
+    let path = dir.join(format!("{name}.ron"));
     if !path.exists() {
         let known = list_scenes().join(", ");
         return Err(LoadError {

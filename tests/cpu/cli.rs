@@ -57,6 +57,15 @@ fn bad_settings_and_arguments_fail_cleanly() {
     let out = glowbrick(&["render", "--scene", "test-room", "--width", "0", "--out", "/tmp/x.png"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("image size 0x180"), "{}", text(&out.stderr));
+    // No scene folder where the scenes are looked for: one line saying where and what to do, not an empty list.
+    let out = Command::new(env!("CARGO_BIN_EXE_glowbrick"))
+        .args(["render", "--scene", "test-room", "--out", "/tmp/x.png"])
+        .env("GLOWBRICK_ASSETS", "/nonexistent/glowbrick-assets")
+        .output()
+        .expect("run glowbrick");
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("/nonexistent/glowbrick-assets/scenes") && stderr.contains("GLOWBRICK_ASSETS"), "{stderr}");
     // ReSTIR settings: out of range, not a number, or not a choice, each with the valid range in the message.
     for (pair, expected) in [
         ("candidates=0", "candidates: 0 is out of range (valid: 1..64)"),
