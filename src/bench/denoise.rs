@@ -370,7 +370,9 @@ fn cost(size: (u32, u32)) -> Result<CostRow, String> {
     let view = world.view(Some("front")).cloned().ok_or("cornell: no view 'front'")?;
     let time = |denoise: &str| -> Result<(f64, Vec<Option<f64>>), String> {
         let mut r = renderer(&world, &view, size, &[denoise], &[])?;
-        r.render(8)?;
+        // Past the GI cache's warm-up (four update iterations a frame): a settled frame is what the filter's
+        // share is of.
+        r.render(crate::render::gi::WARM_UP_FRAMES + 8)?;
         let start = Instant::now();
         for _ in 0..8 {
             r.step();

@@ -4,7 +4,7 @@
 //! found it full. The cache runs at the game's settings (alpha 0.03, fresh directions, the default table).
 
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
-use crate::render::gi::{GI_PASS_NAMES, static_capacity};
+use crate::render::gi::{GI_PASS_NAMES, WARM_UP_FRAMES, static_capacity};
 use crate::render::gpu_types::GpuCounter;
 use crate::render::primary::PRIMARY_PASS_NAME;
 use crate::render::restir;
@@ -15,16 +15,22 @@ use std::time::Instant;
 /// Scenes (and views) measured, and the sizes.
 const SCENES: &[(&str, &str)] = &[("window-room", "inside"), ("cornell", "front"), ("apartments", "")];
 pub const SIZES: &[(u32, u32)] = &[(320, 180), (1280, 720)];
-/// Frames before timing (the cache fills and settles its work), frames timed.
-const WARM_FRAMES: u32 = 24;
+/// Frames before any timing (pipelines, the first inserts); then the rest of a fresh cache's warm-up (four
+/// update iterations a frame, `gi::WARM_UP_FRAMES`), timed on its own; then frames to settle and frames timed.
+/// A settled frame is timed after the warm-up: timed inside it (as before the warm-up existed) it would carry
+/// its extra iterations.
+const FIRST_FRAMES: u32 = 8;
+const WARM_FRAMES: u32 = WARM_UP_FRAMES + 8;
 const TIMED_FRAMES: u32 = 16;
 
 pub struct ScaleRow {
     pub scene: &'static str,
     pub size: (u32, u32),
-    /// Wall-clock ms per frame without and with the cache.
+    /// Wall-clock ms per frame without and with the cache (settled).
     pub frame_off_ms: f64,
     pub frame_on_ms: f64,
+    /// Wall-clock ms per frame with the cache during its warm-up (frames FIRST_FRAMES + 1 to WARM_UP_FRAMES).
+    pub frame_warm_up_ms: f64,
     /// GPU ms with the cache on: primary + ReSTIR (the direct-light frame), and each GI pass (lists, refresh,
     /// update, filter).
     pub direct_ms: f64,
@@ -40,25 +46,34 @@ impl ScaleRow {
     }
 }
 
-/// Wall-clock ms per frame over TIMED_FRAMES after WARM_FRAMES, and the renderer for its counters and timings.
-fn timed(scene: &str, view: &str, size: (u32, u32), gi: bool) -> Result<(f64, HeadlessRenderer), String> {
+/// Wall-clock ms per frame during the warm-up and over TIMED_FRAMES after WARM_FRAMES, and the renderer for
+/// its counters and timings.
+fn timed(scene: &str, view: &str, size: (u32, u32), gi: bool) -> Result<(f64, f64, HeadlessRenderer), String> {
     let world = load_scene(scene).map_err(|e| e.to_string())?;
     let view = world.view((!view.is_empty()).then_some(view)).cloned().unwrap_or_else(|| world.overview());
     let pairs = ["lighting=emitters".to_string(), format!("gi={}", if gi { "on" } else { "off" })];
     let settings = RenderSettings::default().with_pairs(&pairs)?;
     let options = HeadlessOptions { width: size.0, height: size.1, settings, ..Default::default() };
     let mut r = HeadlessRenderer::new(world, &view, &options)?;
-    r.render(WARM_FRAMES)?;
+    r.render(FIRST_FRAMES)?;
+    let warm_up_ms = mean_frame_ms(&mut r, WARM_UP_FRAMES - FIRST_FRAMES);
+    r.render(WARM_FRAMES - WARM_UP_FRAMES)?;
+    let settled_ms = mean_frame_ms(&mut r, TIMED_FRAMES);
+    Ok((warm_up_ms, settled_ms, r))
+}
+
+/// Wall-clock ms per frame over the next `frames` frames.
+fn mean_frame_ms(r: &mut HeadlessRenderer, frames: u32) -> f64 {
     let start = Instant::now();
-    for _ in 0..TIMED_FRAMES {
+    for _ in 0..frames {
         r.step();
     }
-    Ok((start.elapsed().as_secs_f64() * 1000.0 / TIMED_FRAMES as f64, r))
+    start.elapsed().as_secs_f64() * 1000.0 / frames as f64
 }
 
 pub fn measure(scene: &'static str, view: &str, size: (u32, u32)) -> Result<ScaleRow, String> {
-    let (frame_off_ms, _) = timed(scene, view, size, false)?;
-    let (frame_on_ms, mut r) = timed(scene, view, size, true)?;
+    let (_, frame_off_ms, _) = timed(scene, view, size, false)?;
+    let (frame_warm_up_ms, frame_on_ms, mut r) = timed(scene, view, size, true)?;
     let direct_ms = std::iter::once(PRIMARY_PASS_NAME)
         .chain(restir::PASSES.iter().map(|p| p.name))
         .filter_map(|n| r.gpu_pass_ms(n))
@@ -69,6 +84,7 @@ pub fn measure(scene: &'static str, view: &str, size: (u32, u32)) -> Result<Scal
         size,
         frame_off_ms,
         frame_on_ms,
+        frame_warm_up_ms,
         direct_ms,
         gi_ms: GI_PASS_NAMES.map(|n| r.gpu_pass_ms(n)),
         live: counters[GpuCounter::GiLive as usize],
@@ -106,22 +122,26 @@ pub fn markdown(rows: &[ScaleRow]) -> String {
     let mut text = format!(
         "\n## Cost at game sizes\n\nVoxel ReSTIR lighting the emitters (`lighting=emitters`), the cache at the game's \
          settings (8 fresh rays per entry and frame, alpha 0.03), {WARM_FRAMES} frames to warm up, {TIMED_FRAMES} \
-         timed. Frame ms is wall clock (gi=off, gi=on); the pass columns are GPU timestamps with gi=on; direct = \
+         timed. Frame ms is wall clock (gi=off, gi=on); \"warm-up\" is gi=on's frames {} to {WARM_UP_FRAMES}, a \
+         fresh cache's four update iterations a frame; the pass columns are GPU timestamps with gi=on; direct = \
          primary + ReSTIR's three passes. Load = live entries / static table slots; full = inserts that found their \
          probe window full in the last frame.\n\n\
-         | scene | size | frame ms, gi off | frame ms, gi on | on / off | direct ms | lists ms | refresh ms | update \
+         | scene | size | frame ms, gi off | frame ms, gi on | on / off | frame ms, warm-up | warm-up / on | direct ms | lists ms | refresh ms | update \
          ms | filter ms | GI / direct | live entries | load | full |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        FIRST_FRAMES + 1
     );
     for r in rows {
         text += &format!(
-            "| {} | {}x{} | {:.1} | {:.1} | {:.2} | {:.1} | {} | {} | {} | {} | {:.2} | {} | {:.2} | {} |\n",
+            "| {} | {}x{} | {:.1} | {:.1} | {:.2} | {:.1} | {:.2} | {:.1} | {} | {} | {} | {} | {:.2} | {} | {:.2} | {} |\n",
             r.scene,
             r.size.0,
             r.size.1,
             r.frame_off_ms,
             r.frame_on_ms,
             r.frame_on_ms / r.frame_off_ms.max(1e-9),
+            r.frame_warm_up_ms,
+            r.frame_warm_up_ms / r.frame_on_ms.max(1e-9),
             r.direct_ms,
             ms(r.gi_ms[0]),
             ms(r.gi_ms[1]),

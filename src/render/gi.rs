@@ -502,7 +502,7 @@ pub fn prepare_gi(
 pub const RESTART_ITERATIONS: u32 = 4;
 /// Frames of a fresh cache's warm-up (a world loaded, the cache's shape or seed changed), and its update
 /// iterations a frame.
-const WARM_UP_FRAMES: u32 = 64;
+pub const WARM_UP_FRAMES: u32 = 64;
 const WARM_UP_ITERATIONS: u32 = 4;
 /// Direct-light samples an entry starts over with after a change of light (`RESTART_SAMPLES` in
 /// shaders/gi/direct.wgsl, a shader def).
