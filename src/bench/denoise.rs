@@ -12,7 +12,11 @@ use crate::image_io::LinearImage;
 use crate::lights::daylight::{DEFAULT_HOURS, Daylight};
 use crate::reference::REFERENCE_BOUNCES;
 use crate::reference::metrics::{Metrics, compare};
+use crate::render::adapter::adapter_name;
 use crate::render::denoise::DENOISE_PASS_NAMES;
+use crate::render::gi::GI_PASS_NAMES;
+use crate::render::primary::PRIMARY_PASS_NAME;
+use crate::render::restir::RESTIR_PASS_NAMES;
 use crate::settings::RenderSettings;
 use crate::world::events::EditRequest;
 use crate::world::scene::load_scene;
@@ -40,6 +44,8 @@ pub fn check_scenes(scenes: &[String]) -> Result<(), String> {
 const SETTLE_FRAMES: u32 = 64;
 const FLICKER_FRAMES: u32 = 8;
 const ACCUMULATED_FRAMES: u32 = 64;
+/// The cost section's sizes, unless `--sizes` names others.
+const COST_SIZES: &[(u32, u32)] = &[(320, 180), (1280, 720)];
 /// The game's frame.
 const GAME: [&str; 2] = ["lighting=full", "gi=on"];
 
@@ -62,6 +68,16 @@ struct CostRow {
     denoised_ms: f64,
     /// GPU ms of each denoiser pass (None without timestamps).
     passes: Vec<Option<f64>>,
+    /// GPU ms of the rest of the denoised frame: primary + ReSTIR's three passes, and the GI cache's passes
+    /// (None without timestamps).
+    direct_ms: Option<f64>,
+    gi_ms: Option<f64>,
+}
+
+/// The summed GPU ms of `names`, or None when the adapter records no timestamps.
+fn passes_ms<'a>(r: &HeadlessRenderer, names: impl IntoIterator<Item = &'a str>) -> Option<f64> {
+    let times: Vec<f64> = names.into_iter().filter_map(|n| r.gpu_pass_ms(n)).collect();
+    (!times.is_empty()).then(|| times.iter().sum())
 }
 
 fn renderer(
@@ -368,7 +384,7 @@ fn reactions(config: &BenchConfig) -> Result<Vec<Reaction>, String> {
 fn cost(size: (u32, u32)) -> Result<CostRow, String> {
     let world = load_scene("cornell").map_err(|e| e.to_string())?;
     let view = world.view(Some("front")).cloned().ok_or("cornell: no view 'front'")?;
-    let time = |denoise: &str| -> Result<(f64, Vec<Option<f64>>), String> {
+    let time = |denoise: &str| -> Result<(f64, HeadlessRenderer), String> {
         let mut r = renderer(&world, &view, size, &[denoise], &[])?;
         // Past the GI cache's warm-up (four update iterations a frame): a settled frame is what the filter's
         // share is of.
@@ -377,12 +393,18 @@ fn cost(size: (u32, u32)) -> Result<CostRow, String> {
         for _ in 0..8 {
             r.step();
         }
-        let ms = start.elapsed().as_secs_f64() * 1000.0 / 8.0;
-        Ok((ms, DENOISE_PASS_NAMES.iter().map(|n| r.gpu_pass_ms(n)).collect()))
+        Ok((start.elapsed().as_secs_f64() * 1000.0 / 8.0, r))
     };
     let (raw_ms, _) = time("denoise=off")?;
-    let (denoised_ms, passes) = time("denoise=on")?;
-    Ok(CostRow { size, raw_ms, denoised_ms, passes })
+    let (denoised_ms, r) = time("denoise=on")?;
+    Ok(CostRow {
+        size,
+        raw_ms,
+        denoised_ms,
+        passes: DENOISE_PASS_NAMES.iter().map(|n| r.gpu_pass_ms(n)).collect(),
+        direct_ms: passes_ms(&r, std::iter::once(PRIMARY_PASS_NAME).chain(RESTIR_PASS_NAMES)),
+        gi_ms: passes_ms(&r, GI_PASS_NAMES),
+    })
 }
 
 /// Runs the bench at the config's size, writes `denoise.md` into `out` and returns its text.
@@ -400,9 +422,13 @@ pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, Str
         let text = format!("# The denoiser under motion\n{}", motion_markdown(&run_motion(config)?));
         return write_report(out, "denoise-motion.md", text);
     }
-    let costs = || -> Result<[CostRow; 2], String> { Ok([cost((320, 180))?, cost((1280, 720))?]) };
+    let costs = || -> Result<Vec<CostRow>, String> {
+        let sizes = if config.game_sizes.is_empty() { COST_SIZES } else { &config.game_sizes };
+        sizes.iter().map(|&size| cost(size)).collect()
+    };
     if only("cost") {
-        return write_report(out, "denoise-cost.md", format!("# The denoiser's cost\n{}", cost_markdown(&costs()?)));
+        let text = format!("# The denoiser's cost\n{}", cost_markdown(&costs()?, &adapter_name()));
+        return write_report(out, "denoise-cost.md", text);
     }
     let mut rows = Vec::new();
     for (scene, view) in
@@ -431,23 +457,39 @@ fn write_report(out: &Path, name: &str, text: String) -> Result<String, String> 
     Ok(text)
 }
 
-/// The cost section: the frame with and without the filter, and each pass's GPU time.
-fn cost_markdown(costs: &[CostRow]) -> String {
-    let mut text = String::from(
-        "\n## Cost\n\ncornell, the game's frame, mean wall time of 8 frames (lavapipe), and the GPU time of each \
-         denoiser pass (timestamp queries).\n\n| size | frame ms raw | frame ms denoised | share of the frame | \
-         temporal | wavelet 1 | 2 | 4 | 8 + write |\n|---|---|---|---|---|---|---|---|---|\n",
+/// The cost section: the frame with and without the filter, each denoiser pass's GPU time, and the GPU time of
+/// the frame's other passes beside them.
+fn cost_markdown(costs: &[CostRow], adapter: &str) -> String {
+    let mut text = format!(
+        "\n## Cost\n\ncornell, the game's frame, on {adapter}: mean wall time of 8 frames after the GI cache's \
+         warm-up, the GPU time of each denoiser pass (timestamp queries), and the GPU time of the denoised frame's \
+         other passes (direct = primary + ReSTIR's three; GI = the cache's four). The GPU share is the \
+         denoiser's passes over all the timed passes (wall time also holds the CPU's part of a frame and the \
+         read-back).\n\n| size | frame ms raw | frame ms denoised | share of the frame | temporal | wavelet 1 \
+         | 2 | 4 | 8 + write | GPU ms direct | GPU ms GI | GPU share |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
+    let ms = |v: Option<f64>| v.map_or("-".to_string(), |ms| format!("{ms:.2}"));
     for c in costs {
-        let passes: Vec<String> = c.passes.iter().map(|p| p.map_or("-".into(), |ms| format!("{ms:.1}"))).collect();
+        let passes: Vec<String> = c.passes.iter().map(|&p| ms(p)).collect();
+        let denoiser: f64 = c.passes.iter().flatten().sum();
+        let gpu_share = match (c.direct_ms, c.gi_ms) {
+            (Some(direct), gi) if denoiser > 0.0 => {
+                format!("{:.0}%", 100.0 * denoiser / (denoiser + direct + gi.unwrap_or(0.0)))
+            }
+            _ => "-".into(),
+        };
         text += &format!(
-            "| {}x{} | {:.1} | {:.1} | {:.0}% | {} |\n",
+            "| {}x{} | {:.1} | {:.1} | {:.0}% | {} | {} | {} | {} |\n",
             c.size.0,
             c.size.1,
             c.raw_ms,
             c.denoised_ms,
             100.0 * (c.denoised_ms - c.raw_ms) / c.denoised_ms.max(1e-9),
-            passes.join(" | ")
+            passes.join(" | "),
+            ms(c.direct_ms),
+            ms(c.gi_ms),
+            gpu_share
         );
     }
     text
@@ -539,6 +581,6 @@ fn markdown(rows: &[SceneRow], reaction: &[Reaction], costs: &[CostRow], config:
     let mut text =
         format!("# The denoiser: error, bias, flicker, reaction and cost\n\n{}", frame_markdown(rows, config));
     text += &reaction_markdown(reaction, config.seeds);
-    text += &cost_markdown(costs);
+    text += &cost_markdown(costs, &adapter_name());
     text
 }

@@ -120,7 +120,7 @@ pub fn measure_all(sizes: &[(u32, u32)]) -> Result<Vec<ScaleRow>, String> {
 pub fn markdown(rows: &[ScaleRow]) -> String {
     let ms = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.1}"));
     let mut text = format!(
-        "\n## Cost at game sizes\n\nVoxel ReSTIR lighting the emitters (`lighting=emitters`), the cache at the game's \
+        "\n## Cost at game sizes\n\nOn {}. Voxel ReSTIR lighting the emitters (`lighting=emitters`), the cache at the game's \
          settings (8 fresh rays per entry and frame, alpha 0.03), {WARM_FRAMES} frames to warm up, {TIMED_FRAMES} \
          timed. Frame ms is wall clock (gi=off, gi=on); \"warm-up\" is gi=on's frames {} to {WARM_UP_FRAMES}, a \
          fresh cache's four update iterations a frame; the pass columns are GPU timestamps with gi=on; direct = \
@@ -129,6 +129,7 @@ pub fn markdown(rows: &[ScaleRow]) -> String {
          | scene | size | frame ms, gi off | frame ms, gi on | on / off | frame ms, warm-up | warm-up / on | direct ms | lists ms | refresh ms | update \
          ms | filter ms | GI / direct | live entries | load | full |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        crate::render::adapter::adapter_name(),
         FIRST_FRAMES + 1
     );
     for r in rows {

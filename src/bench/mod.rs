@@ -96,7 +96,7 @@ pub struct BenchConfig {
     pub camera: Option<CameraView>,
     /// Only these settings (by name); empty: all.
     pub only: Vec<String>,
-    /// `--gi --game-sizes`: the sizes of its table (empty: `gi_scale::SIZES`).
+    /// `--gi --game-sizes` and `--denoise --cost`: the sizes of their tables (empty: each one's default).
     pub game_sizes: Vec<(u32, u32)>,
     /// `--denoise --seeds N`: independent realisations (the `seed` setting 0..N) each measure averages.
     pub seeds: u32,

@@ -77,8 +77,9 @@ pub struct BenchArgs {
     /// ms per pass, the table's load); writes gi-scale.md.
     #[arg(long, requires = "gi")]
     game_sizes: bool,
-    /// With --game-sizes: only these sizes (WxH, comma-separated; default 320x180,1280x720).
-    #[arg(long, value_delimiter = ',', value_parser = parse_size, requires = "game_sizes")]
+    /// With --game-sizes or --denoise --cost: only these sizes (WxH, comma-separated; default
+    /// 320x180,1280x720), e.g. a GPU's 1920x1080.
+    #[arg(long, value_delimiter = ',', value_parser = parse_size)]
     sizes: Vec<(u32, u32)>,
     /// With --thesis: image size as a fraction of the thesis' 1600x1024.
     #[arg(long, default_value_t = 0.2, requires = "thesis", conflicts_with_all = ["gi", "daylight", "denoise", "scenes", "quick", "settings", "camera"])]
@@ -129,6 +130,7 @@ enum BenchMode {
         set: Vec<String>,
         lattice: u32,
         scenes: Vec<String>,
+        sizes: Vec<(u32, u32)>,
     },
 }
 
@@ -143,6 +145,10 @@ impl BenchArgs {
         }
         if !self.set.is_empty() && !(self.thesis || self.denoise) {
             return Err("--set needs --thesis or --denoise".into());
+        }
+        // clap's `requires` names one flag; --sizes has two homes.
+        if !self.sizes.is_empty() && !(self.game_sizes || (self.denoise && self.cost)) {
+            return Err("--sizes needs --gi --game-sizes or --denoise --cost".into());
         }
         match self.mode() {
             BenchMode::Settings { scenes, quick, only, camera } => run_settings(scenes, quick, only, camera, &out),
@@ -163,7 +169,7 @@ impl BenchArgs {
                 let config = BenchConfig { width: 160, height: 90, reference_spp: spp, ..BenchConfig::full() };
                 on_gpu(|| run_daylight_bench(&config, &out)).map(|text| println!("{text}"))
             }
-            BenchMode::Denoise { spp, section, seeds, size: (width, height), set, lattice, scenes } => {
+            BenchMode::Denoise { spp, section, seeds, size: (width, height), set, lattice, scenes, sizes } => {
                 crate::bench::check_lattice(lattice, width, height)?;
                 crate::bench::denoise::check_scenes(&scenes)?;
                 let only = section.map(|s| vec![s.to_string()]).unwrap_or_default();
@@ -176,6 +182,7 @@ impl BenchArgs {
                     settings: set,
                     lattice,
                     scenes,
+                    game_sizes: sizes,
                     ..BenchConfig::full()
                 };
                 on_gpu(|| run_denoise_bench(&config, &out)).map(|text| println!("{text}"))
@@ -218,6 +225,7 @@ impl BenchArgs {
                 set: self.set,
                 lattice: self.lattice,
                 scenes: self.scenes,
+                sizes: self.sizes,
             }
         } else {
             BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }

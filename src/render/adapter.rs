@@ -25,3 +25,8 @@ pub fn probe_adapter() -> Result<String, String> {
             .unwrap_or_else(|| "the renderer could not start".into())),
     }
 }
+
+/// The adapter's name and backend for a report, or "an unknown adapter" when there is none.
+pub fn adapter_name() -> String {
+    probe_adapter().unwrap_or_else(|_| "an unknown adapter".into())
+}

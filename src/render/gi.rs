@@ -425,7 +425,7 @@ pub fn prepare_gi(
     // iterations a frame while it warms up bring the next bounces within the same frame.
     cache.iterations = if restart {
         RESTART_ITERATIONS
-    } else if cache.warm_up_frames > 0 {
+    } else if cache.warm_up_frames > 0 && gi.warm_up {
         WARM_UP_ITERATIONS
     } else {
         1

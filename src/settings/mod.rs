@@ -249,6 +249,10 @@ pub struct GiSettings {
     /// frames then covers the hemisphere and the cell evenly: the slow swing a few half-lit cells gave a whole
     /// room's bounce light falls (docs/bench/gi.md, "Low-discrepancy rays").
     pub qmc: bool,
+    /// Run four update iterations a frame in a fresh cache's first 64 frames (and after a reset): a room lit
+    /// over many bounces is then bright within a second instead of brightening for hundreds of frames
+    /// (docs/bench/gi.md, "A fresh cache warms up"); off, one a frame from the start.
+    pub warm_up: bool,
     /// Slots in the static world's table (rounded up to a power of two). A full table fails inserts, which the
     /// `GiFull` counter, the bench and the HUD report.
     pub table: u32,
@@ -270,6 +274,7 @@ impl Default for GiSettings {
             bounces: true,
             cache: false,
             qmc: true,
+            warm_up: true,
             table: GI_TABLE_DEFAULT,
             cell_pixels: 4,
         }

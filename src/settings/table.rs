@@ -414,6 +414,14 @@ pub static SETTINGS: &[Setting] = &[
                 after frame (off: independent random ones, which leave a slow swing in the bounce light).",
         field: &Choice { get: |s| s.gi.qmc, set: |s, v| s.gi.qmc = v },
     },
+    Setting {
+        key: "gi_warm_up",
+        section: Section::Gi,
+        about: "Four update iterations a frame in a fresh cache's first 64 frames, so a room lit over many bounces \
+                is bright within a second (off: one a frame from the start; frames then cost less but the room \
+                brightens slowly).",
+        field: &Choice { get: |s| s.gi.warm_up, set: |s, v| s.gi.warm_up = v },
+    },
 ];
 
 /// The setting called `key`.

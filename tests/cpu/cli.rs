@@ -251,6 +251,11 @@ fn each_bench_mode_takes_its_own_flags() {
     let out = glowbrick(&["bench", "--lattice", "4", "--out", NOWHERE]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("--lattice needs --thesis or --denoise"), "{}", text(&out.stderr));
+    // Sizes belong to the two cost tables, not to the denoiser's one frame.
+    let out = glowbrick(&["bench", "--denoise", "--one-frame", "--sizes", "1920x1080", "--out", NOWHERE]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("--sizes needs --gi --game-sizes or --denoise --cost"), "{stderr}");
 }
 
 /// `src/main.rs` only parses and dispatches; the commands live in `src/cli/`.
