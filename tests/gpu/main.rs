@@ -91,6 +91,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             low_discrepancy_rays_hold_each_entrys_light_steadier,
             wider_camera_cells_keep_fewer_entries,
             with_gi_off_no_gi_pass_runs,
+            with_the_warm_up_off_a_fresh_cache_brings_in_its_bounces_slower,
         ],
         nee_converges: [
             gpu_nee_converges_to_the_cpu_reference_on_the_cornell_box,
