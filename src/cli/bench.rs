@@ -57,7 +57,7 @@ pub struct BenchArgs {
     #[arg(long, requires = "denoise", conflicts_with_all = ["motion", "reaction"])]
     one_frame: bool,
     /// With --denoise: only its cost section (the cornell box's frame with and without the filter at 320x180 and
-    /// 1280x720, GPU ms per pass); writes denoise-cost.md.
+    /// 1280x720, or at --sizes; GPU ms per pass); writes denoise-cost.md.
     #[arg(long, requires = "denoise", conflicts_with_all = ["motion", "reaction", "one_frame"])]
     cost: bool,
     /// With --denoise: average its one-frame and reaction measures over this many independent realisations
