@@ -5,7 +5,7 @@
 //! `denoise.md` (with `--motion` only the last, `denoise-motion.md`).
 
 use super::motion::{motion_markdown, run_motion};
-use super::{BenchConfig, Reference, mean_metrics, two_seed_reference};
+use super::{BenchConfig, Reference, direct_light_ms, mean_metrics, two_seed_reference};
 use crate::colour::luminance;
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::LinearImage;
@@ -15,8 +15,6 @@ use crate::reference::metrics::{Metrics, compare};
 use crate::render::adapter::adapter_name;
 use crate::render::denoise::DENOISE_PASS_NAMES;
 use crate::render::gi::GI_PASS_NAMES;
-use crate::render::primary::PRIMARY_PASS_NAME;
-use crate::render::restir::RESTIR_PASS_NAMES;
 use crate::settings::RenderSettings;
 use crate::world::events::EditRequest;
 use crate::world::scene::load_scene;
@@ -72,12 +70,6 @@ struct CostRow {
     /// (None without timestamps).
     direct_ms: Option<f64>,
     gi_ms: Option<f64>,
-}
-
-/// The summed GPU ms of `names`, or None when the adapter records no timestamps.
-fn passes_ms<'a>(r: &HeadlessRenderer, names: impl IntoIterator<Item = &'a str>) -> Option<f64> {
-    let times: Vec<f64> = names.into_iter().filter_map(|n| r.gpu_pass_ms(n)).collect();
-    (!times.is_empty()).then(|| times.iter().sum())
 }
 
 fn renderer(
@@ -402,8 +394,8 @@ fn cost(size: (u32, u32)) -> Result<CostRow, String> {
         raw_ms,
         denoised_ms,
         passes: DENOISE_PASS_NAMES.iter().map(|n| r.gpu_pass_ms(n)).collect(),
-        direct_ms: passes_ms(&r, std::iter::once(PRIMARY_PASS_NAME).chain(RESTIR_PASS_NAMES)),
-        gi_ms: passes_ms(&r, GI_PASS_NAMES),
+        direct_ms: direct_light_ms(&r),
+        gi_ms: GI_PASS_NAMES.iter().filter_map(|n| r.gpu_pass_ms(n)).reduce(|a, b| a + b),
     })
 }
 

@@ -6,8 +6,6 @@
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::render::gi::{GI_PASS_NAMES, WARM_UP_FRAMES, static_capacity};
 use crate::render::gpu_types::GpuCounter;
-use crate::render::primary::PRIMARY_PASS_NAME;
-use crate::render::restir;
 use crate::settings::RenderSettings;
 use crate::world::scene::load_scene;
 use std::time::Instant;
@@ -74,10 +72,7 @@ fn mean_frame_ms(r: &mut HeadlessRenderer, frames: u32) -> f64 {
 pub fn measure(scene: &'static str, view: &str, size: (u32, u32)) -> Result<ScaleRow, String> {
     let (_, frame_off_ms, _) = timed(scene, view, size, false)?;
     let (frame_warm_up_ms, frame_on_ms, mut r) = timed(scene, view, size, true)?;
-    let direct_ms = std::iter::once(PRIMARY_PASS_NAME)
-        .chain(restir::PASSES.iter().map(|p| p.name))
-        .filter_map(|n| r.gpu_pass_ms(n))
-        .sum();
+    let direct_ms = super::direct_light_ms(&r).unwrap_or(0.0);
     let counters = r.counters()?;
     Ok(ScaleRow {
         scene,

@@ -372,6 +372,12 @@ pub(crate) fn pass_times(renderer: &HeadlessRenderer) -> PassTimes {
         .collect()
 }
 
+/// GPU time of the direct-light frame (the passes `pass_times` reads), or None without timestamps.
+pub(crate) fn direct_light_ms(renderer: &HeadlessRenderer) -> Option<f64> {
+    let times = pass_times(renderer);
+    (!times.is_empty()).then(|| times.iter().map(|(_, ms)| ms).sum())
+}
+
 /// Independent draws the equal-time comparison averages. One accumulation's relMSE is heavy-tailed: NEE's on
 /// `letters` read 0.83, 0.22, 0.10, 0.19, 0.20 at 3, 6, 10, 18, 34 frames of one run (a rare firefly moves it 5x),
 /// so one draw made the ReSTIR / NEE ratio read 4x in one run and 14x in another. The mean of several draws
