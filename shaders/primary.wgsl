@@ -2,11 +2,11 @@
 // sample, lighting=full or emitters) that is all; otherwise this pass shades too: next-event estimation, the
 // disk and sky of lighting=full without emitters, or the sun-only debug look. Debug views show the pass's inputs.
 
-#import glowbrick::world::materials
+#import glowbrick::world::{materials, Material}
 #import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, primary_ray_dir, lit_view,
     pixel_footprint, NOT_A_VOXEL}
 #import glowbrick::gi::cache::{gi_on, gi_touch_surface, gi_incoming, camera_level}
-#import glowbrick::traversal::{trace_scene, face_normal, INF}
+#import glowbrick::traversal::{Hit, trace_scene, face_normal, INF}
 #import glowbrick::lights::{scene, sky, background, direct_sample, disk_sample, sky_sample}
 #import glowbrick::random::{Rng, pcg}
 #import glowbrick::constants::{LIGHTING_NEE, LIGHTING_EMITTERS, LIGHTING_FULL, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
@@ -36,78 +36,98 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     if frame.debug_view == DEBUG_RESERVOIR {
         // No ReSTIR pass ran (no lights, or another mode): every reservoir is empty, W = M = w_sum = 0, none reset.
-        // (The shaded colour's alpha of 1 here read as "reset for a non-finite field" to the soak.)
+        // (The shaded colour's alpha of 1 here would read as "reset for a non-finite field" to the soak.)
         write_output(id.xy, vec4(0.0));
         return;
     }
     let nee = scene.mode == LIGHTING_NEE || restir;
     var colour = vec4(0.0);
     if !hit.found {
-        if lit_view() && full {
-            colour = vec4(background(dir) * frame.exposure, 1.0);
-        } else if lit_view() && !nee {
-            colour = vec4(sky(dir) * frame.exposure, 1.0);
-        }
+        colour = miss_colour(dir, full, nee);
     } else {
-        let normal = face_normal(hit.face);
-        // Moving objects' voxels are in their own coordinates: never outlined or selected.
-        let world_voxel = select(hit.voxel, vec3(NOT_A_VOXEL), hit.object != 0u);
-        let material = materials[hit.material];
-        switch frame.debug_view {
-            case DEBUG_ALBEDO: {
-                colour = vec4(material.albedo.rgb, 1.0);
-            }
-            case DEBUG_NORMAL: {
-                colour = vec4(normal * 0.5 + 0.5, 1.0);
-            }
-            case DEBUG_HIT: {
-                colour = vec4(vec3<f32>(hit.voxel), f32(hit.face + 1u));
-            }
-            case DEBUG_DEPTH: {
-                colour = vec4(vec3(hit.distance), 1.0);
-            }
-            default: {
-                if nee {
-                    var rng = Rng(pcg(id.x + size.x * id.y) ^ pcg(frame.frame * 0x9E3779B9u + 1u));
-                    var radiance = material.radiance.rgb
-                        + direct_sample(point, normal, material.albedo.rgb, scene.light_count, scene.power_pick == 1u, &rng);
-                    if full {
-                        // No emitters to sample (ReSTIR would have shaded): the disk, and the sky below.
-                        radiance += disk_sample(point, normal, material.albedo.rgb, &rng);
-                        if !gi_on() {
-                            radiance += sky_sample(point, normal, material.albedo.rgb, &rng);
-                        }
-                    }
-                    if gi_on() {
-                        radiance += material.albedo.rgb * gi_incoming(point, hit.face, hit.object, camera_level(pixel_footprint(point), hit.object));
-                    }
-                    colour = vec4(highlight(radiance * frame.exposure, world_voxel, hit.face, point, hit.distance), 1.0);
-                    break;
-                }
-                let sun_dir = scene.sun.xyz;
-                var sun = 0.0;
-                let cos_sun = dot(normal, sun_dir);
-                if scene.sun.w > 0.0 && cos_sun > 0.0 {
-                    sun = cos_sun;
-                    if scene.shadows != 0u {
-                        // Start just off the face so the shadow ray does not hit its own voxel.
-                        let p = origin + dir * hit.distance + normal * RAY_OFFSET;
-                        if trace_scene(p, sun_dir, INF).found {
-                            sun = 0.0;
-                        }
-                    }
-                }
-                // Indirect light: the GI cache's (which sees the sky through its rays), else a crude ambient term,
-                // the sky colour in the normal's direction.
-                var ambient = sky(normal) * 0.3;
-                if gi_on() {
-                    ambient = gi_incoming(point, hit.face, hit.object, camera_level(pixel_footprint(point), hit.object));
-                }
-                let lit = scene.sun_radiance.rgb * sun + ambient;
-                let shaded = (material.albedo.rgb * lit + material.radiance.rgb) * frame.exposure;
-                colour = vec4(highlight(shaded, world_voxel, hit.face, point, hit.distance), 1.0);
+        colour = hit_colour(id.xy, size, point, hit, full, nee);
+    }
+    write_output(id.xy, colour);
+}
+
+// A ray that left the world: the sky (or, without emitters under lighting=full, the sky and the disk).
+fn miss_colour(dir: vec3<f32>, full: bool, nee: bool) -> vec4<f32> {
+    if lit_view() && full {
+        return vec4(background(dir) * frame.exposure, 1.0);
+    } else if lit_view() && !nee {
+        return vec4(sky(dir) * frame.exposure, 1.0);
+    }
+    return vec4(0.0);
+}
+
+// A hit: a debug view of it, or its light (NEE or the sun-only look) with the highlight drawn over.
+fn hit_colour(pixel: vec2<u32>, size: vec2<u32>, point: vec3<f32>, hit: Hit, full: bool, nee: bool) -> vec4<f32> {
+    let normal = face_normal(hit.face);
+    let material = materials[hit.material];
+    switch frame.debug_view {
+        case DEBUG_ALBEDO: {
+            return vec4(material.albedo.rgb, 1.0);
+        }
+        case DEBUG_NORMAL: {
+            return vec4(normal * 0.5 + 0.5, 1.0);
+        }
+        case DEBUG_HIT: {
+            return vec4(vec3<f32>(hit.voxel), f32(hit.face + 1u));
+        }
+        case DEBUG_DEPTH: {
+            return vec4(vec3(hit.distance), 1.0);
+        }
+        default: {}
+    }
+    var shaded: vec3<f32>;
+    if nee {
+        var rng = Rng(pcg(pixel.x + size.x * pixel.y) ^ pcg(frame.frame * 0x9E3779B9u + 1u));
+        shaded = nee_radiance(point, hit, normal, material, full, &rng) * frame.exposure;
+    } else {
+        shaded = sun_look(point, hit, normal, material);
+    }
+    // Moving objects' voxels are in their own coordinates: never outlined or selected.
+    let world_voxel = select(hit.voxel, vec3(NOT_A_VOXEL), hit.object != 0u);
+    return vec4(highlight(shaded, world_voxel, hit.face, point, hit.distance), 1.0);
+}
+
+// Emission plus one next-event-estimation sample of the light pool (and under lighting=full, with no emitters
+// to sample, the disk and the sky), plus the GI cache's indirect light when it is on.
+fn nee_radiance(point: vec3<f32>, hit: Hit, normal: vec3<f32>, material: Material, full: bool, rng: ptr<function, Rng>) -> vec3<f32> {
+    var radiance = material.radiance.rgb
+        + direct_sample(point, normal, material.albedo.rgb, scene.light_count, scene.power_pick == 1u, rng);
+    if full {
+        radiance += disk_sample(point, normal, material.albedo.rgb, rng);
+        if !gi_on() {
+            radiance += sky_sample(point, normal, material.albedo.rgb, rng);
+        }
+    }
+    if gi_on() {
+        radiance += material.albedo.rgb * gi_incoming(point, hit.face, hit.object, camera_level(pixel_footprint(point), hit.object));
+    }
+    return radiance;
+}
+
+// The sun-only debug look: a sun without a disk, shadowed, and a crude sky ambient (or the GI cache's light).
+fn sun_look(point: vec3<f32>, hit: Hit, normal: vec3<f32>, material: Material) -> vec3<f32> {
+    let sun_dir = scene.sun.xyz;
+    var sun = 0.0;
+    let cos_sun = dot(normal, sun_dir);
+    if scene.sun.w > 0.0 && cos_sun > 0.0 {
+        sun = cos_sun;
+        if scene.shadows != 0u {
+            // Start just off the face so the shadow ray does not hit its own voxel.
+            if trace_scene(point + normal * RAY_OFFSET, sun_dir, INF).found {
+                sun = 0.0;
             }
         }
     }
-    write_output(id.xy, colour);
+    // Indirect light: the GI cache's (which sees the sky through its rays), else the sky colour in the normal's
+    // direction.
+    var ambient = sky(normal) * 0.3;
+    if gi_on() {
+        ambient = gi_incoming(point, hit.face, hit.object, camera_level(pixel_footprint(point), hit.object));
+    }
+    let lit = scene.sun_radiance.rgb * sun + ambient;
+    return (material.albedo.rgb * lit + material.radiance.rgb) * frame.exposure;
 }

@@ -14,7 +14,7 @@
 #import glowbrick::constants::{RAY_OFFSET, LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, GI_QMC, COUNT_GI_BORROWED,
     COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
 #import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_touch, gi_find,
-    listed_slot, hit_level, used_within, slot_seed, world_exit, ray_direction, cosine_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
+    GiEntry, listed_slot, hit_level, used_within, slot_seed, world_exit, ray_direction, cosine_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
     WORK_STATIC, WORK_DYNAMIC}
 #import glowbrick::gi::direct::{direct_at, cell_point}
 
@@ -102,21 +102,123 @@ fn miss_radiance(dir: vec3<f32>) -> vec3<f32> {
     return select(vec3(0.0), sky(dir), scene.mode == LIGHTING_SUN || scene.mode == LIGHTING_FULL);
 }
 
-// Ages and re-shades the entry in `slot`. Static entries read their cached static hits and test only
-// the moving objects per frame; a moving object's entries trace everything every frame (nothing of theirs stays
-// put).
-fn update_entry(slot: u32) {
-    let e = gi_entries[slot];
-    let dynamic = e.object != 0u;
+// One of an entry's rays this frame: where it starts, where it goes, and the static world's hit (if any).
+struct EntryRay {
+    start: vec3<f32>,
+    dir: vec3<f32>,
+    found: bool,
+    face: u32,
+    distance: f32,
+}
+
+// The ray generators' inputs for one entry this frame.
+struct RayPlan {
+    // The face's centre, where cached hits and a moving object's rays start.
+    origin: vec3<f32>,
+    seed: u32,
+    frame_seed: u32,
+    // Cached hits: the first of the K fixed directions re-shaded this frame.
+    first: u32,
+    // Fresh rays: where this frame's run continues the entry's low-discrepancy sequence, and its rotation.
+    run: u32,
+    rotation: vec4<u32>,
+    // Fresh rays of a static entry start from a point of its cell.
+    spread: bool,
+}
+
+// With cached hits, each frame re-shades the next `update_rays` of the entry's K fixed directions; a frame's
+// further iterations (after a change of light) start 3 groups further on each, other directions at the game's
+// K and update rays.
+fn cached_ray(e: GiEntry, slot: u32, plan: RayPlan, j: u32) -> EntryRay {
+    let i = (plan.first + j) % gi.rays;
+    let code = gi_rays[slot * gi.rays + i];
+    let face = hit_face(code);
+    return EntryRay(plan.origin, ray_direction(e.face, i, gi.rays, plan.seed), face != MISS_FACE, face, hit_distance(code));
+}
+
+// Without cached hits each frame draws `update_rays` fresh directions (a fixed set leaves each entry a quadrature
+// error of its own that no blend averages: docs/bench/gi.md, "Fresh directions"). With gi_qmc (the default) the
+// directions and start points are the entry's own shifted 4D Kronecker sequence (random.wgsl), continued frame
+// after frame and iteration after iteration, so the blend of the last frames' rays covers the hemisphere and the
+// cell evenly (docs/bench/gi.md, "Low-discrepancy rays"). Without, this frame's directions are stratified (a
+// Hammersley set turned by a seed of the frame's, not the rng's stream, which the hits' direct light draws from)
+// and the start points random.
+fn fresh_ray(e: GiEntry, plan: RayPlan, j: u32, rng: ptr<function, Rng>) -> EntryRay {
+    var dir: vec3<f32>;
+    // The start point's place on the cell.
+    var across: vec2<f32>;
+    if (gi.flags & GI_QMC) != 0u {
+        let u = r4_point(plan.run + j, plan.rotation);
+        dir = cosine_direction(e.face, u.xy);
+        across = u.zw;
+    } else {
+        dir = ray_direction(e.face, j, gi.update_rays, pcg(plan.seed ^ plan.frame_seed ^ 0x68BC21EBu));
+        across = vec2(rng_next(rng), rng_next(rng));
+    }
+    // A static entry's value is then its cell's average, as its direct light is, whichever face inserted it (a
+    // cache that lived through an edit settles where a fresh one does).
+    var start = plan.origin;
+    if plan.spread {
+        start = cell_point(e, across).point + face_normal(e.face) * RAY_OFFSET;
+    }
+    let hit = trace(start, dir, INF);
+    return EntryRay(start, dir, hit.found, hit.face, hit.distance);
+}
+
+// The light a ray brings: a moving object in front of the static hit replaces it for this frame.
+fn ray_radiance(ray: EntryRay, level: u32, seen: bool, own: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+    let object = trace_objects(ray.start, ray.dir, select(INF, ray.distance, ray.found));
+    if object.found {
+        return object_hit_radiance(object, ray.start + ray.dir * object.distance, seen, own, rng);
+    } else if ray.found {
+        return hit_radiance(ray.start + ray.dir * ray.distance, ray.face, hit_level(ray.distance, level), seen, own, rng);
+    }
+    return miss_radiance(ray.dir);
+}
+
+// Blends this frame's estimate into the entry. Young entries average with weights growing linearly with age
+// (frame j weighs j + 1): their first estimates come before the light has travelled the bounces (their hits are
+// young too), and an even average keeps that shortfall for 1 / alpha frames (docs/bench/gi.md). After about
+// 2 / alpha frames it is an exponential blend.
+fn blend_estimate(slot: u32, age: u32, estimate: vec3<f32>) {
+    let weight = max(gi.alpha, 2.0 / f32(age + 2u));
+    let blended = select(mix(gi_irradiance[slot].rgb, estimate, weight), estimate, age == 0u);
+    gi_irradiance[slot] = vec4(blended, 1.0);
+}
+
+// The ray generators' inputs for the entry `e` in `slot`.
+fn ray_plan(e: GiEntry, slot: u32, cached: bool, dynamic: bool) -> RayPlan {
     // Only a moving object's entry looks its object up (a scan of the object list; compact.wgsl freed the
     // entries of objects that are gone).
     var base = vec3(0.0);
     if dynamic {
         base = objects[object_index(e.object)].min;
     }
-    let origin = ray_origin(e.voxel, e.face, base);
+    let seed = slot_seed(slot);
+    var first = 0u;
+    if cached {
+        first = pcg(seed ^ 0x5bd1e995u) + (gi.frame + gi.iteration * 3u) * gi.update_rays;
+    }
+    return RayPlan(
+        ray_origin(e.voxel, e.face, base),
+        seed,
+        pcg(gi.frame ^ (gi.iteration << 28u)),
+        first,
+        (gi.update_run + gi.iteration) * gi.update_rays,
+        rotation4(seed ^ 0x68BC21EBu),
+        !cached && !dynamic,
+    );
+}
+
+// Ages and re-shades the entry in `slot`. Static entries read their cached static hits and test only
+// the moving objects per frame; a moving object's entries trace everything every frame (nothing of theirs stays
+// put).
+fn update_entry(slot: u32) {
+    let e = gi_entries[slot];
+    let dynamic = e.object != 0u;
     // The refresh pass (refresh.wgsl) has brought the cached hits up to date this frame.
     let cached = (gi.flags & GI_CACHE) != 0u && !dynamic;
+    let plan = ray_plan(e, slot, cached, dynamic);
     let samples = e.samples;
     // After a change of light the blend starts over from this frame's estimate (the samples count stays for
     // the readers: the entry still has a value).
@@ -126,98 +228,33 @@ fn update_entry(slot: u32) {
     let age = select(samples, 0u, (gi.flags & GI_RESTART) != 0u || edit_restart);
     let seen = used_within(e.last_seen, 1u) && !dynamic;
     let own = select(vec3(0.0), gi_filtered[slot].rgb, samples > 0u);
-    let seed = slot_seed(slot);
-    let frame_seed = pcg(gi.frame ^ (gi.iteration << 28u));
-    var rng = Rng(pcg(seed ^ frame_seed));
-    // With cached hits, each frame re-shades the next `update_rays` of the entry's K fixed directions; a frame's
-    // further iterations (after a change of light) start 3 groups further on each, other directions at the
-    // game's K = 64 and 8 rays. Without, each frame draws `update_rays` fresh directions: a fixed set of 64
-    // leaves each entry a quadrature error of its own that no blend averages (the window room's sky seen through
-    // a few of them; docs/bench/gi.md, "Fresh directions").
-    var first = 0u;
-    if cached {
-        first = pcg(seed ^ 0x5bd1e995u) + (gi.frame + gi.iteration * 3u) * gi.update_rays;
-    }
-    // Fresh rays of a static entry start from a point of its cell (its own face at level 0): the entry's value is
-    // then its cell's average, as its direct light is, whichever face inserted it (a cache that lived through an
-    // edit settles where a fresh one does). Cached hits and a moving object's rays start from the face's centre.
-    // With gi_qmc (the default) fresh directions and start points are the entry's own shifted 4D Kronecker
-    // sequence (random.wgsl), frame after frame, so the blend of the last frames' rays covers the hemisphere and
-    // the cell evenly: a third less spread between realisations than independent rays (docs/bench/gi.md,
-    // "Low-discrepancy rays"). Iterations continue the run where the last one stopped, within a frame as across
-    // frames: a warm-up's four iterations a frame that jumped elsewhere in it each left the blend four short runs
-    // instead of one long one, more of the quadrature's error (the letters at frame 65: relMSE 0.0012 against
-    // 0.0008 without the warm-up, docs/bench/denoise.md).
-    let spread = !cached && !dynamic;
-    let rotation = rotation4(seed ^ 0x68BC21EBu);
-    let run = (gi.update_run + gi.iteration) * gi.update_rays;
-    var lo = select(origin, e.lo, samples > 0u);
-    var hi = select(origin, e.hi, samples > 0u);
+    var rng = Rng(pcg(plan.seed ^ plan.frame_seed));
+    var lo = select(plan.origin, e.lo, samples > 0u);
+    var hi = select(plan.origin, e.hi, samples > 0u);
     var sum = vec3(0.0);
     for (var j = 0u; j < gi.update_rays; j++) {
-        var dir: vec3<f32>;
-        var found: bool;
-        var face: u32;
-        var distance: f32;
-        var start = origin;
+        var ray: EntryRay;
         if cached {
-            let i = (first + j) % gi.rays;
-            dir = ray_direction(e.face, i, gi.rays, seed);
-            let code = gi_rays[slot * gi.rays + i];
-            face = hit_face(code);
-            found = face != MISS_FACE;
-            distance = hit_distance(code);
+            ray = cached_ray(e, slot, plan, j);
         } else {
-            // The start point's place on the cell.
-            var across: vec2<f32>;
-            if (gi.flags & GI_QMC) != 0u {
-                let u = r4_point(run + j, rotation);
-                dir = cosine_direction(e.face, u.xy);
-                across = u.zw;
-            } else {
-                // As before gi_qmc: this frame's directions stratified (a Hammersley set turned by a seed of the
-                // frame's, not the rng's stream, which the hits' direct light draws from), random points.
-                dir = ray_direction(e.face, j, gi.update_rays, pcg(seed ^ frame_seed ^ 0x68BC21EBu));
-                across = vec2(rng_next(&rng), rng_next(&rng));
-            }
-            if spread {
-                start = cell_point(e, across).point + face_normal(e.face) * RAY_OFFSET;
-            }
-            let hit = trace(start, dir, INF);
-            found = hit.found;
-            face = hit.face;
-            distance = hit.distance;
-            if spread {
-                // The bounds of every segment traced so far: an edit inside them restarts the blend
-                // (refresh.wgsl), as a retraced cached hit does.
-                let end = start + dir * select(world_exit(start, dir), distance, found);
-                lo = min(lo, min(start, end));
-                hi = max(hi, max(start, end));
-            }
+            ray = fresh_ray(e, plan, j, &rng);
         }
-        // A moving object in front of the static hit replaces it for this frame.
-        let object = trace_objects(start, dir, select(INF, distance, found));
-        if object.found {
-            sum += object_hit_radiance(object, start + dir * object.distance, seen, own, &rng);
-        } else if found {
-            sum += hit_radiance(start + dir * distance, face, hit_level(distance, e.level), seen, own, &rng);
-        } else {
-            sum += miss_radiance(dir);
+        if plan.spread {
+            // The bounds of every segment traced so far: an edit inside them restarts the blend (refresh.wgsl),
+            // as a retraced cached hit does.
+            let end = ray.start + ray.dir * select(world_exit(ray.start, ray.dir), ray.distance, ray.found);
+            lo = min(lo, min(ray.start, end));
+            hi = max(hi, max(ray.start, end));
         }
+        sum += ray_radiance(ray, e.level, seen, own, &rng);
     }
     var estimate = sum / f32(gi.update_rays);
     if !finite3(estimate) {
         atomicAdd(&counters[COUNT_GI_RESETS], 1u);
         estimate = vec3(0.0);
     }
-    // Young entries average with weights growing linearly with age (frame j weighs j + 1): their first
-    // estimates come before the light has travelled the bounces (their hits are young too), and an even average
-    // kept that shortfall for 1 / alpha frames (the window room at frame 64: -5.6% of its mean, now -2.4%; at
-    // frame 128: -2.2%, now -0.3%). After about 2 / alpha frames it is an exponential blend.
-    let weight = max(gi.alpha, 2.0 / f32(age + 2u));
-    let blended = select(mix(gi_irradiance[slot].rgb, estimate, weight), estimate, age == 0u);
-    gi_irradiance[slot] = vec4(blended, 1.0);
-    if spread {
+    blend_estimate(slot, age, estimate);
+    if plan.spread {
         gi_entries[slot].lo = lo;
         gi_entries[slot].hi = hi;
     }

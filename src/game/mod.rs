@@ -82,22 +82,26 @@ pub fn run_game(
             undo::history_keys,
             save_load::save_load_keys,
             models::model_key,
-            toggle_debug_view,
+            clock_keys,
+            lighting_toggle_keys,
+            debug_view_key,
             window_fit::fit_window_to_screen,
         ),
     )
     .run()
 }
 
-/// F3 cycles the debug views (lit, albedo, normal, depth, the denoiser's variance and history); G turns the GI
-/// cache on and off, N the denoiser; T moves the clock an hour on (Shift+T back).
-fn toggle_debug_view(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<RenderSettings>) {
-    use crate::settings::DebugView;
+/// T moves the clock an hour on (Shift+T back).
+fn clock_keys(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<RenderSettings>) {
     if keys.just_pressed(KeyCode::KeyT) {
         let back = keys.pressed(KeyCode::ShiftLeft) || keys.pressed(KeyCode::ShiftRight);
         settings.time = step_clock(settings.time, if back { -1.0 } else { 1.0 });
         info!("time of day: {:.1} h", settings.time);
     }
+}
+
+/// G turns the GI cache on and off, N the denoiser.
+fn lighting_toggle_keys(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<RenderSettings>) {
     if keys.just_pressed(KeyCode::KeyG) {
         settings.gi.enabled = !settings.gi.enabled;
         info!("{}", settings.summary());
@@ -106,6 +110,11 @@ fn toggle_debug_view(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<Rende
         settings.denoise = !settings.denoise;
         info!("{}", settings.summary());
     }
+}
+
+/// F3 cycles the debug views (lit, albedo, normal, depth, the denoiser's variance and history).
+fn debug_view_key(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<RenderSettings>) {
+    use crate::settings::DebugView;
     if keys.just_pressed(KeyCode::F3) {
         settings.debug = match settings.debug {
             DebugView::None => DebugView::Albedo,

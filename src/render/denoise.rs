@@ -13,11 +13,16 @@
 //!    darkened the image by 5%: a dark pixel refused a bright neighbour's light); the last remodulates (albedo x
 //!    filtered + emission), draws the highlight and writes the image.
 //!
-//! The history restarts on frames where an edit changed the world or its lights (`frame::prepare_view_resources`),
+//! Its per-view state (`DenoiseView`): the noisy frame, the history (this and last frame's), the wavelet's
+//! ping-pong, and the rule that restarts the history on frames where an edit changed the world or its lights,
 //! so a lamp switched on or off shows at once, noisier for a few frames. Off (`denoise=off`, `render`'s
 //! default) none of the passes runs and the shading passes write the image themselves.
 
 use super::frame::{Dispatch, VoxelPass};
+use super::gpu_types::{DENOISE_HISTORY, DENOISE_ON, DENOISE_TEXEL_BYTES};
+use crate::settings::RenderSettings;
+use bevy::render::render_resource::{BindingResource, Buffer, BufferDescriptor, BufferUsages, CommandEncoder};
+use bevy::render::renderer::RenderDevice;
 
 const fn pass(name: &'static str, shader: &'static str, entry_point: &'static str) -> VoxelPass {
     VoxelPass { name, shader, entry_point, dispatch: Dispatch::Pixels }
@@ -35,3 +40,87 @@ pub const PASSES: [VoxelPass; 5] = [
 /// GPU-time names of the passes, in dispatch order.
 pub const DENOISE_PASS_NAMES: [&str; 5] =
     [PASSES[0].name, PASSES[1].name, PASSES[2].name, PASSES[3].name, PASSES[4].name];
+
+/// Whether the passes run this frame: when asked for, on a view that shows light.
+pub fn runs(settings: &RenderSettings) -> bool {
+    settings.denoise && settings.debug.is_lit()
+}
+
+/// `FrameParams::denoise` for a frame: `DENOISE_ON` when the passes run, `DENOISE_HISTORY` when last frame's
+/// history may be reused: last frame ran the denoiser too, and no edit changed the world or its lights (moving
+/// objects are left to the reprojection test, which their pixels fail).
+pub fn frame_flags(ran_last_frame: bool, runs: bool, world_changed: bool) -> u32 {
+    let history = ran_last_frame && runs && !world_changed;
+    (if runs { DENOISE_ON } else { 0 }) | if history { DENOISE_HISTORY } else { 0 }
+}
+
+/// One view's denoiser buffers (group 1, bindings 8 to 11): the shading passes' noisy frame; per pixel two
+/// texels of history (demodulated colour and length, luminance moments), this frame's and last frame's; the
+/// wavelet's two halves (colour and variance).
+pub struct DenoiseView {
+    noisy: Buffer,
+    history: Buffer,
+    prev_history: Buffer,
+    wavelet: Buffer,
+    ran_last_frame: bool,
+    /// Whether this frame runs the passes (set in prepare, read by the frame).
+    pub runs: bool,
+}
+
+impl DenoiseView {
+    pub fn new(device: &RenderDevice, pixels: u64) -> Self {
+        let buffer = |label: &'static str, texels: u64, usage: BufferUsages| {
+            device.create_buffer(&BufferDescriptor {
+                label: Some(label),
+                size: texels * pixels * DENOISE_TEXEL_BYTES,
+                usage: BufferUsages::STORAGE | usage,
+                mapped_at_creation: false,
+            })
+        };
+        DenoiseView {
+            noisy: buffer("glowbrick_denoise_noisy", 1, BufferUsages::empty()),
+            history: buffer("glowbrick_denoise_history", 2, BufferUsages::COPY_SRC),
+            prev_history: buffer("glowbrick_denoise_prev_history", 2, BufferUsages::COPY_DST),
+            wavelet: buffer("glowbrick_denoise_wavelet", 2, BufferUsages::empty()),
+            ran_last_frame: false,
+            runs: false,
+        }
+    }
+
+    /// Starts this frame: `FrameParams::denoise`, the `DENOISE_*` flags.
+    pub fn begin_frame(&mut self, runs: bool, world_changed: bool) -> u32 {
+        let flags = frame_flags(self.ran_last_frame, runs, world_changed);
+        self.ran_last_frame = runs;
+        self.runs = runs;
+        flags
+    }
+
+    /// Keeps last frame's history before this frame's temporal pass overwrites it.
+    pub fn keep_history(&self, encoder: &mut CommandEncoder) {
+        encoder.copy_buffer_to_buffer(&self.history, 0, &self.prev_history, 0, self.history.size());
+    }
+
+    /// Bindings 8 to 11 of the view's group.
+    pub fn bindings(&self) -> [BindingResource<'_>; 4] {
+        [
+            self.noisy.as_entire_binding(),
+            self.history.as_entire_binding(),
+            self.prev_history.as_entire_binding(),
+            self.wavelet.as_entire_binding(),
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The history holds only across consecutive denoised frames without an edit.
+    #[test]
+    fn the_history_restarts_after_an_edit_or_a_frame_without_the_denoiser() {
+        assert_eq!(frame_flags(true, true, false), DENOISE_ON | DENOISE_HISTORY);
+        assert_eq!(frame_flags(false, true, false), DENOISE_ON, "first frame");
+        assert_eq!(frame_flags(true, true, true), DENOISE_ON, "an edit");
+        assert_eq!(frame_flags(true, false, false), 0, "not running");
+    }
+}

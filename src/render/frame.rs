@@ -9,31 +9,23 @@
 //!   frame (a change of light or an edit shows in the frame it happens); the entries the cameras insert are
 //!   updated first next frame.
 //!
-//! Bind groups: 0 the world (grid, materials, objects, counters; `scene::world`), 1 the view (`ViewResources`;
-//! empty for world passes), 2 the lights and scene lighting (`scene::lights`), 3 the GI cache (`gi`).
+//! Bind groups: 0 the world (grid, materials, objects, counters; `scene::world`), 1 the view (`view::ViewResources`,
+//! its parts owned by the techniques; empty for world passes), 2 the lights and scene lighting (`scene::lights`), 3 the GI cache (`gi`).
 
 use super::gi::{self, GiCache};
-use super::gpu_types::{
-    ACCUMULATION_TEXEL_BYTES, DENOISE_HISTORY, DENOISE_ON, DENOISE_TEXEL_BYTES, FrameParams, GBUFFER_TEXEL_BYTES,
-    RESERVOIR_BYTES, RESTIR_LOCAL, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL, RESTIR_TEMPORAL, RESTIR_UNBIASED,
-    shader_defs,
-};
+use super::gpu_types::shader_defs;
 use super::scene::lights::{GpuLights, LightsLayout};
 use super::scene::objects::GpuObjects;
 use super::scene::world::{GpuWorld, WorldLayout};
 use super::shaders::GlowbrickShaders;
-use super::{FramesRendered, Highlight, VoxelCamera, denoise, primary, restir};
-use crate::settings::{DebugView, LightSample, RenderSettings, Reuse, SEED_FRAMES};
+use super::view::{ViewResources, view_layout};
+use super::{FramesRendered, VoxelCamera, denoise, primary, restir};
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy::render::diagnostic::RecordDiagnostics;
-use bevy::render::render_resource::binding_types::{
-    storage_buffer_sized, texture_storage_2d, uniform_buffer, uniform_buffer_sized,
-};
 use bevy::render::render_resource::*;
-use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
-use bevy::render::view::{ExtractedView, ViewTarget, ViewUniform, ViewUniformOffset, ViewUniforms};
-use std::num::NonZeroU64;
+use bevy::render::renderer::{RenderContext, RenderDevice, ViewQuery};
+use bevy::render::view::{ViewTarget, ViewUniformOffset, ViewUniforms};
 use std::sync::atomic::Ordering;
 
 /// One compute pass of the voxel renderer.
@@ -70,188 +62,6 @@ pub fn all_passes() -> Vec<VoxelPass> {
     passes
 }
 
-/// Per-view, per-frame parameters for `view`'s shaders (`FrameParams`), before the view's own history fields.
-pub fn frame_params(settings: &RenderSettings, highlight: &Highlight, frame: u32) -> FrameParams {
-    let restir = settings.restir.clone().clamped();
-    let flag = |on: bool, bit: u32| if on { bit } else { 0 };
-    FrameParams {
-        prev_clip_from_world: Mat4::IDENTITY.to_cols_array_2d(),
-        prev_camera: [0.0; 4],
-        debug_view: settings.debug.shader_index(),
-        exposure: settings.exposure,
-        frame: frame.wrapping_add(settings.seed.wrapping_mul(SEED_FRAMES)),
-        accumulated: 1,
-        highlight_target: highlight.target.map_or([0; 4], |(v, face)| [v.x, v.y, v.z, face as i32 + 1]),
-        selection_min: highlight.selection.map_or([0; 4], |(a, _)| [a.x, a.y, a.z, 1]),
-        selection_max: highlight.selection.map_or([0; 4], |(_, b)| [b.x, b.y, b.z, 1]),
-        candidates: restir.candidates,
-        taps: restir.taps,
-        radius: restir.radius,
-        restir_flags: flag(restir.temporal, RESTIR_TEMPORAL)
-            | flag(restir.spatial, RESTIR_SPATIAL)
-            | flag(restir.sample == LightSample::Point, RESTIR_POINT)
-            | flag(restir.reuse == Reuse::Unbiased, RESTIR_UNBIASED)
-            | flag(restir.reuse == Reuse::OneRay, RESTIR_ONE_RAY)
-            | flag(restir.local_lights, RESTIR_LOCAL),
-        denoise: 0,
-        _pad: [0; 3],
-    }
-}
-
-/// A view's own buffers: frame parameters, the running sum of accumulated frames, this and last frame's
-/// G-buffer, the two reservoir buffers of Voxel ReSTIR, and the denoiser's noisy frame, history (this and last
-/// frame's) and wavelet ping-pong.
-#[derive(Component)]
-pub struct ViewResources {
-    frame_params: Buffer,
-    accumulation: Buffer,
-    gbuffer: Buffer,
-    prev_gbuffer: Buffer,
-    reservoirs_temporal: Buffer,
-    reservoirs_final: Buffer,
-    noisy: Buffer,
-    history: Buffer,
-    prev_history: Buffer,
-    wavelet: Buffer,
-    size: UVec2,
-    /// What the average so far was rendered with; any difference restarts it.
-    last_key: Option<AccumulationKey>,
-    accumulated: u32,
-    /// Last frame's camera, and whether it ran ReSTIR (its reservoirs are reusable).
-    prev_clip_from_world: Mat4,
-    prev_camera: Vec3,
-    prev_restir: bool,
-    /// Whether this frame runs the ReSTIR passes (set in prepare, read by the frame).
-    pub run_restir: bool,
-    /// Whether last frame ran the denoiser, and whether this one does.
-    prev_denoise: bool,
-    pub run_denoise: bool,
-}
-
-impl ViewResources {
-    fn new(device: &RenderDevice, size: UVec2) -> Self {
-        let pixels = (size.x.max(1) * size.y.max(1)) as u64;
-        let buffer = |label: &'static str, size: u64, usage: BufferUsages| {
-            device.create_buffer(&BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
-        };
-        let storage = BufferUsages::STORAGE;
-        ViewResources {
-            frame_params: buffer(
-                "glowbrick_frame_params",
-                size_of::<FrameParams>() as u64,
-                BufferUsages::UNIFORM | BufferUsages::COPY_DST,
-            ),
-            accumulation: buffer("glowbrick_accumulation", pixels * ACCUMULATION_TEXEL_BYTES, storage),
-            gbuffer: buffer("glowbrick_gbuffer", pixels * GBUFFER_TEXEL_BYTES, storage | BufferUsages::COPY_SRC),
-            prev_gbuffer: buffer(
-                "glowbrick_prev_gbuffer",
-                pixels * GBUFFER_TEXEL_BYTES,
-                storage | BufferUsages::COPY_DST,
-            ),
-            reservoirs_temporal: buffer("glowbrick_reservoirs_temporal", pixels * RESERVOIR_BYTES, storage),
-            reservoirs_final: buffer("glowbrick_reservoirs_final", pixels * RESERVOIR_BYTES, storage),
-            noisy: buffer("glowbrick_denoise_noisy", pixels * DENOISE_TEXEL_BYTES, storage),
-            history: buffer(
-                "glowbrick_denoise_history",
-                2 * pixels * DENOISE_TEXEL_BYTES,
-                storage | BufferUsages::COPY_SRC,
-            ),
-            prev_history: buffer(
-                "glowbrick_denoise_prev_history",
-                2 * pixels * DENOISE_TEXEL_BYTES,
-                storage | BufferUsages::COPY_DST,
-            ),
-            wavelet: buffer("glowbrick_denoise_wavelet", 2 * pixels * DENOISE_TEXEL_BYTES, storage),
-            size,
-            last_key: None,
-            accumulated: 0,
-            prev_clip_from_world: Mat4::IDENTITY,
-            prev_camera: Vec3::ZERO,
-            prev_restir: false,
-            run_restir: false,
-            prev_denoise: false,
-            run_denoise: false,
-        }
-    }
-}
-
-/// Everything that must stay the same for frames to be averaged.
-#[derive(Clone, Debug, PartialEq)]
-struct AccumulationKey {
-    clip_from_world: Mat4,
-    settings: RenderSettings,
-    highlight: Highlight,
-}
-
-/// Creates each view's buffers and writes its frame parameters, restarting accumulation when anything that
-/// affects the image changed (Render schedule, PrepareResources, after the scene uploads).
-#[allow(clippy::too_many_arguments)]
-pub fn prepare_view_resources(
-    mut commands: Commands,
-    mut views: Query<(Entity, &ExtractedView, Option<&mut ViewResources>), With<VoxelCamera>>,
-    settings: Option<Res<RenderSettings>>,
-    highlight: Option<Res<Highlight>>,
-    gpu_world: Option<Res<GpuWorld>>,
-    gpu_lights: Option<Res<GpuLights>>,
-    objects: Option<Res<GpuObjects>>,
-    frames: Res<FramesRendered>,
-    device: Res<RenderDevice>,
-    queue: Res<RenderQueue>,
-) {
-    let settings = settings.map(|s| s.clone()).unwrap_or_default();
-    let highlight = highlight.map(|h| *h).unwrap_or_default();
-    let lights_changed = gpu_lights.as_ref().is_some_and(|l| l.changed);
-    let scene_changed = gpu_world.as_ref().is_some_and(|w| w.uploaded_bytes > 0)
-        || lights_changed
-        || objects.as_ref().is_some_and(|o| o.changed);
-    let light_count = gpu_lights.as_ref().map_or(0, |l| l.light_count);
-    let mut params = frame_params(&settings, &highlight, frames.0.load(Ordering::Relaxed));
-    // ReSTIR runs only where it has something to sample; its history is valid if last frame ran it too.
-    let run_restir = settings.lighting.uses_restir()
-        && (settings.debug.is_lit() || settings.debug == DebugView::Reservoir)
-        && light_count > 0;
-    let run_denoise = settings.denoise && settings.debug.is_lit();
-    // The denoiser's history restarts where the image changed without the camera moving: an edit (geometry or
-    // lights). Moving objects are left to the reprojection test (their pixels fail it).
-    let world_changed = gpu_world.as_ref().is_some_and(|w| w.uploaded_bytes > 0) || lights_changed;
-    for (entity, view, resources) in &mut views {
-        let size = view.viewport.zw();
-        let clip_from_world = view.clip_from_view * view.world_from_view.to_matrix().inverse();
-        let key = AccumulationKey { clip_from_world, settings: settings.clone(), highlight };
-        let mut created = None;
-        let resources: &mut ViewResources = match resources {
-            Some(r) if r.size == size => r.into_inner(),
-            _ => created.insert(ViewResources::new(&device, size)),
-        };
-        let same = settings.accumulate && !scene_changed && resources.last_key.as_ref() == Some(&key);
-        resources.accumulated = if same { resources.accumulated.saturating_add(1) } else { 1 };
-        resources.last_key = Some(key);
-        params.accumulated = resources.accumulated;
-        resources.run_restir = run_restir;
-        params.prev_clip_from_world = resources.prev_clip_from_world.to_cols_array_2d();
-        let p = resources.prev_camera;
-        // A frame whose light pool changed starts ReSTIR's history afresh: last frame's reservoirs were drawn
-        // from other lights, and the temporal MIS weights, which assume last frame could have drawn this
-        // frame's samples, would weigh a lamp placed now at M_init / (M_init + history) of its light
-        // (measured in tests/gpu/daylight.rs: a lamp placed at night lit 41 of its 340 pixels in its first frame;
-        // with the history restarted, 391 of 499).
-        let history = resources.prev_restir && run_restir && !lights_changed;
-        params.prev_camera = [p.x, p.y, p.z, if history { 1.0 } else { 0.0 }];
-        resources.prev_clip_from_world = clip_from_world;
-        resources.prev_camera = view.world_from_view.translation();
-        resources.prev_restir = run_restir;
-        let denoise_history = resources.prev_denoise && run_denoise && !world_changed;
-        params.denoise = if run_denoise { DENOISE_ON } else { 0 } | if denoise_history { DENOISE_HISTORY } else { 0 };
-        resources.prev_denoise = run_denoise;
-        resources.run_denoise = run_denoise;
-        queue.write_buffer(&resources.frame_params, 0, bytemuck::bytes_of(&params));
-        if let Some(new) = created {
-            // A new or resized view: its buffers live on its render-world entity from now on.
-            commands.entity(entity).insert(new);
-        }
-    }
-}
-
 /// Layouts of group 1: the view's (`shaders/lib/frame.wgsl`) and the empty one world passes bind instead.
 #[derive(Resource)]
 pub struct ViewLayouts {
@@ -260,28 +70,7 @@ pub struct ViewLayouts {
 }
 
 fn view_layouts() -> ViewLayouts {
-    let view = BindGroupLayoutDescriptor::new(
-        "glowbrick_view_layout",
-        &BindGroupLayoutEntries::sequential(
-            ShaderStages::COMPUTE,
-            (
-                texture_storage_2d(TextureFormat::Rgba16Float, StorageTextureAccess::WriteOnly),
-                uniform_buffer::<ViewUniform>(true),
-                uniform_buffer_sized(false, NonZeroU64::new(size_of::<FrameParams>() as u64)),
-                storage_buffer_sized(false, None),
-                storage_buffer_sized(false, None),
-                storage_buffer_sized(false, None),
-                storage_buffer_sized(false, None),
-                storage_buffer_sized(false, None),
-                // The denoiser: noisy frame, history, last frame's history, wavelet ping-pong.
-                storage_buffer_sized(false, None),
-                storage_buffer_sized(false, None),
-                storage_buffer_sized(false, None),
-                storage_buffer_sized(false, None),
-            ),
-        ),
-    );
-    ViewLayouts { view, empty: BindGroupLayoutDescriptor::new("glowbrick_no_view_layout", &[]) }
+    ViewLayouts { view: view_layout(), empty: BindGroupLayoutDescriptor::new("glowbrick_no_view_layout", &[]) }
 }
 
 /// Every pass's pipeline, in `all_passes` order, and the empty group 1 of world passes.
@@ -393,6 +182,17 @@ impl PassRecorder<'_> {
     }
 }
 
+/// The compiled pipelines of a technique's passes when `runs`: `Some(None)` when it does not run, `None` while
+/// its pipelines compile (a frame waits for all of them rather than showing half a frame).
+fn technique_pipelines<'a>(
+    runs: bool,
+    pipelines: &VoxelPipelines,
+    cache: &'a PipelineCache,
+    passes: &[VoxelPass],
+) -> Option<Option<Vec<&'a ComputePipeline>>> {
+    if runs { pipelines.get(cache, passes).map(Some) } else { Some(None) }
+}
+
 /// One camera's frame, top to bottom.
 #[allow(clippy::too_many_arguments)]
 pub fn view_frame(
@@ -412,51 +212,24 @@ pub fn view_frame(
     };
     let Some(gi_group) = scene.gi.as_ref().and_then(|g| g.bind_group.as_ref()) else { return };
     let Some(primary_pipeline) = pipelines.get(&pipeline_cache, &[primary::PRIMARY]).map(|p| p[0]) else { return };
-    // A ReSTIR frame waits until all its passes compiled rather than showing half a frame.
-    let restir = match resources.run_restir {
-        true => match pipelines.get(&pipeline_cache, &restir::PASSES) {
-            Some(restir) => Some(restir),
-            None => return,
-        },
-        false => None,
-    };
-    let denoise = match resources.run_denoise {
-        true => match pipelines.get(&pipeline_cache, &denoise::PASSES) {
-            Some(denoise) => Some(denoise),
-            None => return,
-        },
-        false => None,
+    let cache = &pipeline_cache;
+    let Some(restir) = technique_pipelines(resources.restir.runs, &pipelines, cache, &restir::PASSES) else { return };
+    let Some(denoise) = technique_pipelines(resources.denoise.runs, &pipelines, cache, &denoise::PASSES) else {
+        return;
     };
     let Some(view_binding) = view_uniforms.uniforms.binding() else { return };
     let size = target.main_texture().size();
-    let view_group = ctx.render_device().create_bind_group(
-        "glowbrick_view",
-        &pipeline_cache.get_bind_group_layout(&layouts.view),
-        &BindGroupEntries::sequential((
-            target.get_unsampled_color_attachment().view,
-            view_binding,
-            resources.frame_params.as_entire_binding(),
-            resources.accumulation.as_entire_binding(),
-            resources.gbuffer.as_entire_binding(),
-            resources.prev_gbuffer.as_entire_binding(),
-            resources.reservoirs_temporal.as_entire_binding(),
-            resources.reservoirs_final.as_entire_binding(),
-            resources.noisy.as_entire_binding(),
-            resources.history.as_entire_binding(),
-            resources.prev_history.as_entire_binding(),
-            resources.wavelet.as_entire_binding(),
-        )),
-    );
+    let layout = pipeline_cache.get_bind_group_layout(&layouts.view);
+    let view_group = resources.bind_group(ctx.render_device(), &layout, target, view_binding);
     let diagnostics = ctx.diagnostic_recorder();
     let encoder = ctx.command_encoder();
-    // Keep last frame's G-buffer for the temporal reprojections (ReSTIR's and the denoiser's) before this frame
-    // overwrites it, and the denoiser's history likewise; other modes skip the copies.
+    // Last frame's G-buffer and denoiser history, kept for the temporal reprojections before this frame
+    // overwrites them; modes without a reprojection skip the copies.
     if restir.is_some() || denoise.is_some() {
-        encoder.copy_buffer_to_buffer(&resources.gbuffer, 0, &resources.prev_gbuffer, 0, resources.gbuffer.size());
+        resources.gbuffers.keep_previous(encoder);
     }
     if denoise.is_some() {
-        let history = &resources.history;
-        encoder.copy_buffer_to_buffer(history, 0, &resources.prev_history, 0, history.size());
+        resources.denoise.keep_history(encoder);
     }
     let mut recorder = PassRecorder {
         encoder,
@@ -472,16 +245,12 @@ pub fn view_frame(
     // 1. G-buffer, GI cache entries touched; the image too unless ReSTIR shades it.
     recorder.dispatch(&primary::PRIMARY, primary_pipeline, size);
     // 2-4. Voxel ReSTIR: candidates + temporal reuse, spatial reuse, shading.
-    if let Some(restir_pipelines) = restir {
-        for (pass, pipeline) in restir::PASSES.iter().zip(restir_pipelines) {
-            recorder.dispatch(pass, pipeline, size);
-        }
+    for (pass, pipeline) in restir::PASSES.iter().zip(restir.into_iter().flatten()) {
+        recorder.dispatch(pass, pipeline, size);
     }
     // 5-9. The denoiser: temporal accumulation, then the wavelet's iterations, the last writing the image.
-    if let Some(denoise_pipelines) = denoise {
-        for (pass, pipeline) in denoise::PASSES.iter().zip(denoise_pipelines) {
-            recorder.dispatch(pass, pipeline, size);
-        }
+    for (pass, pipeline) in denoise::PASSES.iter().zip(denoise.into_iter().flatten()) {
+        recorder.dispatch(pass, pipeline, size);
     }
     frames.0.fetch_add(1, Ordering::Relaxed);
 }
@@ -545,30 +314,10 @@ pub fn add(render_app: &mut SubApp) {
     use bevy::render::{Render, RenderStartup, RenderSystems};
     render_app
         .add_systems(RenderStartup, init_pipelines)
-        .add_systems(Render, prepare_view_resources.after(SceneUploaded).in_set(RenderSystems::PrepareResources))
+        .add_systems(
+            Render,
+            super::view::prepare_view_resources.after(SceneUploaded).in_set(RenderSystems::PrepareResources),
+        )
         .add_systems(Core3d, view_frame.after(main_transparent_pass_3d).in_set(Core3dSystems::MainPass))
         .add_systems(RenderGraph, world_frame.before(camera_driver).in_set(RenderGraphSystems::Render));
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::render::scene::lights::scene_lighting;
-
-    /// The named choices reach the GPU as the bits the shaders test.
-    #[test]
-    fn named_choices_reach_the_gpu_as_flag_bits() {
-        let settings = |pairs: &[&str]| {
-            RenderSettings::default().with_pairs(&pairs.iter().map(|p| p.to_string()).collect::<Vec<_>>()).unwrap()
-        };
-        let default = settings(&[]);
-        let params = frame_params(&default, &Highlight::default(), 0);
-        // Default: temporal, spatial, one ray per neighbour, local candidates.
-        assert_eq!((scene_lighting(&default, 3).power_pick, params.restir_flags), (1, 1 | 2 | 16 | 32));
-        assert_eq!(frame_params(&settings(&["reuse=biased"]), &Highlight::default(), 0).restir_flags, 1 | 2 | 32);
-        let changed = settings(&["pick=uniform", "sample=point", "reuse=unbiased", "temporal=off", "local_lights=off"]);
-        let params = frame_params(&changed, &Highlight::default(), 0);
-        assert_eq!((scene_lighting(&changed, 3).power_pick, params.restir_flags), (0, 2 | 4 | 8));
-        assert_eq!(scene_lighting(&changed, 3).light_count, 3);
-    }
 }

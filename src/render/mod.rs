@@ -3,11 +3,13 @@
 //! - `scene/`: the GPU copy of what is traced and lit (world, lights and this frame's lighting, moving objects,
 //!   counters): uploads in the main world's PostUpdate, buffers written in `RenderSystems::PrepareResources`.
 //! - `gpu_types`: the CPU/GPU contract (every buffer struct, every shared constant as a shader def).
-//! - `frame`: the passes in order, per camera (`view_frame`) and once per frame (`world_frame`), and each view's
-//!   buffers.
-//! - one module per technique: `primary` (G-buffer), `restir` (Voxel ReSTIR direct light), `gi` (the
-//!   per-voxel-face GI cache).
-//! - `shaders`: the embedded WGSL (`shaders/lib`, `shaders/restir`, `shaders/gi`).
+//! - `frame`: the passes in order, per camera (`view_frame`) and once per frame (`world_frame`); it owns no
+//!   technique's state.
+//! - one module per technique, each owning its passes, its buffers and when its history restarts: `primary`
+//!   (the G-buffer), `restir` (Voxel ReSTIR direct light, the reservoirs), `denoise` (the denoiser's history),
+//!   `gi/` (the per-voxel-face GI cache: tables, edit log, the schedule of restarts and warm-up).
+//! - `view`: a camera's bind group, gathered from the techniques' parts, and its frame parameters.
+//! - `shaders`: the embedded WGSL (`shaders/lib`, `shaders/restir`, `shaders/gi`, `shaders/denoise`).
 //!
 //! Bevy's tonemapping runs after the voxel passes.
 
@@ -21,6 +23,7 @@ pub mod primary;
 pub mod restir;
 pub mod scene;
 pub mod shaders;
+pub mod view;
 
 pub use camera::VoxelCamera;
 

@@ -2,9 +2,18 @@
 //! primary pass has written the G-buffer: candidates + temporal reuse (`shaders/restir/initial.wgsl`), spatial
 //! reuse (`spatial.wgsl`) and shading (`shade.wgsl`); `common.wgsl` holds the reservoir and the resampling steps.
 //! None of them runs when the scene has no lights (or ReSTIR is not the lighting mode): the primary pass then
-//! shows emission alone, and the skipped passes record no GPU time. `frame::view_frame` dispatches them.
+//! shows emission alone, and the skipped passes record no GPU time.
+//!
+//! Its per-view state (`RestirView`): the two reservoir buffers and whether last frame's are this frame's
+//! temporal history. `frame::view_frame` dispatches the passes.
 
 use super::frame::{Dispatch, VoxelPass};
+use super::gpu_types::{
+    RESERVOIR_BYTES, RESTIR_LOCAL, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL, RESTIR_TEMPORAL, RESTIR_UNBIASED,
+};
+use crate::settings::{DebugView, LightSample, RenderSettings, Reuse};
+use bevy::render::render_resource::{BindingResource, Buffer, BufferDescriptor, BufferUsages};
+use bevy::render::renderer::RenderDevice;
 
 /// The passes in dispatch order.
 pub const PASSES: [VoxelPass; 3] = [
@@ -30,3 +39,112 @@ pub const PASSES: [VoxelPass; 3] = [
 
 /// GPU-time names of the three passes, in dispatch order.
 pub const RESTIR_PASS_NAMES: [&str; 3] = [PASSES[0].name, PASSES[1].name, PASSES[2].name];
+
+/// Whether the passes run this frame: only where there is something to sample, in a lighting mode that uses
+/// them, for a view that shows light (or the reservoirs themselves).
+pub fn runs(settings: &RenderSettings, light_count: u32) -> bool {
+    settings.lighting.uses_restir()
+        && (settings.debug.is_lit() || settings.debug == DebugView::Reservoir)
+        && light_count > 0
+}
+
+/// Whether last frame's reservoirs are this frame's temporal history: last frame ran the passes too, and the
+/// light pool did not change. Reservoirs drawn from another pool would be reused with MIS weights that assume
+/// last frame could have drawn this frame's samples: a lamp placed now would start at a fraction of its light.
+pub fn history_is_valid(ran_last_frame: bool, runs: bool, lights_changed: bool) -> bool {
+    ran_last_frame && runs && !lights_changed
+}
+
+/// The `FrameParams` fields the passes read: M_init, spatial taps, radius in pixels and the `RESTIR_*` flags.
+pub struct RestirParams {
+    pub candidates: u32,
+    pub taps: u32,
+    pub radius: f32,
+    pub flags: u32,
+}
+
+impl RestirParams {
+    pub fn of(settings: &RenderSettings) -> Self {
+        let restir = settings.restir.clone().clamped();
+        let flag = |on: bool, bit: u32| if on { bit } else { 0 };
+        RestirParams {
+            candidates: restir.candidates,
+            taps: restir.taps,
+            radius: restir.radius,
+            flags: flag(restir.temporal, RESTIR_TEMPORAL)
+                | flag(restir.spatial, RESTIR_SPATIAL)
+                | flag(restir.sample == LightSample::Point, RESTIR_POINT)
+                | flag(restir.reuse == Reuse::Unbiased, RESTIR_UNBIASED)
+                | flag(restir.reuse == Reuse::OneRay, RESTIR_ONE_RAY)
+                | flag(restir.local_lights, RESTIR_LOCAL),
+        }
+    }
+}
+
+/// One view's reservoirs (group 1, bindings 6 and 7: after temporal reuse, and final) and their history.
+pub struct RestirView {
+    reservoirs_temporal: Buffer,
+    reservoirs_final: Buffer,
+    ran_last_frame: bool,
+    /// Whether this frame runs the passes (set in prepare, read by the frame).
+    pub runs: bool,
+}
+
+impl RestirView {
+    pub fn new(device: &RenderDevice, pixels: u64) -> Self {
+        let buffer = |label: &'static str| {
+            device.create_buffer(&BufferDescriptor {
+                label: Some(label),
+                size: pixels * RESERVOIR_BYTES,
+                usage: BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        };
+        RestirView {
+            reservoirs_temporal: buffer("glowbrick_reservoirs_temporal"),
+            reservoirs_final: buffer("glowbrick_reservoirs_final"),
+            ran_last_frame: false,
+            runs: false,
+        }
+    }
+
+    /// Starts this frame: whether the passes run, and whether last frame's reservoirs are its history.
+    pub fn begin_frame(&mut self, runs: bool, lights_changed: bool) -> bool {
+        let history = history_is_valid(self.ran_last_frame, runs, lights_changed);
+        self.ran_last_frame = runs;
+        self.runs = runs;
+        history
+    }
+
+    /// Bindings 6 and 7 of the view's group.
+    pub fn bindings(&self) -> [BindingResource<'_>; 2] {
+        [self.reservoirs_temporal.as_entire_binding(), self.reservoirs_final.as_entire_binding()]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The history holds only across consecutive ReSTIR frames with the same light pool.
+    #[test]
+    fn the_history_restarts_after_a_frame_without_restir_or_a_change_of_lights() {
+        assert!(history_is_valid(true, true, false));
+        assert!(!history_is_valid(false, true, false), "first frame");
+        assert!(!history_is_valid(true, false, false), "not running");
+        assert!(!history_is_valid(true, true, true), "the light pool changed");
+    }
+
+    /// No lights, an unlit debug view or a mode without ReSTIR skip the passes.
+    #[test]
+    fn the_passes_run_only_where_they_have_lights_to_sample() {
+        let settings = |pairs: &[&str]| {
+            RenderSettings::default().with_pairs(&pairs.iter().map(|p| p.to_string()).collect::<Vec<_>>()).unwrap()
+        };
+        assert!(runs(&settings(&[]), 1));
+        assert!(!runs(&settings(&[]), 0));
+        assert!(!runs(&settings(&["debug=normal"]), 1));
+        assert!(runs(&settings(&["debug=reservoir"]), 1));
+        assert!(!runs(&settings(&["lighting=sun"]), 1));
+    }
+}
