@@ -8,6 +8,7 @@
 pub mod counters;
 pub mod lights;
 pub mod objects;
+pub mod staging;
 pub mod world;
 
 use bevy::prelude::*;

@@ -5,7 +5,7 @@
 
 use super::counters::GpuCountersBuffer;
 use super::objects::GpuObjects;
-use super::storage_buffer;
+use super::staging::{Fit, Staging, upload};
 use crate::render::gpu_types::{GpuMaterial, WorldInfo};
 use crate::world::grid::{BRICK_VOXELS, BrickCell, Voxel};
 use crate::world::{Palette, VoxelWorld};
@@ -57,9 +57,9 @@ pub fn gpu_materials(palette: &Palette) -> Vec<GpuMaterial> {
 pub struct FullWorld {
     pub size: UVec3,
     pub brick_dims: UVec3,
-    pub top_cells: Vec<u32>,
+    pub top_cells: Arc<Vec<u32>>,
     /// Pool voxels of all slots, padded with air to `pool_slots` slots.
-    pub pool: Vec<Voxel>,
+    pub pool: Arc<Vec<Voxel>>,
     pub pool_slots: u32,
 }
 
@@ -124,8 +124,8 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
         upload.full = Some(Arc::new(FullWorld {
             size: grid.size(),
             brick_dims: grid.brick_dims(),
-            top_cells: grid.top_cells().to_vec(),
-            pool,
+            top_cells: Arc::new(grid.top_cells().to_vec()),
+            pool: Arc::new(pool),
             pool_slots,
         }));
         state.world_instance = Some(world.instance);
@@ -147,16 +147,52 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
     upload
 }
 
-/// Render-world queue of uploads not yet written to GPU buffers (applied in order by `prepare_gpu_world`).
+/// Render-world uploads not yet written to GPU buffers, merged per buffer as they are extracted (in order) and
+/// written by `prepare_gpu_world`.
 #[derive(Resource, Default)]
-pub struct PendingUploads(pub Vec<WorldUpload>);
+pub struct PendingUploads {
+    /// World size and brick grid size of the latest full upload.
+    layout: Option<(UVec3, UVec3)>,
+    top_cells: Staging<u32>,
+    pool: Staging<Voxel>,
+    materials: Staging<GpuMaterial>,
+    /// Brick indices whose top cell changed after the latest full upload.
+    edited: Vec<u32>,
+    /// Bytes of the uploads a later full upload did not supersede (`WorldUpload::bytes`).
+    bytes: u64,
+}
+
+impl PendingUploads {
+    /// Queues one frame's upload behind the ones already pending.
+    pub fn push(&mut self, upload: &WorldUpload) {
+        if let Some(full) = &upload.full {
+            self.layout = Some((full.size, full.brick_dims));
+            self.top_cells.whole(full.top_cells.clone());
+            self.pool.whole(full.pool.clone());
+            self.edited.clear();
+            self.bytes = 0;
+        }
+        for &(index, raw) in &upload.top_cells {
+            self.top_cells.range(index as u64, &[raw]);
+            self.edited.push(index);
+        }
+        for (slot, voxels) in &upload.bricks {
+            self.pool.range(*slot as u64 * BRICK_VOXELS as u64, voxels);
+        }
+        // A full upload that only resized the pool carries no table: the GPU keeps the one it has.
+        if let Some(materials) = &upload.materials {
+            self.materials.whole(materials.clone());
+        }
+        self.bytes += upload.bytes();
+    }
+}
 
 /// Copies this frame's upload into the render world.
 pub fn extract_world_upload(upload: Extract<Option<Res<WorldUpload>>>, mut pending: ResMut<PendingUploads>) {
     if let Some(upload) = upload.as_ref()
         && !upload.is_empty()
     {
-        pending.0.push((**upload).clone());
+        pending.push(upload);
     }
 }
 
@@ -190,7 +226,6 @@ pub struct GpuWorld {
     pub top_cells: Buffer,
     pub brick_pool: Buffer,
     pub materials: Buffer,
-    pub material_capacity: u32,
     pub bind_group: BindGroup,
     /// Bytes written to GPU buffers last frame (0 when nothing changed).
     pub uploaded_bytes: u64,
@@ -216,13 +251,44 @@ impl GpuWorld {
 #[derive(Resource)]
 pub struct WorldLayout(pub BindGroupLayoutDescriptor);
 
-/// Voxels as the shader reads them: pairs of u16 packed little-endian into u32 words.
-fn voxel_bytes(voxels: &[u16]) -> &[u8] {
-    bytemuck::cast_slice(voxels)
+const TOP_CELLS_LABEL: &str = "glowbrick_top_cells";
+const BRICK_POOL_LABEL: &str = "glowbrick_brick_pool";
+const MATERIALS_LABEL: &str = "glowbrick_materials";
+
+/// What group 0 binds next to the world's own buffers, and how to build it.
+struct WorldBinding<'a> {
+    device: &'a RenderDevice,
+    cache: &'a PipelineCache,
+    layout: &'a BindGroupLayoutDescriptor,
+    objects: &'a GpuObjects,
+    counters: &'a Buffer,
 }
 
-fn material_buffer(device: &RenderDevice, materials: &[GpuMaterial]) -> Buffer {
-    storage_buffer(device, "glowbrick_materials", bytemuck::cast_slice(materials))
+impl WorldBinding<'_> {
+    fn bind(&self, info: &Buffer, top_cells: &Buffer, brick_pool: &Buffer, materials: &Buffer) -> BindGroup {
+        self.device.create_bind_group(
+            "glowbrick_world",
+            &self.cache.get_bind_group_layout(self.layout),
+            &BindGroupEntries::sequential((
+                info.as_entire_binding(),
+                top_cells.as_entire_binding(),
+                brick_pool.as_entire_binding(),
+                materials.as_entire_binding(),
+                self.objects.objects.as_entire_binding(),
+                self.objects.voxels.as_entire_binding(),
+                self.counters.as_entire_binding(),
+            )),
+        )
+    }
+}
+
+fn world_info(size: UVec3, brick_dims: UVec3, object_count: u32) -> WorldInfo {
+    WorldInfo { size: size.as_ivec3().to_array(), object_count, bricks: brick_dims.as_ivec3().to_array(), _pad: 0 }
+}
+
+/// Brick grid position of a brick index (x fastest).
+fn brick_position(index: u32, dims: UVec3) -> UVec3 {
+    UVec3::new(index % dims.x, index / dims.x % dims.y, index / (dims.x * dims.y))
 }
 
 /// Applies the queued uploads to the GPU buffers (creating them on the first full upload).
@@ -242,85 +308,84 @@ pub fn prepare_gpu_world(
     // The bind group needs the object and counter buffers; until they exist the uploads wait.
     let Some(objects) = objects else { return };
     let Some(counters) = counters.and_then(|c| shader_buffers.get(&c.0)) else { return };
-    if let Some(gpu) = gpu.as_deref_mut() {
-        gpu.uploaded_bytes = 0;
-        gpu.edited_bricks.clear();
-        gpu.replaced = false;
-    }
-    let bind = |gpu_buffers: [&Buffer; 4]| {
-        let [info, top_cells, brick_pool, materials] = gpu_buffers;
-        device.create_bind_group(
-            "glowbrick_world",
-            &pipeline_cache.get_bind_group_layout(&layout.0),
-            &BindGroupEntries::sequential((
-                info.as_entire_binding(),
-                top_cells.as_entire_binding(),
-                brick_pool.as_entire_binding(),
-                materials.as_entire_binding(),
-                objects.objects.as_entire_binding(),
-                objects.voxels.as_entire_binding(),
-                counters.buffer.as_entire_binding(),
-            )),
-        )
+    let binding = WorldBinding {
+        device: &device,
+        cache: &pipeline_cache,
+        layout: &layout.0,
+        objects: &objects,
+        counters: &counters.buffer,
     };
-    for upload in pending.0.drain(..) {
-        if let Some(full) = &upload.full {
-            let materials = upload.materials.as_deref().cloned().unwrap_or_else(|| vec![GpuMaterial::default()]);
-            let info = WorldInfo {
-                size: full.size.as_ivec3().to_array(),
-                object_count: objects.count,
-                bricks: full.brick_dims.as_ivec3().to_array(),
-                _pad: 0,
-            };
-            let info_buffer = device.create_buffer_with_data(&BufferInitDescriptor {
-                label: Some("glowbrick_world_info"),
-                contents: bytemuck::bytes_of(&info),
-                usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
-            });
-            let top_cells = storage_buffer(&device, "glowbrick_top_cells", bytemuck::cast_slice(&full.top_cells));
-            let brick_pool = storage_buffer(&device, "glowbrick_brick_pool", voxel_bytes(&full.pool));
-            let material_capacity = materials.len() as u32;
-            let materials = material_buffer(&device, &materials);
-            let bind_group = bind([&info_buffer, &top_cells, &brick_pool, &materials]);
-            let new_gpu = GpuWorld {
-                info,
-                info_buffer,
-                top_cells,
-                brick_pool,
-                materials,
-                material_capacity,
-                bind_group,
-                uploaded_bytes: upload.bytes(),
-                brick_dims: full.brick_dims,
-                edited_bricks: Vec::new(),
-                replaced: true,
-            };
-            match gpu.as_deref_mut() {
-                Some(existing) => *existing = new_gpu,
-                None => commands.insert_resource(new_gpu),
-            }
-            continue;
-        }
-        // Partial uploads need the buffers of an earlier full upload; the main world always sends one first.
-        let Some(gpu) = gpu.as_deref_mut() else { continue };
-        for &(index, raw) in &upload.top_cells {
-            queue.write_buffer(&gpu.top_cells, index as u64 * 4, bytemuck::bytes_of(&raw));
-            let d = gpu.brick_dims;
-            gpu.edited_bricks.push(UVec3::new(index % d.x, index / d.x % d.y, index / (d.x * d.y)));
-        }
-        for (slot, voxels) in &upload.bricks {
-            let offset = *slot as u64 * BRICK_VOXELS as u64 * 2;
-            queue.write_buffer(&gpu.brick_pool, offset, voxel_bytes(voxels));
-        }
-        if let Some(materials) = &upload.materials {
-            if materials.len() as u32 > gpu.material_capacity {
-                gpu.materials = material_buffer(&device, materials);
-                gpu.material_capacity = materials.len() as u32;
-                gpu.bind_group = bind([&gpu.info_buffer, &gpu.top_cells, &gpu.brick_pool, &gpu.materials]);
-            } else {
-                queue.write_buffer(&gpu.materials, 0, bytemuck::cast_slice(materials));
+    let mut batch = std::mem::take(&mut *pending);
+    match gpu.as_deref_mut() {
+        Some(gpu) => apply_uploads(gpu, &mut batch, &binding, &queue),
+        None => {
+            if let Some(created) = create_gpu_world(&mut batch, &binding, &queue) {
+                commands.insert_resource(created);
             }
         }
-        gpu.uploaded_bytes += upload.bytes();
     }
+}
+
+/// The GPU world from a batch that holds a full upload (and whatever was queued behind it).
+fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &RenderQueue) -> Option<GpuWorld> {
+    // Partial uploads need the buffers of a full one; the main world always sends one first.
+    let (size, brick_dims) = batch.layout?;
+    if !batch.materials.has_whole() {
+        batch.materials.whole(Arc::new(vec![GpuMaterial::default()]));
+    }
+    let device = binding.device;
+    let info = world_info(size, brick_dims, binding.objects.count);
+    let info_buffer = device.create_buffer_with_data(&BufferInitDescriptor {
+        label: Some("glowbrick_world_info"),
+        contents: bytemuck::bytes_of(&info),
+        usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+    });
+    let top_cells = upload(&mut batch.top_cells, None, Fit::Exact, TOP_CELLS_LABEL, device, queue)?;
+    let brick_pool = upload(&mut batch.pool, None, Fit::Exact, BRICK_POOL_LABEL, device, queue)?;
+    let materials = upload(&mut batch.materials, None, Fit::AtLeast, MATERIALS_LABEL, device, queue)?;
+    let bind_group = binding.bind(&info_buffer, &top_cells, &brick_pool, &materials);
+    Some(GpuWorld {
+        info,
+        info_buffer,
+        top_cells,
+        brick_pool,
+        materials,
+        bind_group,
+        uploaded_bytes: batch.bytes,
+        brick_dims,
+        edited_bricks: batch.edited.iter().map(|&i| brick_position(i, brick_dims)).collect(),
+        replaced: true,
+    })
+}
+
+/// Writes a batch into the existing GPU world, recreating (and rebinding) the buffers whose size changed.
+fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &WorldBinding, queue: &RenderQueue) {
+    let device = binding.device;
+    gpu.replaced = batch.layout.is_some();
+    if let Some((size, brick_dims)) = batch.layout {
+        gpu.brick_dims = brick_dims;
+        gpu.info = world_info(size, brick_dims, gpu.info.object_count);
+        queue.write_buffer(&gpu.info_buffer, 0, bytemuck::bytes_of(&gpu.info));
+    }
+    let mut rebind = false;
+    if let Some(buffer) = upload(&mut batch.top_cells, Some(&gpu.top_cells), Fit::Exact, TOP_CELLS_LABEL, device, queue)
+    {
+        gpu.top_cells = buffer;
+        rebind = true;
+    }
+    if let Some(buffer) = upload(&mut batch.pool, Some(&gpu.brick_pool), Fit::Exact, BRICK_POOL_LABEL, device, queue) {
+        gpu.brick_pool = buffer;
+        rebind = true;
+    }
+    if let Some(buffer) =
+        upload(&mut batch.materials, Some(&gpu.materials), Fit::AtLeast, MATERIALS_LABEL, device, queue)
+    {
+        gpu.materials = buffer;
+        rebind = true;
+    }
+    if rebind {
+        gpu.bind_group = binding.bind(&gpu.info_buffer, &gpu.top_cells, &gpu.brick_pool, &gpu.materials);
+    }
+    gpu.edited_bricks = batch.edited.iter().map(|&i| brick_position(i, gpu.brick_dims)).collect();
+    gpu.uploaded_bytes = batch.bytes;
 }
