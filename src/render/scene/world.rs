@@ -185,6 +185,17 @@ impl PendingUploads {
         }
         self.bytes += upload.bytes();
     }
+
+    /// World size and brick grid size for the buffers to create, when the batch holds a full upload, with an
+    /// air-only material table when no table came with it.
+    fn prepare_creation(&mut self) -> Option<(UVec3, UVec3)> {
+        // Partial uploads need the buffers of a full one; the main world always sends one first.
+        let layout = self.layout?;
+        if !self.materials.has_whole() {
+            self.materials.whole(Arc::new(vec![GpuMaterial::default()]));
+        }
+        Some(layout)
+    }
 }
 
 /// Copies this frame's upload into the render world.
@@ -328,11 +339,7 @@ pub fn prepare_gpu_world(
 
 /// The GPU world from a batch that holds a full upload (and whatever was queued behind it).
 fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &RenderQueue) -> Option<GpuWorld> {
-    // Partial uploads need the buffers of a full one; the main world always sends one first.
-    let (size, brick_dims) = batch.layout?;
-    if !batch.materials.has_whole() {
-        batch.materials.whole(Arc::new(vec![GpuMaterial::default()]));
-    }
+    let (size, brick_dims) = batch.prepare_creation()?;
     let device = binding.device;
     let info = world_info(size, brick_dims, binding.objects.count);
     let info_buffer = device.create_buffer_with_data(&BufferInitDescriptor {
@@ -388,4 +395,138 @@ fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &World
     }
     gpu.edited_bricks = batch.edited.iter().map(|&i| brick_position(i, gpu.brick_dims)).collect();
     gpu.uploaded_bytes = batch.bytes;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::scene::staging::BufferOp;
+    use crate::render::scene::staging::tests::run;
+    use crate::world::Edit;
+
+    /// The GPU world's buffers as `prepare_gpu_world` leaves them, on the CPU.
+    #[derive(Default)]
+    struct SimulatedGpu {
+        top_cells: Option<Vec<u8>>,
+        pool: Option<Vec<u8>>,
+        materials: Option<Vec<u8>>,
+    }
+
+    impl SimulatedGpu {
+        /// Writes a batch the way `create_gpu_world` / `apply_uploads` do.
+        fn drain(&mut self, batch: &mut PendingUploads) {
+            if self.top_cells.is_none() && batch.prepare_creation().is_none() {
+                return;
+            }
+            let size = |b: &Option<Vec<u8>>| b.as_ref().map(|b| b.len() as u64);
+            let ops: Vec<BufferOp> = batch.top_cells.ops(size(&self.top_cells), Fit::Exact);
+            run(&ops, &mut self.top_cells);
+            run(&batch.pool.ops(size(&self.pool), Fit::Exact), &mut self.pool);
+            run(&batch.materials.ops(size(&self.materials), Fit::AtLeast), &mut self.materials);
+            *batch = PendingUploads::default();
+        }
+
+        fn assert_holds(&self, world: &VoxelWorld, order: &[Change]) {
+            let top_cells = self.top_cells.as_ref().expect("top cells");
+            assert_eq!(top_cells.as_slice(), bytemuck::cast_slice::<u32, u8>(world.grid.top_cells()), "{order:?}");
+            let pool = self.pool.as_ref().expect("pool");
+            let expected = voxel_bytes(world.grid.pool());
+            assert_eq!(&pool[..expected.len()], expected, "pool after {order:?}");
+            let materials = self.materials.as_ref().expect("materials");
+            let expected = gpu_materials(&world.palette);
+            let expected: &[u8] = bytemuck::cast_slice(&expected);
+            assert_eq!(&materials[..expected.len()], expected, "materials after {order:?}");
+        }
+    }
+
+    fn voxel_bytes(voxels: &[Voxel]) -> &[u8] {
+        bytemuck::cast_slice(voxels)
+    }
+
+    /// One change to the main world, each staged as its own frame's upload.
+    #[derive(Clone, Copy, Debug)]
+    enum Change {
+        /// A voxel in one brick: a partial upload.
+        Place(IVec3),
+        /// More pooled bricks than the GPU pool holds: a full upload without a material table.
+        Grow,
+        /// A material's colour: the table alone.
+        Recolour,
+        /// A new, smaller world: a full upload with the table.
+        Replace,
+    }
+
+    fn brick_corner(i: i32) -> IVec3 {
+        IVec3::new(i % 9 * 8, 0, i / 9 * 8)
+    }
+
+    fn apply(change: Change, world: &mut VoxelWorld) {
+        match change {
+            Change::Place(at) => {
+                world.apply(Edit::Place { at, material: 2 }).unwrap();
+            }
+            Change::Grow => {
+                for i in 0..70 {
+                    world.apply(Edit::Place { at: brick_corner(i) + IVec3::ONE, material: 1 }).unwrap();
+                }
+            }
+            Change::Recolour => world.palette.materials[0].albedo[0] += 0.25,
+            Change::Replace => *world = VoxelWorld::new(UVec3::new(72, 8, 80), world.palette.clone()),
+        }
+    }
+
+    fn permutations(items: &[Change]) -> Vec<Vec<Change>> {
+        if items.is_empty() {
+            return vec![Vec::new()];
+        }
+        let mut out = Vec::new();
+        for i in 0..items.len() {
+            let mut rest = items.to_vec();
+            let first = rest.remove(i);
+            for mut tail in permutations(&rest) {
+                tail.insert(0, first);
+                out.push(tail);
+            }
+        }
+        out
+    }
+
+    /// Full and partial world uploads queued in every order, drained in one or two batches, into a GPU world
+    /// that exists already or is created by the first full upload in the batch: the GPU holds the CPU world's
+    /// bytes. Partial uploads behind the creating full upload, and the material table across a full upload that
+    /// only grew the pool, both survive.
+    #[test]
+    fn every_order_of_world_uploads_leaves_the_world_bytes() {
+        let changes = [
+            Change::Place(IVec3::new(3, 3, 3)),
+            Change::Place(IVec3::new(20, 4, 12)),
+            Change::Grow,
+            Change::Recolour,
+            Change::Replace,
+        ];
+        for order in permutations(&changes) {
+            for split in 0..=order.len() {
+                for created_before in [false, true] {
+                    let mut world = VoxelWorld::new(UVec3::new(80, 8, 80), Palette::default_blocks());
+                    let mut state = UploadState::default();
+                    let mut gpu = SimulatedGpu::default();
+                    let mut pending = PendingUploads::default();
+                    pending.push(&stage_upload(&mut world, &mut state));
+                    if created_before {
+                        gpu.drain(&mut pending);
+                    }
+                    for (i, &change) in order.iter().enumerate() {
+                        if i == split {
+                            gpu.drain(&mut pending);
+                            gpu.assert_holds(&world, &order[..i]);
+                        }
+                        apply(change, &mut world);
+                        pending.push(&stage_upload(&mut world, &mut state));
+                    }
+                    gpu.drain(&mut pending);
+                    gpu.assert_holds(&world, &order);
+                }
+            }
+        }
+    }
 }
