@@ -2,7 +2,7 @@
 //! changed slots, its alias table and light index when they changed, and this frame's `SceneLighting` (sun, sky, mode, light
 //! count). Staged in the main world (PostUpdate), written to GPU buffers in the render world (PrepareResources).
 
-use super::storage_buffer;
+use super::staging::{Fit, Staging, upload};
 use crate::lights::daylight::Daylight;
 use crate::lights::{AliasEntry, Light, LightPool};
 use crate::render::gpu_types::{GpuLight, LIGHT_FACES_SHIFT, SceneLighting};
@@ -147,9 +147,7 @@ pub fn stage_light_upload(
 pub struct GpuLights {
     pub lights: Buffer,
     pub alias: Buffer,
-    pub alias_capacity: u32,
     pub index: Buffer,
-    pub index_capacity: u32,
     pub light_count: u32,
     pub has_lights: bool,
     /// Group 2 of the voxel passes: slots, alias table, scene lighting, light index.
@@ -179,47 +177,87 @@ impl Default for LightsLayout {
     }
 }
 
-fn lights_bind_group(
-    device: &RenderDevice,
-    cache: &PipelineCache,
-    layout: &LightsLayout,
-    buffers: [&Buffer; 4],
-) -> BindGroup {
-    let [lights, alias, scene, index] = buffers;
-    device.create_bind_group(
-        "glowbrick_lights",
-        &cache.get_bind_group_layout(&layout.0),
-        &BindGroupEntries::sequential((
-            lights.as_entire_binding(),
-            alias.as_entire_binding(),
-            scene.as_entire_binding(),
-            index.as_entire_binding(),
-        )),
-    )
+/// Builds group 2 around the scene lighting uniform.
+struct LightsBinding<'a> {
+    device: &'a RenderDevice,
+    cache: &'a PipelineCache,
+    layout: &'a LightsLayout,
+    scene: &'a Buffer,
 }
 
-/// Uploads not yet written, in order.
+impl LightsBinding<'_> {
+    fn bind(&self, lights: &Buffer, alias: &Buffer, index: &Buffer) -> BindGroup {
+        self.device.create_bind_group(
+            "glowbrick_lights",
+            &self.cache.get_bind_group_layout(&self.layout.0),
+            &BindGroupEntries::sequential((
+                lights.as_entire_binding(),
+                alias.as_entire_binding(),
+                self.scene.as_entire_binding(),
+                index.as_entire_binding(),
+            )),
+        )
+    }
+}
+
+/// Light uploads not yet written, merged per buffer in the order they were extracted.
 #[derive(Resource, Default)]
-pub struct PendingLightUploads(pub Vec<LightUpload>);
+pub struct PendingLightUploads {
+    lights: Staging<GpuLight>,
+    alias: Staging<AliasEntry>,
+    index: Staging<u32>,
+    /// The latest upload's light count (`None`: nothing extracted since the last write).
+    light_count: Option<u32>,
+    /// Whether any of the queued uploads changed a light.
+    changed: bool,
+}
+
+impl PendingLightUploads {
+    /// Queues one frame's upload behind the ones already pending.
+    pub fn push(&mut self, upload: &LightUpload) {
+        self.light_count = Some(upload.light_count);
+        self.changed |= !upload.is_empty();
+        if let Some(all) = &upload.full {
+            self.lights.whole(all.clone());
+        }
+        for (slot, light) in &upload.slots {
+            self.lights.range(*slot as u64, std::slice::from_ref(light));
+        }
+        if let Some(entries) = &upload.alias {
+            self.alias.whole(padded_alias(entries));
+        }
+        if let Some(entries) = &upload.index {
+            self.index.whole(padded_index(entries));
+        }
+    }
+}
 
 pub fn extract_light_upload(upload: Extract<Option<Res<LightUpload>>>, mut pending: ResMut<PendingLightUploads>) {
     if let Some(upload) = upload.as_ref() {
         // The count travels every frame so the skip flag is current; buffers only when something changed.
-        pending.0.push((**upload).clone());
+        pending.push(upload);
     }
 }
 
 /// Alias entries padded to at least one (storage buffers cannot be empty).
-fn alias_bytes(entries: &[AliasEntry]) -> Vec<u8> {
-    let padded: Vec<AliasEntry> = if entries.is_empty() { vec![AliasEntry::default()] } else { entries.to_vec() };
-    bytemuck::cast_slice(&padded).to_vec()
+fn padded_alias(entries: &Arc<Vec<AliasEntry>>) -> Arc<Vec<AliasEntry>> {
+    if entries.is_empty() { Arc::new(vec![AliasEntry::default()]) } else { entries.clone() }
 }
 
 /// The light index, one empty entry when there is none yet.
-fn index_bytes(entries: &[u32]) -> Vec<u8> {
-    let padded: &[u32] = if entries.is_empty() { &[crate::lights::index::NO_COLUMN] } else { entries };
-    bytemuck::cast_slice(padded).to_vec()
+fn padded_index(entries: &Arc<Vec<u32>>) -> Arc<Vec<u32>> {
+    if entries.is_empty() { Arc::new(vec![crate::lights::index::NO_COLUMN]) } else { entries.clone() }
 }
+
+const LIGHTS_LABEL: &str = "glowbrick_lights";
+const ALIAS_LABEL: &str = "glowbrick_light_alias";
+const INDEX_LABEL: &str = "glowbrick_light_index";
+/// The slot buffer is sized by the main world (`arrayLength` bounds reservoir slots) and the shader masks the
+/// index with `arrayLength - 1`, so both are exactly their contents; the alias table may be larger than the
+/// lights it holds.
+const LIGHTS_FIT: Fit = Fit::Exact;
+const ALIAS_FIT: Fit = Fit::AtLeast;
+const INDEX_FIT: Fit = Fit::Exact;
 
 /// Applies the queued light uploads and writes this frame's scene lighting.
 #[allow(clippy::too_many_arguments)]
@@ -234,69 +272,80 @@ pub fn prepare_gpu_lights(
     mut pending: ResMut<PendingLightUploads>,
     mut gpu: Option<ResMut<GpuLights>>,
 ) {
-    if let Some(gpu) = gpu.as_deref_mut() {
-        gpu.changed = false;
-    }
-    // The count after this frame's uploads (a first `GpuLights` is only inserted at the end of the system).
-    let mut light_count = gpu.as_deref().map_or(0, |g| g.light_count);
-    for upload in pending.0.drain(..) {
-        light_count = upload.light_count;
-        if let Some(all) = &upload.full {
-            let lights = storage_buffer(&device, "glowbrick_lights", bytemuck::cast_slice(all));
-            let entries = upload.alias.as_deref().map_or(&[][..], |a| a.as_slice());
-            let alias = storage_buffer(&device, "glowbrick_light_alias", &alias_bytes(entries));
-            let index_entries = upload.index.as_deref().map_or(&[][..], |i| i.as_slice());
-            let index = storage_buffer(&device, "glowbrick_light_index", &index_bytes(index_entries));
-            let bind_group = lights_bind_group(&device, &cache, &layout, [&lights, &alias, &scene.0, &index]);
-            let fresh = GpuLights {
-                lights,
-                alias,
-                alias_capacity: entries.len().max(1) as u32,
-                index,
-                index_capacity: index_entries.len().max(1) as u32,
-                light_count: upload.light_count,
-                has_lights: upload.light_count > 0,
-                bind_group,
-                changed: true,
-            };
-            match gpu.as_deref_mut() {
-                Some(existing) => *existing = fresh,
-                None => commands.insert_resource(fresh),
-            }
-            continue;
-        }
-        let Some(gpu) = gpu.as_deref_mut() else { continue };
-        gpu.changed |= !upload.is_empty();
-        for (slot, light) in &upload.slots {
-            queue.write_buffer(&gpu.lights, *slot as u64 * size_of::<GpuLight>() as u64, bytemuck::bytes_of(light));
-        }
-        let mut rebind = false;
-        if let Some(entries) = &upload.alias {
-            if entries.len() as u32 > gpu.alias_capacity {
-                gpu.alias = storage_buffer(&device, "glowbrick_light_alias", &alias_bytes(entries));
-                gpu.alias_capacity = entries.len() as u32;
-                rebind = true;
-            } else if !entries.is_empty() {
-                queue.write_buffer(&gpu.alias, 0, bytemuck::cast_slice(entries));
+    let binding = LightsBinding { device: &device, cache: &cache, layout: &layout, scene: &scene.0 };
+    let mut batch = std::mem::take(&mut *pending);
+    let light_count = batch.light_count.or(gpu.as_deref().map(|g| g.light_count)).unwrap_or(0);
+    match gpu.as_deref_mut() {
+        Some(gpu) => apply_light_uploads(gpu, &mut batch, &binding, &queue),
+        None => {
+            if let Some(created) = create_gpu_lights(&mut batch, &binding, &queue) {
+                commands.insert_resource(created);
             }
         }
-        if let Some(entries) = &upload.index {
-            // The shader masks with arrayLength - 1: the buffer is exactly the table, never larger.
-            if entries.len() as u32 != gpu.index_capacity {
-                gpu.index = storage_buffer(&device, "glowbrick_light_index", &index_bytes(entries));
-                gpu.index_capacity = entries.len().max(1) as u32;
-                rebind = true;
-            } else {
-                queue.write_buffer(&gpu.index, 0, &index_bytes(entries));
-            }
-        }
-        if rebind {
-            gpu.bind_group =
-                lights_bind_group(&device, &cache, &layout, [&gpu.lights, &gpu.alias, &scene.0, &gpu.index]);
-        }
-        gpu.light_count = upload.light_count;
-        gpu.has_lights = upload.light_count > 0;
     }
     let settings = settings.map(|s| s.clone()).unwrap_or_default();
     queue.write_buffer(&scene.0, 0, bytemuck::bytes_of(&scene_lighting(&settings, light_count)));
+}
+
+/// The light buffers from a batch that holds a full upload (and whatever was queued behind it).
+fn create_gpu_lights(
+    batch: &mut PendingLightUploads,
+    binding: &LightsBinding,
+    queue: &RenderQueue,
+) -> Option<GpuLights> {
+    // Slot changes need the buffer of a full upload; the main world always sends one first.
+    if !batch.lights.has_whole() {
+        return None;
+    }
+    if !batch.alias.has_whole() {
+        batch.alias.whole(padded_alias(&Arc::default()));
+    }
+    if !batch.index.has_whole() {
+        batch.index.whole(padded_index(&Arc::default()));
+    }
+    let device = binding.device;
+    let lights = upload(&mut batch.lights, None, LIGHTS_FIT, LIGHTS_LABEL, device, queue)?;
+    let alias = upload(&mut batch.alias, None, ALIAS_FIT, ALIAS_LABEL, device, queue)?;
+    let index = upload(&mut batch.index, None, INDEX_FIT, INDEX_LABEL, device, queue)?;
+    let light_count = batch.light_count.unwrap_or(0);
+    Some(GpuLights {
+        bind_group: binding.bind(&lights, &alias, &index),
+        lights,
+        alias,
+        index,
+        light_count,
+        has_lights: light_count > 0,
+        changed: true,
+    })
+}
+
+/// Writes a batch into the existing light buffers, recreating (and rebinding) the ones whose size changed.
+fn apply_light_uploads(
+    gpu: &mut GpuLights,
+    batch: &mut PendingLightUploads,
+    binding: &LightsBinding,
+    queue: &RenderQueue,
+) {
+    let device = binding.device;
+    gpu.changed = batch.changed;
+    if let Some(count) = batch.light_count {
+        gpu.light_count = count;
+        gpu.has_lights = count > 0;
+    }
+    let mut rebind = false;
+    if let Some(buffer) = upload(&mut batch.lights, Some(&gpu.lights), LIGHTS_FIT, LIGHTS_LABEL, device, queue) {
+        gpu.lights = buffer;
+        rebind = true;
+    }
+    if let Some(buffer) = upload(&mut batch.alias, Some(&gpu.alias), ALIAS_FIT, ALIAS_LABEL, device, queue) {
+        gpu.alias = buffer;
+        rebind = true;
+    }
+    if let Some(buffer) = upload(&mut batch.index, Some(&gpu.index), INDEX_FIT, INDEX_LABEL, device, queue) {
+        gpu.index = buffer;
+        rebind = true;
+    }
+    if rebind {
+        gpu.bind_group = binding.bind(&gpu.lights, &gpu.alias, &gpu.index);
+    }
 }

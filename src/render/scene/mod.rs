@@ -1,13 +1,15 @@
 //! What the passes trace and light, on the GPU: the brick grid (`world`), the light pool and this frame's
 //! lighting (`lights`), the moving objects (`objects`) and the counters every pass may add to (`counters`). The
 //! only place that knows these buffers' layouts. Each module stages its upload in the main world (PostUpdate),
-//! extracts it, and writes the GPU buffers in `RenderSystems::PrepareResources`, changed ranges only.
+//! extracts it, and writes the GPU buffers in `RenderSystems::PrepareResources`, changed ranges only. The world's
+//! and the lights' buffers go through one queue per buffer (`staging`), which merges the frames' uploads in order.
 //!
 //! Bind groups: group 0 (`world`: grid, materials, objects, counters) and group 2 (`lights`) of every voxel pass.
 
 pub mod counters;
 pub mod lights;
 pub mod objects;
+pub mod staging;
 pub mod world;
 
 use bevy::prelude::*;

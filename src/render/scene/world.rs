@@ -5,7 +5,7 @@
 
 use super::counters::GpuCountersBuffer;
 use super::objects::GpuObjects;
-use super::storage_buffer;
+use super::staging::{Fit, Staging, upload};
 use crate::render::gpu_types::{GpuMaterial, WorldInfo};
 use crate::world::grid::{BRICK_VOXELS, BrickCell, Voxel};
 use crate::world::{Palette, VoxelWorld};
@@ -57,9 +57,9 @@ pub fn gpu_materials(palette: &Palette) -> Vec<GpuMaterial> {
 pub struct FullWorld {
     pub size: UVec3,
     pub brick_dims: UVec3,
-    pub top_cells: Vec<u32>,
+    pub top_cells: Arc<Vec<u32>>,
     /// Pool voxels of all slots, padded with air to `pool_slots` slots.
-    pub pool: Vec<Voxel>,
+    pub pool: Arc<Vec<Voxel>>,
     pub pool_slots: u32,
 }
 
@@ -124,8 +124,8 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
         upload.full = Some(Arc::new(FullWorld {
             size: grid.size(),
             brick_dims: grid.brick_dims(),
-            top_cells: grid.top_cells().to_vec(),
-            pool,
+            top_cells: Arc::new(grid.top_cells().to_vec()),
+            pool: Arc::new(pool),
             pool_slots,
         }));
         state.world_instance = Some(world.instance);
@@ -147,16 +147,63 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
     upload
 }
 
-/// Render-world queue of uploads not yet written to GPU buffers (applied in order by `prepare_gpu_world`).
+/// Render-world uploads not yet written to GPU buffers, merged per buffer as they are extracted (in order) and
+/// written by `prepare_gpu_world`.
 #[derive(Resource, Default)]
-pub struct PendingUploads(pub Vec<WorldUpload>);
+pub struct PendingUploads {
+    /// World size and brick grid size of the latest full upload.
+    layout: Option<(UVec3, UVec3)>,
+    top_cells: Staging<u32>,
+    pool: Staging<Voxel>,
+    materials: Staging<GpuMaterial>,
+    /// Brick indices whose top cell changed after the latest full upload.
+    edited: Vec<u32>,
+    /// Bytes of the uploads a later full upload did not supersede (`WorldUpload::bytes`).
+    bytes: u64,
+}
+
+impl PendingUploads {
+    /// Queues one frame's upload behind the ones already pending.
+    pub fn push(&mut self, upload: &WorldUpload) {
+        if let Some(full) = &upload.full {
+            self.layout = Some((full.size, full.brick_dims));
+            self.top_cells.whole(full.top_cells.clone());
+            self.pool.whole(full.pool.clone());
+            self.edited.clear();
+            self.bytes = 0;
+        }
+        for &(index, raw) in &upload.top_cells {
+            self.top_cells.range(index as u64, &[raw]);
+            self.edited.push(index);
+        }
+        for (slot, voxels) in &upload.bricks {
+            self.pool.range(*slot as u64 * BRICK_VOXELS as u64, voxels);
+        }
+        // A full upload that only resized the pool carries no table: the GPU keeps the one it has.
+        if let Some(materials) = &upload.materials {
+            self.materials.whole(materials.clone());
+        }
+        self.bytes += upload.bytes();
+    }
+
+    /// World size and brick grid size for the buffers to create, when the batch holds a full upload, with an
+    /// air-only material table when no table came with it.
+    fn prepare_creation(&mut self) -> Option<(UVec3, UVec3)> {
+        // Partial uploads need the buffers of a full one; the main world always sends one first.
+        let layout = self.layout?;
+        if !self.materials.has_whole() {
+            self.materials.whole(Arc::new(vec![GpuMaterial::default()]));
+        }
+        Some(layout)
+    }
+}
 
 /// Copies this frame's upload into the render world.
 pub fn extract_world_upload(upload: Extract<Option<Res<WorldUpload>>>, mut pending: ResMut<PendingUploads>) {
     if let Some(upload) = upload.as_ref()
         && !upload.is_empty()
     {
-        pending.0.push((**upload).clone());
+        pending.push(upload);
     }
 }
 
@@ -190,7 +237,6 @@ pub struct GpuWorld {
     pub top_cells: Buffer,
     pub brick_pool: Buffer,
     pub materials: Buffer,
-    pub material_capacity: u32,
     pub bind_group: BindGroup,
     /// Bytes written to GPU buffers last frame (0 when nothing changed).
     pub uploaded_bytes: u64,
@@ -216,13 +262,44 @@ impl GpuWorld {
 #[derive(Resource)]
 pub struct WorldLayout(pub BindGroupLayoutDescriptor);
 
-/// Voxels as the shader reads them: pairs of u16 packed little-endian into u32 words.
-fn voxel_bytes(voxels: &[u16]) -> &[u8] {
-    bytemuck::cast_slice(voxels)
+const TOP_CELLS_LABEL: &str = "glowbrick_top_cells";
+const BRICK_POOL_LABEL: &str = "glowbrick_brick_pool";
+const MATERIALS_LABEL: &str = "glowbrick_materials";
+
+/// What group 0 binds next to the world's own buffers, and how to build it.
+struct WorldBinding<'a> {
+    device: &'a RenderDevice,
+    cache: &'a PipelineCache,
+    layout: &'a BindGroupLayoutDescriptor,
+    objects: &'a GpuObjects,
+    counters: &'a Buffer,
 }
 
-fn material_buffer(device: &RenderDevice, materials: &[GpuMaterial]) -> Buffer {
-    storage_buffer(device, "glowbrick_materials", bytemuck::cast_slice(materials))
+impl WorldBinding<'_> {
+    fn bind(&self, info: &Buffer, top_cells: &Buffer, brick_pool: &Buffer, materials: &Buffer) -> BindGroup {
+        self.device.create_bind_group(
+            "glowbrick_world",
+            &self.cache.get_bind_group_layout(self.layout),
+            &BindGroupEntries::sequential((
+                info.as_entire_binding(),
+                top_cells.as_entire_binding(),
+                brick_pool.as_entire_binding(),
+                materials.as_entire_binding(),
+                self.objects.objects.as_entire_binding(),
+                self.objects.voxels.as_entire_binding(),
+                self.counters.as_entire_binding(),
+            )),
+        )
+    }
+}
+
+fn world_info(size: UVec3, brick_dims: UVec3, object_count: u32) -> WorldInfo {
+    WorldInfo { size: size.as_ivec3().to_array(), object_count, bricks: brick_dims.as_ivec3().to_array(), _pad: 0 }
+}
+
+/// Brick grid position of a brick index (x fastest).
+fn brick_position(index: u32, dims: UVec3) -> UVec3 {
+    UVec3::new(index % dims.x, index / dims.x % dims.y, index / (dims.x * dims.y))
 }
 
 /// Applies the queued uploads to the GPU buffers (creating them on the first full upload).
@@ -242,85 +319,214 @@ pub fn prepare_gpu_world(
     // The bind group needs the object and counter buffers; until they exist the uploads wait.
     let Some(objects) = objects else { return };
     let Some(counters) = counters.and_then(|c| shader_buffers.get(&c.0)) else { return };
-    if let Some(gpu) = gpu.as_deref_mut() {
-        gpu.uploaded_bytes = 0;
-        gpu.edited_bricks.clear();
-        gpu.replaced = false;
-    }
-    let bind = |gpu_buffers: [&Buffer; 4]| {
-        let [info, top_cells, brick_pool, materials] = gpu_buffers;
-        device.create_bind_group(
-            "glowbrick_world",
-            &pipeline_cache.get_bind_group_layout(&layout.0),
-            &BindGroupEntries::sequential((
-                info.as_entire_binding(),
-                top_cells.as_entire_binding(),
-                brick_pool.as_entire_binding(),
-                materials.as_entire_binding(),
-                objects.objects.as_entire_binding(),
-                objects.voxels.as_entire_binding(),
-                counters.buffer.as_entire_binding(),
-            )),
-        )
+    let binding = WorldBinding {
+        device: &device,
+        cache: &pipeline_cache,
+        layout: &layout.0,
+        objects: &objects,
+        counters: &counters.buffer,
     };
-    for upload in pending.0.drain(..) {
-        if let Some(full) = &upload.full {
-            let materials = upload.materials.as_deref().cloned().unwrap_or_else(|| vec![GpuMaterial::default()]);
-            let info = WorldInfo {
-                size: full.size.as_ivec3().to_array(),
-                object_count: objects.count,
-                bricks: full.brick_dims.as_ivec3().to_array(),
-                _pad: 0,
-            };
-            let info_buffer = device.create_buffer_with_data(&BufferInitDescriptor {
-                label: Some("glowbrick_world_info"),
-                contents: bytemuck::bytes_of(&info),
-                usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
-            });
-            let top_cells = storage_buffer(&device, "glowbrick_top_cells", bytemuck::cast_slice(&full.top_cells));
-            let brick_pool = storage_buffer(&device, "glowbrick_brick_pool", voxel_bytes(&full.pool));
-            let material_capacity = materials.len() as u32;
-            let materials = material_buffer(&device, &materials);
-            let bind_group = bind([&info_buffer, &top_cells, &brick_pool, &materials]);
-            let new_gpu = GpuWorld {
-                info,
-                info_buffer,
-                top_cells,
-                brick_pool,
-                materials,
-                material_capacity,
-                bind_group,
-                uploaded_bytes: upload.bytes(),
-                brick_dims: full.brick_dims,
-                edited_bricks: Vec::new(),
-                replaced: true,
-            };
-            match gpu.as_deref_mut() {
-                Some(existing) => *existing = new_gpu,
-                None => commands.insert_resource(new_gpu),
-            }
-            continue;
-        }
-        // Partial uploads need the buffers of an earlier full upload; the main world always sends one first.
-        let Some(gpu) = gpu.as_deref_mut() else { continue };
-        for &(index, raw) in &upload.top_cells {
-            queue.write_buffer(&gpu.top_cells, index as u64 * 4, bytemuck::bytes_of(&raw));
-            let d = gpu.brick_dims;
-            gpu.edited_bricks.push(UVec3::new(index % d.x, index / d.x % d.y, index / (d.x * d.y)));
-        }
-        for (slot, voxels) in &upload.bricks {
-            let offset = *slot as u64 * BRICK_VOXELS as u64 * 2;
-            queue.write_buffer(&gpu.brick_pool, offset, voxel_bytes(voxels));
-        }
-        if let Some(materials) = &upload.materials {
-            if materials.len() as u32 > gpu.material_capacity {
-                gpu.materials = material_buffer(&device, materials);
-                gpu.material_capacity = materials.len() as u32;
-                gpu.bind_group = bind([&gpu.info_buffer, &gpu.top_cells, &gpu.brick_pool, &gpu.materials]);
-            } else {
-                queue.write_buffer(&gpu.materials, 0, bytemuck::cast_slice(materials));
+    let mut batch = std::mem::take(&mut *pending);
+    match gpu.as_deref_mut() {
+        Some(gpu) => apply_uploads(gpu, &mut batch, &binding, &queue),
+        None => {
+            if let Some(created) = create_gpu_world(&mut batch, &binding, &queue) {
+                commands.insert_resource(created);
             }
         }
-        gpu.uploaded_bytes += upload.bytes();
+    }
+}
+
+/// The GPU world from a batch that holds a full upload (and whatever was queued behind it).
+fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &RenderQueue) -> Option<GpuWorld> {
+    let (size, brick_dims) = batch.prepare_creation()?;
+    let device = binding.device;
+    let info = world_info(size, brick_dims, binding.objects.count);
+    let info_buffer = device.create_buffer_with_data(&BufferInitDescriptor {
+        label: Some("glowbrick_world_info"),
+        contents: bytemuck::bytes_of(&info),
+        usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
+    });
+    let top_cells = upload(&mut batch.top_cells, None, Fit::Exact, TOP_CELLS_LABEL, device, queue)?;
+    let brick_pool = upload(&mut batch.pool, None, Fit::Exact, BRICK_POOL_LABEL, device, queue)?;
+    let materials = upload(&mut batch.materials, None, Fit::AtLeast, MATERIALS_LABEL, device, queue)?;
+    let bind_group = binding.bind(&info_buffer, &top_cells, &brick_pool, &materials);
+    Some(GpuWorld {
+        info,
+        info_buffer,
+        top_cells,
+        brick_pool,
+        materials,
+        bind_group,
+        uploaded_bytes: batch.bytes,
+        brick_dims,
+        edited_bricks: batch.edited.iter().map(|&i| brick_position(i, brick_dims)).collect(),
+        replaced: true,
+    })
+}
+
+/// Writes a batch into the existing GPU world, recreating (and rebinding) the buffers whose size changed.
+fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &WorldBinding, queue: &RenderQueue) {
+    let device = binding.device;
+    gpu.replaced = batch.layout.is_some();
+    if let Some((size, brick_dims)) = batch.layout {
+        gpu.brick_dims = brick_dims;
+        gpu.info = world_info(size, brick_dims, gpu.info.object_count);
+        queue.write_buffer(&gpu.info_buffer, 0, bytemuck::bytes_of(&gpu.info));
+    }
+    let mut rebind = false;
+    if let Some(buffer) = upload(&mut batch.top_cells, Some(&gpu.top_cells), Fit::Exact, TOP_CELLS_LABEL, device, queue)
+    {
+        gpu.top_cells = buffer;
+        rebind = true;
+    }
+    if let Some(buffer) = upload(&mut batch.pool, Some(&gpu.brick_pool), Fit::Exact, BRICK_POOL_LABEL, device, queue) {
+        gpu.brick_pool = buffer;
+        rebind = true;
+    }
+    if let Some(buffer) =
+        upload(&mut batch.materials, Some(&gpu.materials), Fit::AtLeast, MATERIALS_LABEL, device, queue)
+    {
+        gpu.materials = buffer;
+        rebind = true;
+    }
+    if rebind {
+        gpu.bind_group = binding.bind(&gpu.info_buffer, &gpu.top_cells, &gpu.brick_pool, &gpu.materials);
+    }
+    gpu.edited_bricks = batch.edited.iter().map(|&i| brick_position(i, gpu.brick_dims)).collect();
+    gpu.uploaded_bytes = batch.bytes;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::scene::staging::BufferOp;
+    use crate::render::scene::staging::tests::run;
+    use crate::world::Edit;
+
+    /// The GPU world's buffers as `prepare_gpu_world` leaves them, on the CPU.
+    #[derive(Default)]
+    struct SimulatedGpu {
+        top_cells: Option<Vec<u8>>,
+        pool: Option<Vec<u8>>,
+        materials: Option<Vec<u8>>,
+    }
+
+    impl SimulatedGpu {
+        /// Writes a batch the way `create_gpu_world` / `apply_uploads` do.
+        fn drain(&mut self, batch: &mut PendingUploads) {
+            if self.top_cells.is_none() && batch.prepare_creation().is_none() {
+                return;
+            }
+            let size = |b: &Option<Vec<u8>>| b.as_ref().map(|b| b.len() as u64);
+            let ops: Vec<BufferOp> = batch.top_cells.ops(size(&self.top_cells), Fit::Exact);
+            run(&ops, &mut self.top_cells);
+            run(&batch.pool.ops(size(&self.pool), Fit::Exact), &mut self.pool);
+            run(&batch.materials.ops(size(&self.materials), Fit::AtLeast), &mut self.materials);
+            *batch = PendingUploads::default();
+        }
+
+        fn assert_holds(&self, world: &VoxelWorld, order: &[Change]) {
+            let top_cells = self.top_cells.as_ref().expect("top cells");
+            assert_eq!(top_cells.as_slice(), bytemuck::cast_slice::<u32, u8>(world.grid.top_cells()), "{order:?}");
+            let pool = self.pool.as_ref().expect("pool");
+            let expected = voxel_bytes(world.grid.pool());
+            assert_eq!(&pool[..expected.len()], expected, "pool after {order:?}");
+            let materials = self.materials.as_ref().expect("materials");
+            let expected = gpu_materials(&world.palette);
+            let expected: &[u8] = bytemuck::cast_slice(&expected);
+            assert_eq!(&materials[..expected.len()], expected, "materials after {order:?}");
+        }
+    }
+
+    fn voxel_bytes(voxels: &[Voxel]) -> &[u8] {
+        bytemuck::cast_slice(voxels)
+    }
+
+    /// One change to the main world, each staged as its own frame's upload.
+    #[derive(Clone, Copy, Debug)]
+    enum Change {
+        /// A voxel in one brick: a partial upload.
+        Place(IVec3),
+        /// More pooled bricks than the GPU pool holds: a full upload without a material table.
+        Grow,
+        /// A material's colour: the table alone.
+        Recolour,
+        /// A new, smaller world: a full upload with the table.
+        Replace,
+    }
+
+    fn brick_corner(i: i32) -> IVec3 {
+        IVec3::new(i % 9 * 8, 0, i / 9 * 8)
+    }
+
+    fn apply(change: Change, world: &mut VoxelWorld) {
+        match change {
+            Change::Place(at) => {
+                world.apply(Edit::Place { at, material: 2 }).unwrap();
+            }
+            Change::Grow => {
+                for i in 0..70 {
+                    world.apply(Edit::Place { at: brick_corner(i) + IVec3::ONE, material: 1 }).unwrap();
+                }
+            }
+            Change::Recolour => world.palette.materials[0].albedo[0] += 0.25,
+            Change::Replace => *world = VoxelWorld::new(UVec3::new(72, 8, 80), world.palette.clone()),
+        }
+    }
+
+    fn permutations(items: &[Change]) -> Vec<Vec<Change>> {
+        if items.is_empty() {
+            return vec![Vec::new()];
+        }
+        let mut out = Vec::new();
+        for i in 0..items.len() {
+            let mut rest = items.to_vec();
+            let first = rest.remove(i);
+            for mut tail in permutations(&rest) {
+                tail.insert(0, first);
+                out.push(tail);
+            }
+        }
+        out
+    }
+
+    /// Full and partial world uploads queued in every order, drained in one or two batches, into a GPU world
+    /// that exists already or is created by the first full upload in the batch: the GPU holds the CPU world's
+    /// bytes. Partial uploads behind the creating full upload, and the material table across a full upload that
+    /// only grew the pool, both survive.
+    #[test]
+    fn every_order_of_world_uploads_leaves_the_world_bytes() {
+        let changes = [
+            Change::Place(IVec3::new(3, 3, 3)),
+            Change::Place(IVec3::new(20, 4, 12)),
+            Change::Grow,
+            Change::Recolour,
+            Change::Replace,
+        ];
+        for order in permutations(&changes) {
+            for split in 0..=order.len() {
+                for created_before in [false, true] {
+                    let mut world = VoxelWorld::new(UVec3::new(80, 8, 80), Palette::default_blocks());
+                    let mut state = UploadState::default();
+                    let mut gpu = SimulatedGpu::default();
+                    let mut pending = PendingUploads::default();
+                    pending.push(&stage_upload(&mut world, &mut state));
+                    if created_before {
+                        gpu.drain(&mut pending);
+                    }
+                    for (i, &change) in order.iter().enumerate() {
+                        if i == split {
+                            gpu.drain(&mut pending);
+                            gpu.assert_holds(&world, &order[..i]);
+                        }
+                        apply(change, &mut world);
+                        pending.push(&stage_upload(&mut world, &mut state));
+                    }
+                    gpu.drain(&mut pending);
+                    gpu.assert_holds(&world, &order);
+                }
+            }
+        }
     }
 }
