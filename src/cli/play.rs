@@ -36,9 +36,7 @@ impl PlayArgs {
     pub fn run(self) -> Result<(), String> {
         // The game lights with the GI cache and denoises unless told otherwise (`--set gi=off denoise=off`, G
         // and N in game).
-        let mut base = RenderSettings::default();
-        base.gi.enabled = true;
-        base.denoise = true;
+        let base = RenderSettings::game();
         // Refused before the world loads; the world's saved time of day goes under the pairs.
         self.settings.settings_over(base.clone())?;
         // Without --world or --scene the game generates a world, --new or not (clap refuses --new with either).

@@ -11,10 +11,10 @@ use std::process::Command;
 
 #[derive(Args)]
 pub struct StressArgs {
-    /// A short run (240 frames at 64x48) for CI.
+    /// A short run (330 frames at 64x48, every soaked configuration once) for CI.
     #[arg(long)]
     quick: bool,
-    /// Frames of the soak (default 5000, or 240 with --quick).
+    /// Frames of the soak (default 5000, or 330 with --quick).
     #[arg(long)]
     frames: Option<u32>,
     #[arg(long, default_value = "test-room")]

@@ -349,6 +349,15 @@ impl Default for RenderSettings {
 }
 
 impl RenderSettings {
+    /// The settings `play` starts from: the defaults with the GI cache and the denoiser on (the defaults leave
+    /// them off so `render`, the bench and the thesis protocol measure raw direct light).
+    pub fn game() -> Self {
+        let mut settings = RenderSettings::default();
+        settings.gi.enabled = true;
+        settings.denoise = true;
+        settings
+    }
+
     /// These settings at the time of day `world` was saved at, if it was.
     pub fn with_world_time(mut self, world: &crate::world::VoxelWorld) -> Self {
         if let Some(hours) = world.time_of_day {

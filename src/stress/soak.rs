@@ -1,7 +1,8 @@
 //! The soak (`glowbrick stress`): a headless run of the renderer. Every frame edits the world (lamps placed, broken and
-//! recoloured, blocks placed), the camera jumps or teleports, and the ReSTIR settings cycle through their
-//! extremes; every frame's image is read back and checked for non-finite pixels, and every tenth frame reads the
-//! reservoirs (`debug=reservoir`) for non-finite fields, M and W ranges. Then a static phase (fixed camera, no
+//! recoloured, blocks placed), the camera jumps or teleports, and the settings cycle through the game's own frame
+//! (its defaults, moving objects, the clock moving) and the extremes of ReSTIR and the GI cache; every frame's image
+//! is read back and checked for non-finite pixels, and every tenth frame reads the reservoirs (`debug=reservoir`)
+//! for non-finite fields, M and W ranges. Then a static phase (fixed camera, no
 //! edits) measures how the mean luminance of a view drifts over time against the CPU reference of that view.
 
 use super::memory::{MemorySample, MemoryTrack};
@@ -34,8 +35,10 @@ impl StressConfig {
         StressConfig { scene: "test-room".into(), frames: 5000, static_frames: 600, width: 96, height: 64, seed: 1 }
     }
 
+    /// Long enough to soak every entry of the settings cycle once.
     pub fn quick() -> Self {
-        StressConfig { scene: "test-room".into(), frames: 240, static_frames: 120, width: 64, height: 48, seed: 1 }
+        let frames = CYCLE_FRAMES * SETTING_CYCLE.len() as u32;
+        StressConfig { scene: "test-room".into(), frames, static_frames: 120, width: 64, height: 48, seed: 1 }
     }
 }
 
@@ -49,6 +52,8 @@ pub struct StressReport {
     pub broken: u32,
     pub camera_jumps: u32,
     pub settings_changes: u32,
+    /// Frames rendered with the game's own settings (`Soaked::Game`).
+    pub game_frames: u32,
     pub nonfinite_pixels: u64,
     pub reservoir_reads: u32,
     /// Reads taken while the world held no light (every lamp broken or buried): no ReSTIR pass ran.
@@ -123,6 +128,11 @@ impl fmt::Display for StressReport {
             self.camera_jumps,
             self.settings_changes
         )?;
+        writeln!(
+            f,
+            "the game's frame (full lighting, GI cache, denoiser, objects, the clock moving): {} frames",
+            self.game_frames
+        )?;
         writeln!(f, "non-finite pixels: {}", self.nonfinite_pixels)?;
         writeln!(
             f,
@@ -142,7 +152,7 @@ impl fmt::Display for StressReport {
         if let Some((frame, settings, pixels)) = &self.first_bad_read {
             writeln!(
                 f,
-                "reads with a non-finite reservoir: {}; the first at frame {frame} ({pixels} pixels; settings [{settings}] over lighting=restir gi=on)",
+                "reads with a non-finite reservoir: {}; the first at frame {frame} ({pixels} pixels; settings {settings})",
                 self.bad_reservoir_reads
             )?;
         }
@@ -161,26 +171,58 @@ impl fmt::Display for StressReport {
     }
 }
 
-/// The settings the soak cycles through: defaults and the extremes of every range. The GI cache is on in all
-/// but one (`settings` turns it on).
-const SETTING_CYCLE: [&[&str]; 10] = [
-    &[],
-    &["gi=off"],
+/// One entry of the settings cycle.
+#[derive(Clone, Copy, Debug)]
+enum Soaked {
+    /// What `play` renders: `RenderSettings::game()` (full lighting, the GI cache and the denoiser on), with the
+    /// clock moving.
+    Game,
+    /// These pairs over `lighting=restir gi=on`.
+    Restir(&'static [&'static str]),
+}
+
+impl fmt::Display for Soaked {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        match self {
+            Soaked::Game => write!(f, "the game's frame"),
+            Soaked::Restir(pairs) => write!(f, "[{}] over lighting=restir gi=on", pairs.join(" ")),
+        }
+    }
+}
+
+/// The settings the soak cycles through: the game's frame first (so even a short run soaks it), then the ReSTIR
+/// defaults and the extremes of every range. The GI cache is on in all but one.
+const SETTING_CYCLE: [Soaked; 11] = [
+    Soaked::Game,
+    Soaked::Restir(&[]),
+    Soaked::Restir(&["gi=off"]),
     // The GI cache at its extremes (a new K also rebuilds its tables).
-    &["gi=on", "gi_rays=4", "gi_update=1", "gi_alpha=1"],
-    &["gi=on", "gi_rays=128", "gi_update=64", "gi_alpha=0.001", "gi_filter=off"],
-    &["candidates=1"],
-    &["candidates=64", "taps=16", "radius=100"],
-    &["radius=0"],
-    &["reuse=unbiased", "taps=16"],
-    &["sample=point", "temporal=off"],
-    &["spatial=off", "pick=uniform"],
+    Soaked::Restir(&["gi=on", "gi_rays=4", "gi_update=1", "gi_alpha=1"]),
+    Soaked::Restir(&["gi=on", "gi_rays=128", "gi_update=64", "gi_alpha=0.001", "gi_filter=off"]),
+    Soaked::Restir(&["candidates=1"]),
+    Soaked::Restir(&["candidates=64", "taps=16", "radius=100"]),
+    Soaked::Restir(&["radius=0"]),
+    Soaked::Restir(&["reuse=unbiased", "taps=16"]),
+    Soaked::Restir(&["sample=point", "temporal=off"]),
+    Soaked::Restir(&["spatial=off", "pick=uniform"]),
 ];
 
-fn settings(pairs: &[&str], debug: DebugView) -> Result<RenderSettings, String> {
-    let mut all = vec!["lighting=restir".to_string(), "gi=on".to_string()];
-    all.extend(pairs.iter().map(|p| p.to_string()));
-    let mut s = RenderSettings::default().with_pairs(&all)?;
+/// Frames each entry of the cycle is soaked for.
+const CYCLE_FRAMES: u32 = 30;
+
+/// Hours the game's clock moves each frame of the game's entry: a whole day within its frames, so dawn, dusk and
+/// night (the sun's and the moon's light, a sky that changes every frame) all come in a short run.
+const CLOCK_STEP: f32 = 24.0 / CYCLE_FRAMES as f32 + 0.05;
+
+fn settings(soaked: Soaked, debug: DebugView, hours: f32) -> Result<RenderSettings, String> {
+    let mut s = match soaked {
+        Soaked::Game => RenderSettings { time: hours, ..RenderSettings::game() },
+        Soaked::Restir(pairs) => {
+            let mut all = vec!["lighting=restir".to_string(), "gi=on".to_string()];
+            all.extend(pairs.iter().map(|p| p.to_string()));
+            RenderSettings::default().with_pairs(&all)?
+        }
+    };
     s.debug = debug;
     Ok(s)
 }
@@ -197,8 +239,10 @@ fn random_camera(world: &VoxelWorld, rng: &mut Pcg) -> CameraView {
 /// Runs the soak on `config.scene` and returns what it saw.
 pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
     let mut world = crate::world::scene::load_scene(&config.scene).map_err(|e| e.to_string())?;
-    // A drifting lantern the whole time: every pass traces it, the GI cache gives it its own table.
+    // A drifting lantern and a swinging block (the game's own objects) the whole time: every pass traces them,
+    // the GI cache gives them their own table.
     let lantern = std::sync::Arc::new(crate::dynamic::model_for_world("lantern", &mut world)?);
+    let block = std::sync::Arc::new(crate::dynamic::model_for_world("block", &mut world)?);
     let home = world.view(None).cloned().unwrap_or_else(|| world.overview());
     let lamps: Vec<u16> = (0..world.palette.id_count() as u16).filter(|&id| world.palette.is_emissive(id)).collect();
     let blocks: Vec<u16> = (1..world.palette.id_count() as u16).filter(|&id| !world.palette.is_emissive(id)).collect();
@@ -206,21 +250,24 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
         return Err(format!("scene {}: the soak needs an emissive material", config.scene));
     }
     let size = world.grid.size().as_ivec3();
+    // The clock starts where the game's would: at the world's saved time of day, if it has one.
+    let mut hours = RenderSettings::game().with_world_time(&world).time;
     let options = HeadlessOptions {
         width: config.width,
         height: config.height,
-        settings: settings(&[], DebugView::None)?,
+        settings: settings(SETTING_CYCLE[0], DebugView::None, hours)?,
         ..Default::default()
     };
     let mut renderer = HeadlessRenderer::new(world.clone(), &home, &options)?;
     let centre = world.grid.size().as_vec3() * 0.5;
     let drift = crate::dynamic::Motion::Drift { radius: centre.x * 0.5, period: 4.0 };
     crate::dynamic::spawn_object_in(renderer.app_mut().world_mut(), lantern, drift, centre)?;
+    let swing = crate::dynamic::Motion::Swing { length: centre.y * 0.5, amplitude: 0.7, period: 5.0 };
+    crate::dynamic::spawn_object_in(renderer.app_mut().world_mut(), block, swing, centre + Vec3::X * 3.0)?;
     let mut rng = Pcg::new(config.seed, 0x5747);
     let mut report = StressReport { min_w: f32::INFINITY, ..Default::default() };
     let mut placed: Vec<IVec3> = Vec::new();
     let mut camera = home.clone();
-    let mut cycle = 0usize;
 
     let progress = Progress::new("stress", config.frames as u64);
     for frame in 0..config.frames {
@@ -265,13 +312,18 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
             camera.origin = o.clamp(Vec3::ONE, size.as_vec3() - 1.0).to_array();
         }
         renderer.set_view(&camera);
-        // Settings: a new extreme every 30 frames; every tenth frame reads the reservoirs instead of the image.
-        if frame % 30 == 0 {
-            cycle = (cycle + 1) % SETTING_CYCLE.len();
+        // Settings: the next entry every CYCLE_FRAMES frames; every tenth frame reads the reservoirs instead of the
+        // image.
+        let soaked = SETTING_CYCLE[(frame / CYCLE_FRAMES) as usize % SETTING_CYCLE.len()];
+        if frame.is_multiple_of(CYCLE_FRAMES) {
             report.settings_changes += 1;
         }
+        if matches!(soaked, Soaked::Game) {
+            report.game_frames += 1;
+            hours = crate::game::step_clock(hours, CLOCK_STEP);
+        }
         let debug = if frame % 10 == 9 { DebugView::Reservoir } else { DebugView::None };
-        *renderer.app_mut().world_mut().resource_mut::<RenderSettings>() = settings(SETTING_CYCLE[cycle], debug)?;
+        *renderer.app_mut().world_mut().resource_mut::<RenderSettings>() = settings(soaked, debug, hours)?;
         let image = renderer.render(1)?;
         if debug == DebugView::Reservoir {
             report.reservoir_reads += 1;
@@ -292,7 +344,7 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
             let bad = report.nonfinite_reservoirs - before;
             if bad > 0 {
                 report.bad_reservoir_reads += 1;
-                report.first_bad_read.get_or_insert_with(|| (frame, SETTING_CYCLE[cycle].join(" "), bad));
+                report.first_bad_read.get_or_insert_with(|| (frame, soaked.to_string(), bad));
             }
         } else {
             report.nonfinite_pixels += image.non_finite_pixels() as u64;
@@ -312,7 +364,7 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
     renderer.set_view(&home);
     // The reference is direct light only, so the GI cache is off here.
     *renderer.app_mut().world_mut().resource_mut::<RenderSettings>() =
-        settings(&["reuse=unbiased", "gi=off"], DebugView::None)?;
+        settings(Soaked::Restir(&["reuse=unbiased", "gi=off"]), DebugView::None, hours)?;
     renderer.render(8)?;
     let mut means = Vec::with_capacity(config.static_frames as usize);
     for _ in 0..config.static_frames.max(8) {

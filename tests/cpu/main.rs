@@ -12,6 +12,7 @@ mod reference_converges;
 mod save_survives_kill;
 mod saved_objects;
 mod shaders_validate;
+mod smoke;
 mod traversal_matches_brute_force;
 #[path = "../shared/vox_scene.rs"]
 mod vox_scene;

@@ -17,6 +17,18 @@ pub fn renderer(world: VoxelWorld, view: &CameraView, options: &HeadlessOptions)
     HeadlessRenderer::new(world, view, options).expect("headless renderer")
 }
 
+/// Panics unless `renderer` recorded GPU time for its primary pass, which runs every frame. A test that asserts
+/// some pass recorded no time proves nothing on an adapter without timestamp queries, where no pass records any:
+/// calling this first makes such an adapter fail the test instead of passing it.
+pub fn assert_passes_are_timed(renderer: &HeadlessRenderer) {
+    let primary = glowbrick::render::primary::PRIMARY_PASS_NAME;
+    assert!(
+        renderer.gpu_pass_ms(primary).is_some(),
+        "the {primary} pass recorded no GPU time: this adapter has no timestamp queries, so a test that a pass \
+         did not run cannot tell"
+    );
+}
+
 /// Render settings from `--set` pairs (panics on a bad pair: a test's own typo).
 pub fn settings(pairs: &[&str]) -> glowbrick::settings::RenderSettings {
     let pairs: Vec<String> = pairs.iter().map(|p| p.to_string()).collect();

@@ -30,6 +30,7 @@ mod nee_converges;
 mod objects;
 mod primary_matches_cpu;
 mod restir;
+mod smoke;
 mod stress;
 #[path = "../shared/vox_scene.rs"]
 mod vox_scene;
@@ -119,6 +120,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             the_reservoir_view_of_a_world_without_lights_shows_empty_reservoirs,
             without_lights_no_restir_pass_runs,
         ],
+        smoke: [a_tiny_frame_matches_the_cpu_reference],
         stress: [quick_stress_run_finds_no_non_finite_value_and_no_drift],
         world_after_edits: [gpu_world_follows_edits],
     ]
