@@ -24,8 +24,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let full = scene.mode == LIGHTING_FULL;
     if !surface.found {
         // A miss sees the sky and the disk with lighting=full, nothing with emitters only (the thesis' protocol).
+        // The reservoir view shows a miss as an empty reservoir: an alpha of 1 there reads as "reset for a
+        // non-finite field".
+        if frame.debug_view == DEBUG_RESERVOIR {
+            write_output(id.xy, vec4(0.0));
+            return;
+        }
         var sky_seen = vec3(0.0);
-        if full && frame.debug_view != DEBUG_RESERVOIR {
+        if full {
             sky_seen = background(primary_ray_dir(id.xy, vec2<f32>(size))) * frame.exposure;
         }
         write_output(id.xy, vec4(sky_seen, select(0.0, 1.0, full)));
