@@ -52,15 +52,10 @@ impl Default for HeadlessOptions {
 /// Largest image edge `render` accepts (keeps a typo from allocating gigabytes).
 pub const MAX_IMAGE_EDGE: u32 = 8192;
 
-/// Pixels read back from the GPU, shared with the observer that receives them.
-#[derive(Clone, Default)]
-struct Captured(Arc<Mutex<Option<Vec<u8>>>>);
-
 /// A windowless app rendering one voxel camera into an image: step it, edit its world, read frames back.
 pub struct HeadlessRenderer {
     app: App,
     target: Handle<Image>,
-    captured: Captured,
     frames: FramesRendered,
     width: u32,
     height: u32,
@@ -107,15 +102,7 @@ impl HeadlessRenderer {
             crate::dynamic::saved::spawn_saved(app.world_mut(), &saved)?;
         }
         let frames = app.world().resource::<FramesRendered>().clone();
-        Ok(HeadlessRenderer {
-            app,
-            target,
-            captured: Captured::default(),
-            frames,
-            width: w,
-            height: h,
-            timeout: options.timeout,
-        })
+        Ok(HeadlessRenderer { app, target, frames, width: w, height: h, timeout: options.timeout })
     }
 
     /// The app, to send edit messages or read resources of either world.
@@ -168,33 +155,12 @@ impl HeadlessRenderer {
     /// frame (and any before the readback arrives).
     pub fn counters(&mut self) -> Result<[u32; COUNTERS], String> {
         let handle = self.app.world().resource::<GpuCountersBuffer>().0.clone();
-        let sink = Captured::default();
-        let slot = sink.clone();
-        let entity = self
-            .app
-            .world_mut()
-            .spawn(Readback::buffer(handle))
-            .observe(move |event: On<ReadbackComplete>| {
-                if let Ok(mut s) = slot.0.lock() {
-                    s.get_or_insert_with(|| event.data.clone());
-                }
-            })
-            .id();
-        let start = Instant::now();
-        loop {
-            self.step();
-            if let Some(bytes) = sink.0.lock().map_err(|_| "readback lock poisoned")?.take() {
-                self.app.world_mut().despawn(entity);
-                let mut out = [0u32; COUNTERS];
-                for (value, word) in out.iter_mut().zip(bytes.chunks_exact(4)) {
-                    *value = u32::from_le_bytes([word[0], word[1], word[2], word[3]]);
-                }
-                return Ok(out);
-            }
-            if start.elapsed() > self.timeout {
-                return Err(format!("timed out after {:?} waiting for the GI counters", self.timeout));
-            }
+        let copies = self.read_back(|| Readback::buffer(handle.clone()), 1, "the GI counters", |_| true)?;
+        let mut out = [0u32; COUNTERS];
+        for (value, word) in out.iter_mut().zip(copies[0].chunks_exact(4)) {
+            *value = u32::from_le_bytes([word[0], word[1], word[2], word[3]]);
         }
+        Ok(out)
     }
 
     /// Runs one frame and waits for the GPU (one frame in flight: on software Vulkan, queued frames would
@@ -210,21 +176,16 @@ impl HeadlessRenderer {
     pub fn render(&mut self, frames: u32) -> Result<LinearImage, String> {
         check_frames(frames)?;
         let goal = self.frames_rendered() + frames;
-        let mut readback: Option<Entity> = None;
-        self.until_captured(|renderer| {
-            if readback.is_none() && renderer.frames_rendered() >= goal {
-                readback = Some(renderer.spawn_readback());
-            }
-            readback
-        })
+        let copies = self.read_back(self.texture_readback(), 1, "the last frame", |r| r.frames_rendered() >= goal)?;
+        decode_rgba32f(&copies[0], self.width, self.height)
     }
 
     /// Renders one frame and returns its image: the frame that applies whatever was asked before the call (an
     /// edit message, a setting), not a later one. (The copy arrives while the next frame renders, so two frames
     /// run.)
     pub fn render_next(&mut self) -> Result<LinearImage, String> {
-        let readback = self.spawn_readback();
-        self.until_captured(|_| Some(readback))
+        let copies = self.read_back(self.texture_readback(), 1, "the next frame", |_| true)?;
+        decode_rgba32f(&copies[0], self.width, self.height)
     }
 
     /// Renders `frames` frames, each after `before(k, renderer)` sets frame k up (a camera on a path, objects
@@ -237,81 +198,90 @@ impl HeadlessRenderer {
         mut before: impl FnMut(u32, &mut Self),
     ) -> Result<Vec<LinearImage>, String> {
         check_frames(frames)?;
-        let images: Arc<Mutex<Vec<Vec<u8>>>> = Arc::default();
-        let sink = images.clone();
-        let readback = self
-            .app
-            .world_mut()
-            .spawn(Readback::texture(self.target.clone()))
-            .observe(move |event: On<ReadbackComplete>| {
-                if let Ok(mut all) = sink.lock() {
-                    all.push(event.data.clone());
-                }
-            })
-            .id();
-        let start = Instant::now();
         let mut frame = 0;
+        let what = format!("a sequence of {frames} frames");
         // The last frames' copies arrive while later frames render (with the last frame's set-up).
-        while images.lock().map_err(|_| "readback lock poisoned")?.len() < frames as usize {
+        let copies = self.read_back(self.texture_readback(), frames as usize, &what, |r| {
             if frame < frames {
-                before(frame, self);
+                before(frame, r);
                 frame += 1;
             }
-            self.step();
-            if let Some(error) = crate::render::frame::pipeline_error(self.app.sub_app(RenderApp).world()) {
-                return Err(error);
-            }
-            if start.elapsed() > self.timeout {
-                return Err(format!("timed out after {:?} in a sequence of {frames} frames", self.timeout));
-            }
-        }
-        self.app.world_mut().despawn(readback);
-        let all = images.lock().map_err(|_| "readback lock poisoned")?;
-        all.iter().take(frames as usize).map(|bytes| decode_rgba32f(bytes, self.width, self.height)).collect()
+            true
+        })?;
+        copies.iter().map(|bytes| decode_rgba32f(bytes, self.width, self.height)).collect()
     }
 
-    /// Asks for the render target of the next frame rendered.
-    fn spawn_readback(&mut self) -> Entity {
-        let sink = self.captured.clone();
-        self.app
-            .world_mut()
-            .spawn(Readback::texture(self.target.clone()))
-            .observe(move |event: On<ReadbackComplete>| {
-                if let Ok(mut slot) = sink.0.lock() {
-                    slot.get_or_insert_with(|| event.data.clone());
-                }
-            })
-            .id()
+    /// A copy of the render target.
+    fn texture_readback(&self) -> impl Fn() -> Readback + use<> {
+        let target = self.target.clone();
+        move || Readback::texture(target.clone())
     }
 
-    /// Steps frames until a readback delivers an image; `after_step` (also asked once before the first step)
-    /// spawns the readback when it is time and says which it is (despawned once it delivered).
-    fn until_captured(
+    /// The one loop every read-back waits in: steps frames until `copies` copies of `readback` arrived and
+    /// returns them. `armed(renderer)`, asked before each step, says whether the readback should be on by then
+    /// (once on, it stays on: it copies every frame after). A voxel pass whose pipeline failed fails the wait at
+    /// once, with its name, rather than waiting out the timeout for frames that will never come.
+    fn read_back(
         &mut self,
-        mut after_step: impl FnMut(&mut Self) -> Option<Entity>,
-    ) -> Result<LinearImage, String> {
-        let start = Instant::now();
-        let mut readback = after_step(self);
-        loop {
-            self.step();
-            if let Some(bytes) = self.captured.0.lock().map_err(|_| "readback lock poisoned")?.take() {
-                if let Some(entity) = readback {
-                    self.app.world_mut().despawn(entity);
+        readback: impl Fn() -> Readback,
+        copies: usize,
+        what: &str,
+        mut armed: impl FnMut(&mut Self) -> bool,
+    ) -> Result<Vec<Vec<u8>>, String> {
+        let delivered: Arc<Mutex<Vec<Vec<u8>>>> = Arc::default();
+        let mut entity: Option<Entity> = None;
+        let timeout = self.timeout;
+        let result = wait_for(
+            self,
+            timeout,
+            |r| {
+                if entity.is_none() && armed(r) {
+                    let sink = delivered.clone();
+                    let observer = move |event: On<ReadbackComplete>| {
+                        if let Ok(mut all) = sink.lock() {
+                            all.push(event.data.clone());
+                        }
+                    };
+                    entity = Some(r.app.world_mut().spawn(readback()).observe(observer).id());
                 }
-                return decode_rgba32f(&bytes, self.width, self.height);
-            }
-            readback = after_step(self);
-            let render_world = self.app.sub_app(RenderApp).world();
-            if let Some(error) = crate::render::frame::pipeline_error(render_world) {
-                return Err(error);
-            }
-            if start.elapsed() > self.timeout {
-                return Err(format!(
-                    "timed out after {:?}: {} frames rendered (is a GPU adapter available?)",
-                    self.timeout,
-                    self.frames_rendered()
-                ));
-            }
+                r.step();
+                let mut all = delivered.lock().map_err(|_| "readback lock poisoned")?;
+                Ok((all.len() >= copies).then(|| all.drain(..copies).collect()))
+            },
+            |r| crate::render::frame::pipeline_error(r.app.sub_app(RenderApp).world()),
+            |r, timeout| {
+                format!(
+                    "timed out after {timeout:?} waiting for {what}: {} frames rendered (is a GPU adapter available?)",
+                    r.frames_rendered()
+                )
+            },
+        );
+        if let Some(entity) = entity {
+            self.app.world_mut().despawn(entity);
+        }
+        result
+    }
+}
+
+/// Runs `tick` until it returns a value. After every tick that returned none, `failed` may name an error that
+/// ends the wait at once (a pipeline that failed to compile); past `timeout`, `timed_out` says what was missing.
+fn wait_for<S, T>(
+    state: &mut S,
+    timeout: Duration,
+    mut tick: impl FnMut(&mut S) -> Result<Option<T>, String>,
+    failed: impl Fn(&S) -> Option<String>,
+    timed_out: impl FnOnce(&S, Duration) -> String,
+) -> Result<T, String> {
+    let start = Instant::now();
+    loop {
+        if let Some(value) = tick(state)? {
+            return Ok(value);
+        }
+        if let Some(error) = failed(state) {
+            return Err(error);
+        }
+        if start.elapsed() > timeout {
+            return Err(timed_out(state, timeout));
         }
     }
 }
@@ -346,4 +316,66 @@ fn decode_rgba32f(bytes: &[u8], width: u32, height: u32) -> Result<LinearImage, 
         }
     }
     Ok(LinearImage { width, height, pixels })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A shader error fails the wait on the tick it appears, with the check's message, not after the timeout.
+    #[test]
+    fn a_pipeline_error_ends_the_wait_at_once() {
+        let mut ticks = 0u32;
+        let start = Instant::now();
+        let result: Result<(), String> = wait_for(
+            &mut ticks,
+            Duration::from_secs(600),
+            |t| {
+                *t += 1;
+                Ok(None)
+            },
+            |t| (*t >= 3).then(|| "the primary shader (primary.wgsl) failed to compile: oops".to_string()),
+            |_, _| "timed out".to_string(),
+        );
+        assert_eq!(result, Err("the primary shader (primary.wgsl) failed to compile: oops".to_string()));
+        assert_eq!(ticks, 3);
+        assert!(start.elapsed() < Duration::from_secs(5));
+    }
+
+    /// A value that arrives is returned, even on a tick the check would fail.
+    #[test]
+    fn a_delivered_value_is_returned() {
+        let mut ticks = 0u32;
+        let result = wait_for(
+            &mut ticks,
+            Duration::from_secs(600),
+            |t| {
+                *t += 1;
+                Ok((*t == 2).then_some(*t))
+            },
+            |t| (*t >= 2).then(|| "a failure after the value arrived".to_string()),
+            |_, _| "timed out".to_string(),
+        );
+        assert_eq!(result, Ok(2));
+    }
+
+    /// Without a value or an error, the wait ends at the timeout with the caller's message.
+    #[test]
+    fn the_timeout_says_what_was_missing() {
+        let mut ticks = 0u32;
+        let result: Result<(), String> = wait_for(
+            &mut ticks,
+            Duration::from_millis(20),
+            |t| {
+                *t += 1;
+                std::thread::sleep(Duration::from_millis(1));
+                Ok(None)
+            },
+            |_| None,
+            |t, timeout| format!("timed out after {timeout:?} at tick {t}"),
+        );
+        let error = result.unwrap_err();
+        assert!(error.starts_with("timed out after 20ms at tick"), "{error}");
+        assert!(ticks >= 2);
+    }
 }

@@ -3,7 +3,7 @@
 //! off these curves: each method's error at the time NEE took for its last point, and the time each method needs
 //! to reach NEE's last error (log-log interpolation between the two points around it).
 
-use super::{BenchConfig, EQUAL_TIME_TO};
+use super::sweep::EQUAL_TIME_TO;
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::LinearImage;
 use crate::reference::flip::{Encoding, flip};
@@ -46,6 +46,10 @@ pub struct CurveSpec<'a> {
     pub pairs: &'a [String],
     /// The method's frame time (from the bench's one-frame rows): a point's time is frames x this.
     pub frame_ms: f64,
+    /// Image size.
+    pub size: (u32, u32),
+    /// Frames of the longest point (points read 1, 2, 4, ... up to it).
+    pub frames: u32,
 }
 
 /// The points of one method on one scene: accumulation from the first frame, images read at about powers of two.
@@ -53,18 +57,17 @@ pub fn measure_curve(
     world: &VoxelWorld,
     view: &CameraView,
     spec: &CurveSpec,
-    config: &BenchConfig,
     reference: &LinearImage,
     scene: &str,
 ) -> Result<Vec<CurvePoint>, String> {
     let mut pairs = spec.pairs.to_vec();
     pairs.push("accumulate=on".into());
     let settings = RenderSettings::default().with_pairs(&pairs)?;
-    let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
+    let options = HeadlessOptions { width: spec.size.0, height: spec.size.1, settings, ..Default::default() };
     let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;
     let mut points = Vec::new();
     let mut goal = 1u32;
-    while goal <= config.curve_frames.max(1) {
+    while goal <= spec.frames.max(1) {
         let before = renderer.frames_rendered();
         let image = renderer.render(goal.saturating_sub(before).max(1))?;
         // The readback lands a frame or two after the goal: the image holds every frame rendered so far.

@@ -3,7 +3,7 @@
 //! integrates the same lighting with diffuse bounces; and what the disk and the sky cost on top of ReSTIR over the
 //! emitters alone, at 10^3 and 10^5 lamps. Writes `daylight.md`.
 
-use super::{BenchConfig, Reference, cached_reference_of, reference_noise_of};
+use super::reference_cache::{Reference, ReferenceCache};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::lights::daylight::Daylight;
 use crate::reference::REFERENCE_BOUNCES;
@@ -23,6 +23,21 @@ const TIMED_FRAMES: u32 = 16;
 const AVERAGED_FRAMES: u32 = 128;
 /// The settings of the game's frame (as `play` starts): the default lighting with the GI cache.
 const GAME_PAIRS: [&str; 2] = ["lighting=full", "gi=on"];
+
+/// What `bench --daylight` runs.
+#[derive(Clone, Debug)]
+pub struct DaylightConfig {
+    pub width: u32,
+    pub height: u32,
+    pub reference_spp: u32,
+}
+
+impl DaylightConfig {
+    /// The bench at its own size, with `reference_spp` samples per pixel in the references.
+    pub fn new(reference_spp: u32) -> Self {
+        DaylightConfig { width: 160, height: 90, reference_spp }
+    }
+}
 
 /// One scene at one time of day.
 struct DaylightRow {
@@ -49,7 +64,7 @@ struct CostRow {
 fn renderer(
     world: &VoxelWorld,
     view: &CameraView,
-    config: &BenchConfig,
+    config: &DaylightConfig,
     pairs: &[String],
 ) -> Result<HeadlessRenderer, String> {
     let settings = RenderSettings::default().with_pairs(pairs)?;
@@ -75,12 +90,13 @@ fn measure(
     (time, hours): (&'static str, f32),
     world: &VoxelWorld,
     view: &CameraView,
-    config: &BenchConfig,
+    config: &DaylightConfig,
 ) -> Result<DaylightRow, String> {
     let day = Some(Daylight::at(hours, true));
     let reference = Reference { bounces: REFERENCE_BOUNCES, daylight: day, lattice: None };
-    let truth = cached_reference_of(world, view, config, &reference)?;
-    let noise = reference_noise_of(world, view, config, &reference, &truth)?.mae;
+    let references = ReferenceCache::new(config.width, config.height, config.reference_spp);
+    let truth = references.image(world, view, &reference)?;
+    let noise = references.noise(world, view, &reference, &truth)?.mae;
     let mut pairs: Vec<String> = GAME_PAIRS.iter().map(|p| p.to_string()).collect();
     pairs.push(format!("time={hours}"));
     let mut r = renderer(world, view, config, &pairs)?;
@@ -101,7 +117,7 @@ fn measure(
     })
 }
 
-fn measure_cost(scene: &'static str, config: &BenchConfig) -> Result<CostRow, String> {
+fn measure_cost(scene: &'static str, config: &DaylightConfig) -> Result<CostRow, String> {
     let world = load_scene(scene).map_err(|e| e.to_string())?;
     let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
     let lights = crate::lights::LightPool::from_world(&world).len();
@@ -126,7 +142,7 @@ fn scenes() -> Result<Vec<(String, VoxelWorld, CameraView)>, String> {
 }
 
 /// Runs the bench at the config's size, writes `daylight.md` into `out` and returns its text.
-pub fn run_daylight_bench(config: &BenchConfig, out: &Path) -> Result<String, String> {
+pub fn run_daylight_bench(config: &DaylightConfig, out: &Path) -> Result<String, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let mut rows = Vec::new();
     for (scene, world, view) in scenes()? {
@@ -151,7 +167,7 @@ pub fn run_daylight_bench(config: &BenchConfig, out: &Path) -> Result<String, St
     Ok(text)
 }
 
-fn markdown(rows: &[DaylightRow], costs: &[CostRow], config: &BenchConfig) -> String {
+fn markdown(rows: &[DaylightRow], costs: &[CostRow], config: &DaylightConfig) -> String {
     let mut text = format!(
         "# The game's lighting: sun, sky and lamps against the reference\n\n`glowbrick bench --daylight`: {}x{}, \
          `lighting=full gi=on` (as `play` starts), {SETTLE_FRAMES} frames for the GI cache to settle, \

@@ -1,11 +1,13 @@
 //! The denoiser bench (`glowbrick bench --denoise`): one real-time frame of the game's lighting (`lighting=full`
 //! with the GI cache) raw and denoised against a converged reference on four scenes; what the filter does to
 //! the mean once frames accumulate; how much a still view flickers; how many frames a lamp switched off or on
-//! takes to show; what the passes cost at 320x180 and 1280x720; and ghosting under motion (`motion`). Writes
-//! `denoise.md` (with `--motion` only the last, `denoise-motion.md`).
+//! takes to show (`reaction`); what the passes cost at 320x180 and 1280x720; and ghosting under motion (`motion`).
+//! Writes `denoise.md`, or one section alone into its own file.
 
 use super::motion::{motion_markdown, run_motion};
-use super::{BenchConfig, Reference, direct_light_ms, mean_metrics, two_seed_reference};
+use super::reaction::{Reaction, reaction_markdown, reactions};
+use super::reference_cache::{Reference, ReferenceCache};
+use super::{direct_light_ms, mean_metrics};
 use crate::colour::luminance;
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::LinearImage;
@@ -16,10 +18,8 @@ use crate::render::adapter::adapter_name;
 use crate::render::denoise::DENOISE_PASS_NAMES;
 use crate::render::gi::GI_PASS_NAMES;
 use crate::settings::RenderSettings;
-use crate::world::events::EditRequest;
 use crate::world::scene::load_scene;
-use crate::world::{CameraView, Edit, VoxelWorld};
-use bevy::math::IVec3;
+use crate::world::{CameraView, VoxelWorld};
 use std::path::Path;
 use std::time::Instant;
 
@@ -37,11 +37,63 @@ pub fn check_scenes(scenes: &[String]) -> Result<(), String> {
     }
 }
 
+/// What `bench --denoise` runs.
+#[derive(Clone, Debug)]
+pub struct DenoiseConfig {
+    /// The image size of the one-frame and reaction measures.
+    pub width: u32,
+    pub height: u32,
+    pub reference_spp: u32,
+    /// One section alone, or all of them.
+    pub section: Option<DenoiseSection>,
+    /// Independent realisations (the `seed` setting 0..N) each measure averages.
+    pub seeds: u32,
+    /// `--set KEY=VALUE`: settings on top of each measure's own (e.g. `gi_qmc=off` to compare).
+    pub settings: Vec<String>,
+    /// The one-frame measure's reference and errors at every n-th pixel in each direction only
+    /// (`Reference::lattice`; 1: every pixel), so a game's size stays affordable.
+    pub lattice: u32,
+    /// Only these of the one-frame scenes (empty: all four).
+    pub scenes: Vec<String>,
+    /// The cost section's sizes (empty: `COST_SIZES`).
+    pub cost_sizes: Vec<(u32, u32)>,
+}
+
+impl DenoiseConfig {
+    /// The whole bench at `width` x `height`, one seed, with `reference_spp` samples per pixel in the references.
+    pub fn new(width: u32, height: u32, reference_spp: u32) -> Self {
+        DenoiseConfig {
+            width,
+            height,
+            reference_spp,
+            section: None,
+            seeds: 1,
+            settings: Vec::new(),
+            lattice: 1,
+            scenes: Vec::new(),
+            cost_sizes: Vec::new(),
+        }
+    }
+}
+
+/// A section of the bench that runs alone, into its own report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DenoiseSection {
+    /// `--one-frame`: denoise-frame.md.
+    Frame,
+    /// `--reaction`: denoise-reaction.md.
+    Reaction,
+    /// `--cost`: denoise-cost.md.
+    Cost,
+    /// `--motion`: denoise-motion.md.
+    Motion,
+}
+
 /// Frames for the GI cache (and the denoiser's history) to settle, frames whose changes are averaged for the
 /// flicker, frames accumulated for the bias.
-const SETTLE_FRAMES: u32 = 64;
+pub(crate) const SETTLE_FRAMES: u32 = 64;
 const FLICKER_FRAMES: u32 = 8;
-const ACCUMULATED_FRAMES: u32 = 64;
+pub(crate) const ACCUMULATED_FRAMES: u32 = 64;
 /// The cost section's sizes, unless `--sizes` names others.
 const COST_SIZES: &[(u32, u32)] = &[(320, 180), (1280, 720)];
 /// The game's frame.
@@ -56,7 +108,7 @@ struct SceneRow {
     raw_flicker: f64,
     denoised_flicker: f64,
     mean: f64,
-    /// The reference's own error (the two seeds' mean: see `two_seed_reference`).
+    /// The reference's own error (the two seeds' mean: see `ReferenceCache::two_seeds`).
     noise: Metrics,
 }
 
@@ -72,7 +124,8 @@ struct CostRow {
     gi_ms: Option<f64>,
 }
 
-fn renderer(
+/// The game's frame with `pairs` and the run's `--set` pairs on top.
+pub(crate) fn renderer(
     world: &VoxelWorld,
     view: &CameraView,
     size: (u32, u32),
@@ -109,7 +162,7 @@ fn flicker(r: &mut HeadlessRenderer, frames: u32) -> Result<f64, String> {
 fn measure(
     world: &VoxelWorld,
     view: &CameraView,
-    config: &BenchConfig,
+    config: &DenoiseConfig,
     truth: &LinearImage,
     denoise: &str,
 ) -> Result<(Metrics, f64, Metrics), String> {
@@ -133,7 +186,7 @@ fn measure(
     Ok((mean_metrics(&singles), flickers / config.seeds.max(1) as f64, mean_metrics(&accumulated)))
 }
 
-fn measure_scene(scene: &'static str, view: Option<&str>, config: &BenchConfig) -> Result<SceneRow, String> {
+fn measure_scene(scene: &'static str, view: Option<&str>, config: &DenoiseConfig) -> Result<SceneRow, String> {
     let world = load_scene(scene).map_err(|e| e.to_string())?;
     let view = world.view(view).cloned().ok_or_else(|| format!("{scene}: no such view"))?;
     let what = Reference {
@@ -141,7 +194,8 @@ fn measure_scene(scene: &'static str, view: Option<&str>, config: &BenchConfig) 
         daylight: Some(Daylight::at(DEFAULT_HOURS, true)),
         lattice: (config.lattice > 1).then_some(config.lattice),
     };
-    let (truth, noise) = two_seed_reference(&world, &view, config, &what)?;
+    let references = ReferenceCache::new(config.width, config.height, config.reference_spp);
+    let (truth, noise) = references.two_seeds(&world, &view, &what)?;
     let (raw, raw_flicker, raw_accumulated) = measure(&world, &view, config, &truth, "denoise=off")?;
     let (denoised, denoised_flicker, denoised_accumulated) = measure(&world, &view, config, &truth, "denoise=on")?;
     Ok(SceneRow {
@@ -155,222 +209,6 @@ fn measure_scene(scene: &'static str, view: Option<&str>, config: &BenchConfig) 
         mean: truth.mean_luminance(),
         noise,
     })
-}
-
-/// Frames a reaction is followed for after the edit.
-const REACTION_FRAMES: usize = 16;
-
-/// A lamp switched off, then on again, in a still view: the mean over the pixels it lights, frame by frame after
-/// each edit, and the values the same renderer's frames settle to after each.
-struct Reaction {
-    /// "night" or "day".
-    when: &'static str,
-    denoise: &'static str,
-    pixels: usize,
-    lit: f64,
-    unlit: f64,
-    off: Vec<f64>,
-    on: Vec<f64>,
-    /// Wall time of the frame after the edit (the GI cache's restart), mean of the two edits, and of a settled
-    /// frame.
-    restart_ms: f64,
-    frame_ms: f64,
-}
-
-impl Reaction {
-    /// The first frame after the edit from which every later followed frame is within 10% of `target`.
-    fn frames_to(trajectory: &[f64], target: f64) -> Option<usize> {
-        let within = |v: &f64| (v - target).abs() <= 0.1 * target.max(1e-12);
-        match trajectory.iter().rposition(|v| !within(v)) {
-            None => Some(1),
-            Some(i) if i + 1 < trajectory.len() => Some(i + 2),
-            Some(_) => None,
-        }
-    }
-    fn off_frames(&self) -> Option<usize> {
-        Self::frames_to(&self.off, self.unlit)
-    }
-    fn on_frames(&self) -> Option<usize> {
-        Self::frames_to(&self.on, self.lit)
-    }
-}
-
-/// The test room at one time of day, its lamp (a column of two voxels) and the pixels that lamp lights: where it
-/// more than doubles the light of two fresh renderers, with and without it, settled and accumulated. Shared by
-/// the raw and the denoised run, so both measure the same pixels.
-struct LampScene {
-    world: VoxelWorld,
-    view: CameraView,
-    time: &'static str,
-    lamp: u16,
-    affected: Vec<usize>,
-}
-
-const LAMP_MIN: IVec3 = IVec3::new(24, 1, 24);
-const LAMP_MAX: IVec3 = IVec3::new(24, 2, 24);
-
-impl LampScene {
-    fn new(config: &BenchConfig, time: &'static str) -> Result<Self, String> {
-        let world = load_scene("test-room").map_err(|e| e.to_string())?;
-        let view = world.view(Some("inside")).cloned().ok_or("test-room: no view 'inside'")?;
-        let lamp = world.palette.id_of("lamp").ok_or("test-room: no lamp")?;
-        let mut dark = world.clone();
-        dark.apply(Self::edit(0)).map_err(|e| e.to_string())?;
-        let size = (config.width, config.height);
-        let accumulated = |w: &VoxelWorld| -> Result<LinearImage, String> {
-            let mut r = renderer(w, &view, size, &[time], &config.settings)?;
-            r.render(SETTLE_FRAMES)?;
-            r.app_mut().world_mut().resource_mut::<RenderSettings>().accumulate = true;
-            r.render(ACCUMULATED_FRAMES)
-        };
-        let (lit, unlit) = (accumulated(&world)?, accumulated(&dark)?);
-        let affected = (0..lit.pixels.len()).filter(|&i| lit.pixels[i][1] > 2.0 * unlit.pixels[i][1] + 0.005).collect();
-        Ok(LampScene { world, view, time, lamp, affected })
-    }
-
-    /// The lamp's voxels set to `material` (0: switched off).
-    fn edit(material: u16) -> Edit {
-        Edit::FillBox { min: LAMP_MIN, max: LAMP_MAX, material }
-    }
-
-    fn mean(&self, image: &LinearImage) -> f64 {
-        self.affected.iter().map(|&i| image.pixels[i][1] as f64).sum::<f64>() / self.affected.len().max(1) as f64
-    }
-}
-
-/// The lamp switched off, then on again, with the denoiser `denoise` ("denoise=on|off").
-fn reaction(
-    config: &BenchConfig,
-    scene: &LampScene,
-    when: &'static str,
-    denoise: &'static str,
-) -> Result<Reaction, String> {
-    // Each realisation (seed) follows the same edits; their trajectories and targets are averaged: one
-    // realisation's dark room swings by 10-15% over tens of frames with the GI cache's slow noise.
-    let seeds = config.seeds.max(1);
-    let (mut off, mut on) = (vec![0.0; REACTION_FRAMES], vec![0.0; REACTION_FRAMES]);
-    let (mut unlit, mut lit, mut restart_ms, mut frame_ms) = (0.0, 0.0, 0.0, 0.0);
-    for seed in 0..seeds {
-        let run = follow_edits(config, scene, denoise, seed)?;
-        for i in 0..REACTION_FRAMES {
-            off[i] += run.off[i] / seeds as f64;
-            on[i] += run.on[i] / seeds as f64;
-        }
-        unlit += run.unlit / seeds as f64;
-        lit += run.lit / seeds as f64;
-        restart_ms += run.restart_ms / seeds as f64;
-        frame_ms += run.frame_ms / seeds as f64;
-    }
-    Ok(Reaction { when, denoise, pixels: scene.affected.len(), lit, unlit, off, on, restart_ms, frame_ms })
-}
-
-/// One realisation of `reaction`: trajectories, targets and wall times.
-struct Followed {
-    off: Vec<f64>,
-    on: Vec<f64>,
-    unlit: f64,
-    lit: f64,
-    restart_ms: f64,
-    frame_ms: f64,
-}
-
-fn follow_edits(config: &BenchConfig, scene: &LampScene, denoise: &'static str, seed: u32) -> Result<Followed, String> {
-    let seed = format!("seed={seed}");
-    let mut r = renderer(
-        &scene.world,
-        &scene.view,
-        (config.width, config.height),
-        &[scene.time, denoise, &seed],
-        &config.settings,
-    )?;
-    r.render(SETTLE_FRAMES)?;
-    // The means of the frames after an edit, and the first one's wall time (the cache's restart).
-    let follow = |r: &mut HeadlessRenderer, edit: Edit| -> Result<(Vec<f64>, f64), String> {
-        r.app_mut().world_mut().write_message(EditRequest::player(edit));
-        let start = Instant::now();
-        let first = scene.mean(&r.render_next()?);
-        let ms = start.elapsed().as_secs_f64() * 1000.0;
-        let rest: Result<Vec<f64>, String> =
-            (1..REACTION_FRAMES).map(|_| r.render_next().map(|image| scene.mean(&image))).collect();
-        Ok((std::iter::once(first).chain(rest?).collect(), ms))
-    };
-    // Each target is what this renderer's frames settle to after the edit (the mean of its frames
-    // SETTLE_FRAMES to 2 x SETTLE_FRAMES after it), with their mean wall time: the filter's own bias is in the
-    // tables above, not in how fast it reacts.
-    let settled = |r: &mut HeadlessRenderer| -> Result<(f64, f64), String> {
-        r.render(SETTLE_FRAMES - REACTION_FRAMES as u32)?;
-        let start = Instant::now();
-        let frames: Result<Vec<f64>, String> =
-            (0..SETTLE_FRAMES).map(|_| r.render_next().map(|i| scene.mean(&i))).collect();
-        let ms = start.elapsed().as_secs_f64() * 1000.0 / SETTLE_FRAMES as f64;
-        Ok((frames?.iter().sum::<f64>() / SETTLE_FRAMES as f64, ms))
-    };
-    let (off, off_ms) = follow(&mut r, LampScene::edit(0))?;
-    let (unlit, _) = settled(&mut r)?;
-    let (on, on_ms) = follow(&mut r, LampScene::edit(scene.lamp))?;
-    let (lit, frame_ms) = settled(&mut r)?;
-    Ok(Followed { off, on, unlit, lit, restart_ms: (off_ms + on_ms) / 2.0, frame_ms })
-}
-
-fn reaction_markdown(reactions: &[Reaction], seeds: u32) -> String {
-    let frames = |f: Option<usize>| f.map_or(format!("more than {REACTION_FRAMES}"), |f| f.to_string());
-    let mut text = format!(
-        "\n## Reaction\n\nThe test room, the game's frame: its lamp switched off after {SETTLE_FRAMES} frames, then \
-         on again after {SETTLE_FRAMES} more; the mean over the pixels it lights (where it more than doubles the \
-         light), frame by frame after the edit, as a share of the value the same renderer's frames settle to (the \
-         mean of frames {SETTLE_FRAMES} to {} after the edit), both averaged over {seeds} seed(s) (independent \
-         realisations: one realisation's dark room swings by 10-15% over tens of frames). At night the lamp is nearly all the light: unlit, \
-         the room is the moon's faint bounce light. Restart: the wall time of the frame after the edit (the GI \
-         cache starts over: its update runs {} times, each entry's direct light takes {} samples) against a \
-         settled frame's.\n\n| time | denoiser | pixels | unlit | lit | lit / unlit | frames to within 10%, off | \
-         on | restart ms | frame ms |\n|---|---|---|---|---|---|---|---|---|---|\n",
-        2 * SETTLE_FRAMES,
-        crate::render::gi::RESTART_ITERATIONS,
-        crate::render::gi::RESTART_DIRECT_SAMPLES
-    );
-    for r in reactions {
-        text += &format!(
-            "| {} | {} | {} | {:.6} | {:.5} | {:.0} | **{}** | **{}** | {:.1} | {:.1} |\n",
-            r.when,
-            r.denoise,
-            r.pixels,
-            r.unlit,
-            r.lit,
-            r.lit / r.unlit.max(1e-12),
-            frames(r.off_frames()),
-            frames(r.on_frames()),
-            r.restart_ms,
-            r.frame_ms
-        );
-    }
-    text += "\n| time | denoiser | frame after the edit |";
-    let shown = [0usize, 1, 2, 3, 4, 5, 7, 11, 15];
-    for &i in &shown {
-        text += &format!(" {} |", i + 1);
-    }
-    text += "\n|---|---|---|";
-    text += &"---|".repeat(shown.len());
-    for r in reactions {
-        for (name, trajectory, target) in [("switched off", &r.off, r.unlit), ("switched on", &r.on, r.lit)] {
-            text += &format!("\n| {} | {} | {name} |", r.when, r.denoise);
-            for &i in &shown {
-                text += &format!(" {:.0}% |", 100.0 * trajectory[i] / target.max(1e-12));
-            }
-        }
-    }
-    text + "\n"
-}
-
-/// The reaction at night and by day, raw and denoised.
-fn reactions(config: &BenchConfig) -> Result<Vec<Reaction>, String> {
-    let mut all = Vec::new();
-    for (when, time) in [("night", "time=0"), ("day", "time=10")] {
-        let scene = LampScene::new(config, time)?;
-        for denoise in ["denoise=off", "denoise=on"] {
-            all.push(reaction(config, &scene, when, denoise)?);
-        }
-    }
-    Ok(all)
 }
 
 fn cost(size: (u32, u32)) -> Result<CostRow, String> {
@@ -400,25 +238,26 @@ fn cost(size: (u32, u32)) -> Result<CostRow, String> {
 }
 
 /// Runs the bench at the config's size, writes `denoise.md` into `out` and returns its text.
-pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, String> {
+pub fn run_denoise_bench(config: &DenoiseConfig, out: &Path) -> Result<String, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
-    let only = |section: &str| config.only.iter().any(|o| o == section);
-    if only("reaction") {
+    let only = |section| config.section == Some(section);
+    if only(DenoiseSection::Reaction) {
         let text = format!(
             "# The denoiser's reaction to a change of light\n{}",
             reaction_markdown(&reactions(config)?, config.seeds)
         );
         return write_report(out, "denoise-reaction.md", text);
     }
-    if only("motion") {
-        let text = format!("# The denoiser under motion\n{}", motion_markdown(&run_motion(config)?));
+    let motion = || run_motion((config.width, config.height), config.reference_spp);
+    if only(DenoiseSection::Motion) {
+        let text = format!("# The denoiser under motion\n{}", motion_markdown(&motion()?));
         return write_report(out, "denoise-motion.md", text);
     }
     let costs = || -> Result<Vec<CostRow>, String> {
-        let sizes = if config.game_sizes.is_empty() { COST_SIZES } else { &config.game_sizes };
+        let sizes = if config.cost_sizes.is_empty() { COST_SIZES } else { &config.cost_sizes };
         sizes.iter().map(|&size| cost(size)).collect()
     };
-    if only("cost") {
+    if only(DenoiseSection::Cost) {
         let text = format!("# The denoiser's cost\n{}", cost_markdown(&costs()?, &adapter_name()));
         return write_report(out, "denoise-cost.md", text);
     }
@@ -430,14 +269,14 @@ pub fn run_denoise_bench(config: &BenchConfig, out: &Path) -> Result<String, Str
         eprintln!("denoise bench: {scene}: raw {} / denoised {}", row.raw, row.denoised);
         rows.push(row);
     }
-    if only("frame") {
+    if only(DenoiseSection::Frame) {
         let text = format!("# The denoiser on one frame\n\n{}", frame_markdown(&rows, config));
         return write_report(out, "denoise-frame.md", text);
     }
     let reaction = reactions(config)?;
     eprintln!("denoise bench: reaction {}", reaction_markdown(&reaction, config.seeds));
     let costs = costs()?;
-    let motion = run_motion(config)?;
+    let motion = motion()?;
     let text = markdown(&rows, &reaction, &costs, config) + &motion_markdown(&motion);
     write_report(out, "denoise.md", text)
 }
@@ -488,7 +327,7 @@ fn cost_markdown(costs: &[CostRow], adapter: &str) -> String {
 }
 
 /// Where the one-frame errors were measured, when not on every pixel.
-fn lattice_note(config: &BenchConfig) -> String {
+fn lattice_note(config: &DenoiseConfig) -> String {
     if config.lattice <= 1 {
         return String::new();
     }
@@ -504,7 +343,7 @@ fn lattice_note(config: &BenchConfig) -> String {
 }
 
 /// The one-frame section: error raw and denoised, the bias the filter adds, flicker.
-fn frame_markdown(rows: &[SceneRow], config: &BenchConfig) -> String {
+fn frame_markdown(rows: &[SceneRow], config: &DenoiseConfig) -> String {
     let mut text = format!(
         "`glowbrick bench --denoise`: {}x{}, the game's \
          frame (`lighting=full gi=on`, time {DEFAULT_HOURS} h), {SETTLE_FRAMES} frames to settle, then one frame, \
@@ -569,7 +408,7 @@ fn frame_markdown(rows: &[SceneRow], config: &BenchConfig) -> String {
     text
 }
 
-fn markdown(rows: &[SceneRow], reaction: &[Reaction], costs: &[CostRow], config: &BenchConfig) -> String {
+fn markdown(rows: &[SceneRow], reaction: &[Reaction], costs: &[CostRow], config: &DenoiseConfig) -> String {
     let mut text =
         format!("# The denoiser: error, bias, flicker, reaction and cost\n\n{}", frame_markdown(rows, config));
     text += &reaction_markdown(reaction, config.seeds);

@@ -6,7 +6,8 @@
 //! the error against that reference as a still camera accumulates frames from a cold cache.
 
 use super::convergence::{CurvePoint, CurveSpec, equal_time_table, measure_curve};
-use super::{BenchConfig, cached_path_reference, plot};
+use super::plot;
+use super::reference_cache::{Reference, ReferenceCache};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::reference::REFERENCE_BOUNCES;
 use crate::reference::metrics::{Metrics, compare};
@@ -20,6 +21,27 @@ use crate::world::{CameraView, Edit, VoxelWorld};
 use bevy::math::IVec3;
 use std::path::Path;
 use std::time::Instant;
+
+/// What `bench --gi` runs.
+#[derive(Clone, Debug)]
+pub struct GiConfig {
+    pub width: u32,
+    pub height: u32,
+    pub reference_spp: u32,
+    /// Frames of the longest convergence point.
+    pub curve_frames: u32,
+    /// `--game-sizes`: only the section at game sizes.
+    pub game_sizes_only: bool,
+    /// `--sizes`: that section's sizes (empty: `gi_scale::SIZES`).
+    pub sizes: Vec<(u32, u32)>,
+}
+
+impl GiConfig {
+    /// The whole bench at its own size, with `reference_spp` samples per pixel in the references.
+    pub fn new(reference_spp: u32) -> Self {
+        GiConfig { width: 128, height: 72, reference_spp, curve_frames: 128, game_sizes_only: false, sizes: Vec::new() }
+    }
+}
 
 /// (row name, `--set` pairs) of the GI rows; each adds to NEE direct light with alpha 0.1.
 const ROWS: &[(&str, &[&str])] = &[
@@ -60,7 +82,7 @@ struct GiRow {
 fn renderer(
     world: &VoxelWorld,
     view: &CameraView,
-    config: &BenchConfig,
+    config: &GiConfig,
     pairs: &[&str],
 ) -> Result<HeadlessRenderer, String> {
     let pairs: Vec<String> = ["lighting=nee", "gi_alpha=0.1"].iter().chain(pairs).map(|p| p.to_string()).collect();
@@ -78,7 +100,7 @@ fn measure_row(
     (name, pairs): (&'static str, &[&str]),
     world: &VoxelWorld,
     view: &CameraView,
-    config: &BenchConfig,
+    config: &GiConfig,
     reference: &crate::image_io::LinearImage,
 ) -> Result<GiRow, String> {
     let mut r = renderer(world, view, config, pairs)?;
@@ -115,7 +137,7 @@ struct EditCost {
 }
 
 /// Edits of growing size in the window room, each measured in the frame it reaches the cache.
-fn measure_edits(world: &VoxelWorld, view: &CameraView, config: &BenchConfig) -> Result<Vec<EditCost>, String> {
+fn measure_edits(world: &VoxelWorld, view: &CameraView, config: &GiConfig) -> Result<Vec<EditCost>, String> {
     // The static visibility cache on: what is measured is how few of its cached hits an edit retraces.
     let mut r = renderer(world, view, config, &["gi=on", "gi_cache=on", "gi_rays=64"])?;
     r.render(SETTLE_FRAMES / 2)?;
@@ -149,17 +171,11 @@ fn ms(v: Option<f64>) -> String {
 }
 
 /// Runs the GI bench at the config's size, writes `gi.md` into `out` and returns its text.
-pub fn run_gi_bench(config: &BenchConfig, out: &Path) -> Result<String, String> {
-    // `--gi --game-sizes` runs the game-size section alone.
-    if config.only.iter().any(|s| s == "game-sizes") {
-        let text = format!(
-            "# GI cache at game sizes\n{}",
-            super::gi_scale::markdown(&super::gi_scale::measure_all(if config.game_sizes.is_empty() {
-                super::gi_scale::SIZES
-            } else {
-                &config.game_sizes
-            })?)
-        );
+pub fn run_gi_bench(config: &GiConfig, out: &Path) -> Result<String, String> {
+    if config.game_sizes_only {
+        let sizes = if config.sizes.is_empty() { super::gi_scale::SIZES } else { &config.sizes };
+        let text =
+            format!("# GI cache at game sizes\n{}", super::gi_scale::markdown(&super::gi_scale::measure_all(sizes)?));
         std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
         let path = out.join("gi-scale.md");
         std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -168,10 +184,11 @@ pub fn run_gi_bench(config: &BenchConfig, out: &Path) -> Result<String, String> 
     let mut rows = Vec::new();
     let mut curves: Vec<CurvePoint> = Vec::new();
     let mut edit_costs = Vec::new();
+    let references = ReferenceCache::new(config.width, config.height, config.reference_spp);
     for &(scene, view_name) in SCENES {
         let world = load_scene(scene).map_err(|e| e.to_string())?;
         let view = world.view(Some(view_name)).cloned().ok_or_else(|| format!("{scene}: no view {view_name}"))?;
-        let reference = cached_path_reference(&world, &view, config, REFERENCE_BOUNCES)?;
+        let reference = references.image(&world, &view, &Reference::bounces(REFERENCE_BOUNCES))?;
         for &row in ROWS {
             let measured = measure_row(scene, row, &world, &view, config, &reference)?;
             eprintln!("gi bench: {scene} {}: {} ({:.0} ms/frame)", row.0, measured.metrics, measured.frame_ms);
@@ -186,8 +203,14 @@ pub fn run_gi_bench(config: &BenchConfig, out: &Path) -> Result<String, String> 
             };
             let pairs: Vec<String> =
                 ["lighting=nee", "gi_alpha=0.1"].iter().chain(row_pairs).map(|p| p.to_string()).collect();
-            let spec = CurveSpec { name, pairs: &pairs, frame_ms: measured.frame_ms };
-            let points = measure_curve(&world, &view, &spec, config, &reference, scene)?;
+            let spec = CurveSpec {
+                name,
+                pairs: &pairs,
+                frame_ms: measured.frame_ms,
+                size: (config.width, config.height),
+                frames: config.curve_frames,
+            };
+            let points = measure_curve(&world, &view, &spec, &reference, scene)?;
             eprintln!("gi bench: {scene} {name} accumulated: {} points", points.len());
             curves.extend(points);
         }
@@ -219,7 +242,7 @@ pub fn run_gi_bench(config: &BenchConfig, out: &Path) -> Result<String, String> 
     Ok(text)
 }
 
-fn markdown(rows: &[GiRow], edits: &[EditCost], config: &BenchConfig) -> String {
+fn markdown(rows: &[GiRow], edits: &[EditCost], config: &GiConfig) -> String {
     let mut text = format!(
         "# GI cache: run time against error\n\n`glowbrick bench --gi`: {}x{}, NEE direct light plus the cache (alpha \
          0.1), {SETTLE_FRAMES} frames to settle, {TIMED_FRAMES} timed, then {AVERAGED_FRAMES} averaged and compared \

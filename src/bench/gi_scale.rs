@@ -15,8 +15,7 @@ const SCENES: &[(&str, &str)] = &[("window-room", "inside"), ("cornell", "front"
 pub const SIZES: &[(u32, u32)] = &[(320, 180), (1280, 720)];
 /// Frames before any timing (pipelines, the first inserts); then the rest of a fresh cache's warm-up (four
 /// update iterations a frame, `gi::WARM_UP_FRAMES`), timed on its own; then frames to settle and frames timed.
-/// A settled frame is timed after the warm-up: timed inside it (as before the warm-up existed) it would carry
-/// its extra iterations.
+/// A settled frame is timed after the warm-up: timed inside it, it would carry the warm-up's extra iterations.
 const FIRST_FRAMES: u32 = 8;
 const WARM_FRAMES: u32 = WARM_UP_FRAMES + 8;
 const TIMED_FRAMES: u32 = 16;

@@ -8,7 +8,6 @@
 //! previous frames but not now. A ghost is history that still shows the block there; its signed error is the
 //! ghost's strength.
 
-use super::BenchConfig;
 use crate::dynamic::{DynamicObject, Motion, ObjectClock, model_for_world, spawn_object_in};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::LinearImage;
@@ -139,17 +138,17 @@ fn masked(image: &LinearImage, keep: &[bool]) -> LinearImage {
     LinearImage { width: pixels.len() as u32, height: 1, pixels }
 }
 
-/// Runs the path raw and denoised at the config's size and compares every frame with its reference.
-pub fn run_motion(config: &BenchConfig) -> Result<MotionRun, String> {
+/// Runs the path raw and denoised at `size` and compares every frame with its reference of `reference_spp`
+/// samples per pixel.
+pub fn run_motion(size: (u32, u32), reference_spp: u32) -> Result<MotionRun, String> {
     let world = load_scene("cornell").map_err(|e| e.to_string())?;
     let base = world.view(Some("inside")).cloned().ok_or("cornell: no view 'inside'")?;
-    let size = (config.width, config.height);
     let (still_raw, raw) = render_path(&world, &base, size, "denoise=off")?;
     let (still_denoised, denoised) = render_path(&world, &base, size, "denoise=on")?;
     let options = |seed| ReferenceOptions {
         width: size.0,
         height: size.1,
-        spp: config.reference_spp,
+        spp: reference_spp,
         bounces: 0,
         seed,
         ..Default::default()
@@ -189,7 +188,7 @@ pub fn run_motion(config: &BenchConfig) -> Result<MotionRun, String> {
     }
     Ok(MotionRun {
         size,
-        spp: config.reference_spp,
+        spp: reference_spp,
         still_raw: compare(&still_raw, &still_truth)?,
         still_denoised: compare(&still_denoised, &still_truth)?,
         frames,

@@ -1,8 +1,8 @@
 //! The bench's figures: the convergence curves (relMSE against cumulative time, log-log, one panel per scene,
 //! one line per method, the one-frame settings as crosses) as an SVG drawn with plotters, and the image strips.
 
-use super::BenchRow;
 use super::convergence::CurvePoint;
+use super::sweep::BenchRow;
 use crate::image_io::{LinearImage, display_rgb8, plain_rgb8};
 use image::RgbImage;
 use plotters::prelude::*;

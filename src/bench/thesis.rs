@@ -9,7 +9,8 @@
 //! full image's MAE and MSE at 1 / lattice^2 of the reference's cost. The reference is the mean of two seeds, so
 //! its own noise is measured and stated.
 
-use super::{BenchConfig, PassTimes, Reference, pass_times, two_seed_reference};
+use super::reference_cache::{Reference, ReferenceCache, check_lattice};
+use super::{PassTimes, pass_times};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::write_image;
 use crate::reference::metrics::{Metrics, compare};
@@ -111,13 +112,13 @@ pub struct ThesisOptions {
 fn render_mode(
     world: &VoxelWorld,
     view: &crate::world::CameraView,
-    config: &BenchConfig,
+    (width, height): (u32, u32),
     reference: &Lattice,
     sample: &str,
     extra: &[String],
     (label, out): (&str, &Path),
 ) -> Result<ThesisResult, String> {
-    let radius = (30.0 * config.width as f32 / 1600.0).round().max(1.0);
+    let radius = (30.0 * width as f32 / 1600.0).round().max(1.0);
     let pairs = ["lighting=restir", "candidates=32", "taps=5", "temporal=on", "spatial=on", "reuse=biased"]
         .iter()
         .map(|p| p.to_string())
@@ -125,7 +126,7 @@ fn render_mode(
         .chain(extra.iter().cloned())
         .collect::<Vec<_>>();
     let settings = RenderSettings::default().with_pairs(&pairs)?;
-    let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
+    let options = HeadlessOptions { width, height, settings, ..Default::default() };
     let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;
     let image = renderer.render(THESIS_FRAMES)?;
     let passes = pass_times(&renderer);
@@ -161,16 +162,10 @@ pub fn run_thesis_bench(options: &ThesisOptions, out: &Path) -> Result<String, S
     }
     // A bad `--set` is refused before the references' minutes, not after.
     RenderSettings::default().with_pairs(&options.settings)?;
-    let config = BenchConfig {
-        width: ((1600.0 * scale).round() as u32).max(16),
-        height: ((1024.0 * scale).round() as u32).max(16),
-        warmup_frames: 0,
-        timed_frames: 0,
-        reference_spp: spp / 2,
-        curve_frames: 0,
-        ..BenchConfig::full()
-    };
-    super::check_lattice(lattice, config.width, config.height)?;
+    let size = (((1600.0 * scale).round() as u32).max(16), ((1024.0 * scale).round() as u32).max(16));
+    check_lattice(lattice, size.0, size.1)?;
+    // Each seed's half of the samples.
+    let references = ReferenceCache::new(size.0, size.1, spp / 2);
     let views: Vec<&ThesisView> = THESIS_VIEWS
         .iter()
         .filter(|t| options.views.is_empty() || options.views.iter().any(|v| t.label.contains(v.as_str())))
@@ -193,21 +188,21 @@ pub fn run_thesis_bench(options: &ThesisOptions, out: &Path) -> Result<String, S
         let mut world = loaded.as_ref().map(|(_, w)| w.clone()).ok_or("no world")?;
         world.brick_lights = t.brick_lights;
         let view = world.view(Some(t.view)).cloned().ok_or_else(|| format!("{}: no view {}", t.file, t.view))?;
-        let (image, noise) = two_seed_reference(&world, &view, &config, &what)?;
+        let (image, noise) = references.two_seeds(&world, &view, &what)?;
         std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
         write_image(&image, &out.join(format!("{}-reference.exr", file_stem(t.label))))?;
         let reference = Lattice { image, step: lattice };
-        let area = render_mode(&world, &view, &config, &reference, "area", &options.settings, (t.label, out))?;
+        let area = render_mode(&world, &view, size, &reference, "area", &options.settings, (t.label, out))?;
         let point = if options.area_only {
             None
         } else {
-            Some(render_mode(&world, &view, &config, &reference, "point", &options.settings, (t.label, out))?)
+            Some(render_mode(&world, &view, size, &reference, "point", &options.settings, (t.label, out))?)
         };
         let point_text = point.as_ref().map_or("not rendered".to_string(), |p| p.metrics.to_string());
         eprintln!("thesis: {}: area {}, point {point_text}, reference noise {}", t.label, area.metrics, noise);
         rows.push((t, area, point, noise));
     }
-    let text = thesis_markdown(&rows, &config, options);
+    let text = thesis_markdown(&rows, size, options);
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let path = out.join("thesis.md");
     std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -230,8 +225,9 @@ fn passes_text(passes: &[(&'static str, f64)]) -> String {
 
 type ThesisRow<'a> = (&'a ThesisView, ThesisResult, Option<ThesisResult>, Metrics);
 
-fn thesis_markdown(rows: &[ThesisRow], config: &BenchConfig, options: &ThesisOptions) -> String {
+fn thesis_markdown(rows: &[ThesisRow], (width, height): (u32, u32), options: &ThesisOptions) -> String {
     let ThesisOptions { scale, lattice, .. } = *options;
+    let seed_spp = options.spp / 2;
     let mut command = format!("glowbrick bench --thesis --scale {scale} --spp {}", options.spp);
     if lattice > 1 {
         command += &format!(" --lattice {lattice}");
@@ -254,8 +250,8 @@ fn thesis_markdown(rows: &[ThesisRow], config: &BenchConfig, options: &ThesisOpt
         format!(
             "; errors measured on every {lattice}th pixel in each direction ({}x{} pixels, an unbiased estimate of \
              the whole image's), where the reference is integrated",
-            config.width / lattice,
-            config.height / lattice
+            width / lattice,
+            height / lattice
         )
     } else {
         String::new()
@@ -270,10 +266,10 @@ fn thesis_markdown(rows: &[ThesisRow], config: &BenchConfig, options: &ThesisOpt
          | view | our MAE area | our MAE point | thesis area | thesis point | GfxExp | reference noise (MAE) \
          | our MAE area, point clamped to 1 | our MSE area | our MSE point | thesis MSE area | GPU ms area (per pass) \
          | GPU ms point |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
-        config.width,
-        config.height,
-        2 * config.reference_spp,
-        config.reference_spp
+        width,
+        height,
+        2 * seed_spp,
+        seed_spp
     );
     for (t, area, point, noise) in rows {
         let of_point = |f: &dyn Fn(&ThesisResult) -> String| point.as_ref().map_or("n/a".to_string(), f);

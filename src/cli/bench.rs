@@ -4,10 +4,12 @@
 
 use super::args::parse_camera;
 use super::on_gpu;
-use crate::bench::daylight::run_daylight_bench;
-use crate::bench::denoise::run_denoise_bench;
+use crate::bench::daylight::{DaylightConfig, run_daylight_bench};
+use crate::bench::denoise::{DenoiseConfig, DenoiseSection, check_scenes, run_denoise_bench};
+use crate::bench::gi::{GiConfig, run_gi_bench};
+use crate::bench::reference_cache::check_lattice;
+use crate::bench::sweep::{ALL_SCENES, QUICK_SCENES, SweepConfig, run_bench};
 use crate::bench::thesis::{ThesisOptions, run_thesis_bench};
-use crate::bench::{ALL_SCENES, BenchConfig, QUICK_SCENES, gi::run_gi_bench, run_bench};
 use crate::world::CameraView;
 use clap::{ArgGroup, Args};
 use std::path::{Path, PathBuf};
@@ -120,11 +122,10 @@ enum BenchMode {
     Gi { spp: u32, game_sizes: bool, sizes: Vec<(u32, u32)> },
     /// The game's lighting at three times of day: daylight.md.
     Daylight { spp: u32 },
-    /// The denoiser: denoise.md (or its motion section alone).
-    /// `section`: one section alone ("motion" or "reaction"), or all of them.
+    /// The denoiser: denoise.md (or one section alone).
     Denoise {
         spp: u32,
-        section: Option<&'static str>,
+        section: Option<DenoiseSection>,
         seeds: u32,
         size: (u32, u32),
         set: Vec<String>,
@@ -154,36 +155,24 @@ impl BenchArgs {
             BenchMode::Settings { scenes, quick, only, camera } => run_settings(scenes, quick, only, camera, &out),
             BenchMode::Thesis(options) => on_gpu(|| run_thesis_bench(&options, &out)).map(|text| println!("{text}")),
             BenchMode::Gi { spp, game_sizes, sizes } => {
-                let config = BenchConfig {
-                    width: 128,
-                    height: 72,
-                    reference_spp: spp,
-                    curve_frames: 128,
-                    only: if game_sizes { vec!["game-sizes".into()] } else { Vec::new() },
-                    game_sizes: sizes,
-                    ..BenchConfig::full()
-                };
+                let config = GiConfig { game_sizes_only: game_sizes, sizes, ..GiConfig::new(spp) };
                 on_gpu(|| run_gi_bench(&config, &out)).map(|text| println!("{text}"))
             }
             BenchMode::Daylight { spp } => {
-                let config = BenchConfig { width: 160, height: 90, reference_spp: spp, ..BenchConfig::full() };
+                let config = DaylightConfig::new(spp);
                 on_gpu(|| run_daylight_bench(&config, &out)).map(|text| println!("{text}"))
             }
             BenchMode::Denoise { spp, section, seeds, size: (width, height), set, lattice, scenes, sizes } => {
-                crate::bench::check_lattice(lattice, width, height)?;
-                crate::bench::denoise::check_scenes(&scenes)?;
-                let only = section.map(|s| vec![s.to_string()]).unwrap_or_default();
-                let config = BenchConfig {
-                    width,
-                    height,
-                    reference_spp: spp,
-                    only,
+                check_lattice(lattice, width, height)?;
+                check_scenes(&scenes)?;
+                let config = DenoiseConfig {
+                    section,
                     seeds,
                     settings: set,
                     lattice,
                     scenes,
-                    game_sizes: sizes,
-                    ..BenchConfig::full()
+                    cost_sizes: sizes,
+                    ..DenoiseConfig::new(width, height, spp)
                 };
                 on_gpu(|| run_denoise_bench(&config, &out)).map(|text| println!("{text}"))
             }
@@ -207,13 +196,13 @@ impl BenchArgs {
             BenchMode::Daylight { spp: self.spp }
         } else if self.denoise {
             let section = if self.motion {
-                Some("motion")
+                Some(DenoiseSection::Motion)
             } else if self.reaction {
-                Some("reaction")
+                Some(DenoiseSection::Reaction)
             } else if self.one_frame {
-                Some("frame")
+                Some(DenoiseSection::Frame)
             } else if self.cost {
-                Some("cost")
+                Some(DenoiseSection::Cost)
             } else {
                 None
             };
@@ -242,7 +231,7 @@ fn run_settings(
 ) -> Result<(), String> {
     let defaults = if quick { QUICK_SCENES } else { ALL_SCENES };
     let scenes = if scenes.is_empty() { defaults.iter().map(|s| s.to_string()).collect() } else { scenes };
-    let mut config = if quick { BenchConfig::quick() } else { BenchConfig::full() };
+    let mut config = if quick { SweepConfig::quick() } else { SweepConfig::full() };
     config.camera = camera;
     config.only = only;
     let rows = on_gpu(|| run_bench(&scenes, &config, out))?;

@@ -26,6 +26,7 @@ mod daylight;
 mod denoise;
 mod extreme_scenes;
 mod gi;
+mod headless;
 mod nee_converges;
 mod objects;
 mod primary_matches_cpu;
@@ -94,6 +95,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             with_gi_off_no_gi_pass_runs,
             with_the_warm_up_off_a_fresh_cache_brings_in_its_bounces_slower,
         ],
+        headless: [a_broken_shader_fails_every_wait_at_once_with_its_pass_name],
         nee_converges: [
             gpu_nee_converges_to_the_cpu_reference_on_the_cornell_box,
             gpu_nee_converges_to_the_cpu_reference_on_the_letters,
