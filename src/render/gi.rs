@@ -52,8 +52,8 @@ pub const COMPACT_PASS: VoxelPass = VoxelPass {
 };
 
 /// Where the static and the dynamic table's dispatch sizes lie in the work buffer (x, y, z, then the count).
-const WORK_STATIC: u64 = 0;
-const WORK_DYNAMIC: u64 = 16;
+const WORK_STATIC: u64 = 4 * super::gpu_types::GI_WORK_STATIC_WORD as u64;
+const WORK_DYNAMIC: u64 = 4 * super::gpu_types::GI_WORK_DYNAMIC_WORD as u64;
 
 /// The static world's passes (refresh, update, filter) and the moving objects' (update, filter), which run only
 /// while objects exist. One thread per listed entry.
@@ -222,9 +222,9 @@ impl Tables {
 }
 
 /// The work buffer: per table three dispatch sizes and a count.
-const WORK_BYTES: u64 = 32;
+const WORK_BYTES: u64 = 4 * super::gpu_types::GI_WORK_WORDS as u64;
 /// What the work buffer holds before compaction: no workgroups (y = z = 1) and no entries listed.
-const EMPTY_WORK: [u32; 8] = [0, 1, 1, 0, 0, 1, 1, 0];
+const EMPTY_WORK: [u32; super::gpu_types::GI_WORK_WORDS as usize] = super::gpu_types::GI_EMPTY_WORK;
 
 /// The render world's GI cache: the tables, the edit log and this frame's bind group.
 #[derive(Resource)]
