@@ -7,7 +7,8 @@
 #import glowbrick::traversal::{face_normal, box_entry}
 #import glowbrick::random::pcg
 #import glowbrick::counters::counters
-#import glowbrick::constants::{RAY_OFFSET, COUNT_GI_INSERTED, COUNT_GI_FULL}
+#import glowbrick::constants::{RAY_OFFSET, COUNT_GI_INSERTED, COUNT_GI_FULL, GI_WORK_STATIC_WORD, GI_WORK_DYNAMIC_WORD,
+    GI_WORK_COUNT_WORD}
 
 struct GiParams {
     // 1 when the cache is on (the shading passes read it and the primary pass inserts into it).
@@ -33,6 +34,9 @@ struct GiParams {
     // Update iterations run before this frame's (with an offset per `seed`): fresh rays continue the entries'
     // low-discrepancy sequences from there, one run across iterations and frames alike.
     update_run: u32,
+    // Padding to 16 bytes (GiParams::_pad).
+    _pad_a: u32,
+    _pad_b: u32,
 }
 
 // One (voxel, face) entry. The key lives in gi_keys (0 = empty); this is its payload.
@@ -90,9 +94,9 @@ const DISTANCE_SCALE: f32 = 256.0;
 @group(3) @binding(8) var<storage, read_write> gi_work: array<atomic<u32>>;
 @group(3) @binding(9) var<storage, read_write> gi_list: array<u32>;
 
-const WORK_STATIC: u32 = 0u;
-const WORK_DYNAMIC: u32 = 4u;
-const WORK_COUNT: u32 = 3u;
+const WORK_STATIC: u32 = GI_WORK_STATIC_WORD;
+const WORK_DYNAMIC: u32 = GI_WORK_DYNAMIC_WORD;
+const WORK_COUNT: u32 = GI_WORK_COUNT_WORD;
 
 // The slot listed at index i of this frame's work for a table (WORK_STATIC or WORK_DYNAMIC), or NOT_FOUND past
 // its end (the last workgroup's spare threads).

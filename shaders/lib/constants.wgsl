@@ -17,6 +17,19 @@ const PI: f32 = 3.14159265;
 const LIGHT_FACES_SHIFT: u32 = #{LIGHT_FACES_SHIFT}u;
 const LIGHT_SIZE_MASK: u32 = #{LIGHT_SIZE_MASK}u;
 
+// The light index (src/lights/index.rs): an empty entry, and light_hash's multipliers (per coordinate, then
+// murmur3's finaliser).
+const NO_COLUMN: u32 = #{NO_COLUMN}u;
+const LIGHT_HASH_X: u32 = #{LIGHT_HASH_X}u;
+const LIGHT_HASH_Y: u32 = #{LIGHT_HASH_Y}u;
+const LIGHT_HASH_Z: u32 = #{LIGHT_HASH_Z}u;
+const LIGHT_HASH_MIX_1: u32 = #{LIGHT_HASH_MIX_1}u;
+const LIGHT_HASH_MIX_2: u32 = #{LIGHT_HASH_MIX_2}u;
+
+// Within NEAR_FACE face sizes of a light face's centre, its point is drawn by solid angle, not by area
+// (src/reference/sampling.rs switches at the same distance).
+const NEAR_FACE: u32 = #{NEAR_FACE}u;
+
 // Lighting modes and debug views (src/settings.rs).
 const LIGHTING_SUN: u32 = #{LIGHTING_SUN}u;
 const LIGHTING_NEE: u32 = #{LIGHTING_NEE}u;
@@ -51,6 +64,11 @@ const GI_EDIT_RESTART: u32 = #{GI_EDIT_RESTART}u;
 const GI_QMC: u32 = #{GI_QMC}u;
 // Direct-light samples an entry starts over with after a change of light (gi/direct.wgsl).
 const GI_RESTART_SAMPLES: u32 = #{GI_RESTART_SAMPLES}u;
+// The GI work buffer (gi/cache.wgsl, gi_work), in words: where the static and the dynamic table's dispatch size
+// (x, y, z) start, and the word after them that counts the entries listed.
+const GI_WORK_STATIC_WORD: u32 = #{GI_WORK_STATIC_WORD}u;
+const GI_WORK_DYNAMIC_WORD: u32 = #{GI_WORK_DYNAMIC_WORD}u;
+const GI_WORK_COUNT_WORD: u32 = #{GI_WORK_COUNT_WORD}u;
 
 // The G-buffer's packed hit: bit 0 hit, then the face, the material and the moving object's id.
 const GBUFFER_FACE_SHIFT: u32 = #{GBUFFER_FACE_SHIFT}u;

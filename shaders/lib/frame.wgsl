@@ -35,9 +35,9 @@ struct FrameParams {
     // DENOISE_* flags.
     denoise: u32,
     // Padding to 16 bytes (FrameParams::_pad).
-    spare_a: u32,
-    spare_b: u32,
-    spare_c: u32,
+    _pad_a: u32,
+    _pad_b: u32,
+    _pad_c: u32,
 }
 
 @group(1) @binding(0) var output: texture_storage_2d<rgba16float, write>;

@@ -5,7 +5,8 @@
 
 #import glowbrick::traversal::{trace_scene, INF}
 #import glowbrick::random::{Rng, rng_next, rng_next_u32}
-#import glowbrick::constants::{RAY_OFFSET, PI, LIGHT_FACES_SHIFT, LIGHT_SIZE_MASK, BRICK_SIZE}
+#import glowbrick::constants::{RAY_OFFSET, PI, LIGHT_FACES_SHIFT, LIGHT_SIZE_MASK, BRICK_SIZE, NO_COLUMN, LIGHT_HASH_X,
+    LIGHT_HASH_Y, LIGHT_HASH_Z, LIGHT_HASH_MIX_1, LIGHT_HASH_MIX_2}
 
 struct Light {
     min: vec3<i32>,
@@ -45,8 +46,6 @@ struct SceneLighting {
 // Light cube -> alias column, open addressing at load <= 1/2 (src/lights/index.rs builds it; an entry is only the
 // column, the key is checked against the light itself).
 @group(2) @binding(3) var<storage, read> light_index: array<u32>;
-
-const NO_COLUMN: u32 = 0xffffffffu;
 
 // Sky radiance in direction `dir`, not counting the disk (lights::daylight::Daylight::sky).
 fn sky(dir: vec3<f32>) -> vec3<f32> {
@@ -150,11 +149,11 @@ fn pick_light(count: u32, power: bool, r_column: u32, u_pick: f32) -> PickedLigh
 
 // The home entry of a light cube (src/lights/index.rs, light_hash): multiply-xor, then murmur3's finaliser.
 fn light_hash(min: vec3<i32>, size: i32) -> u32 {
-    var h = (u32(min.x) * 0x8da6b343u) ^ (u32(min.y) * 0xd8163841u) ^ (u32(min.z) * 0xcb1ab31fu) ^ u32(size);
+    var h = (u32(min.x) * LIGHT_HASH_X) ^ (u32(min.y) * LIGHT_HASH_Y) ^ (u32(min.z) * LIGHT_HASH_Z) ^ u32(size);
     h ^= h >> 16u;
-    h *= 0x85ebca6bu;
+    h *= LIGHT_HASH_MIX_1;
     h ^= h >> 13u;
-    h *= 0xc2b2ae35u;
+    h *= LIGHT_HASH_MIX_2;
     return h ^ (h >> 16u);
 }
 

@@ -7,12 +7,12 @@
 #import glowbrick::world::{materials, voxel_at}
 #import glowbrick::traversal::{trace_scene, face_normal}
 #import glowbrick::lights::{Light, PickedLight, lights, scene, alias_table, pick_light, light_contains, light_size,
-    face_exposed, light_at_voxel, NO_COLUMN}
+    face_exposed, light_at_voxel}
 #import glowbrick::random::{Rng, rng_next, rng_next_u32, pcg}
 #import glowbrick::counters::counters
 #import glowbrick::guards::finite
 #import glowbrick::constants::{RAY_OFFSET, PI, RESTIR_POINT, RESTIR_UNBIASED, RESTIR_ONE_RAY, RESTIR_LOCAL,
-    COUNT_RESERVOIR_RESETS}
+    COUNT_RESERVOIR_RESETS, NO_COLUMN, NEAR_FACE}
 #import glowbrick::frame::{frame, view, Surface, luminance}
 
 // 32 bytes. `face` is the light cube's face (0 +X, 1 -X, ... as the traversal numbers faces) or POINT_FACE,
@@ -178,9 +178,6 @@ fn face_solid_angle(p: vec3<f32>, lo: vec3<f32>, size: f32, face: u32) -> f32 {
     let v3 = corner + ec;
     return triangle_solid_angle(v0, v1, v2) + triangle_solid_angle(v0, v2, v3);
 }
-
-// Within this many face sizes of a face's centre, a candidate's point is drawn by solid angle, not by area.
-const NEAR_FACE: f32 = 4.0;
 
 // A point of face `face` of the cube [lo, lo + size]^3 drawn uniformly in the solid angle the face subtends from
 // p (the spherical-rectangle parametrisation of Urena, Fajardo and King 2013), as (u, v) on the face, with that
@@ -379,7 +376,8 @@ fn sample_candidate(x: Shading, local: ptr<function, LocalLights>, rng: ptr<func
         let face_pdf = picked.pdf * (omega[chosen] / total);
         c.pdf = face_pdf / (size * size);
         let centre = light_point(light, c.r.face, vec2(0.5));
-        if distance(x.point, centre) < NEAR_FACE * size {
+        // Within NEAR_FACE face sizes of a face's centre, a candidate's point is drawn by solid angle, not by area.
+        if distance(x.point, centre) < f32(NEAR_FACE) * size {
             let near = sample_face_solid_angle(x.point, lo, size, c.r.face, uv);
             if near.solid_angle > 0.0 {
                 // Quantise first so the pdf and target are those of the point actually stored.

@@ -10,20 +10,28 @@
 use super::AliasTable;
 use bevy::math::IVec3;
 
-/// An empty entry.
+/// An empty entry (shared with the shader through `render::gpu_types::shared_constants`).
 pub const NO_COLUMN: u32 = u32::MAX;
+
+/// `light_hash`'s multipliers: one odd constant per coordinate, then murmur3's two finaliser constants. Shared
+/// with the shader through `render::gpu_types::shared_constants`.
+pub const LIGHT_HASH_X: u32 = 0x8da6_b343;
+pub const LIGHT_HASH_Y: u32 = 0xd816_3841;
+pub const LIGHT_HASH_Z: u32 = 0xcb1a_b31f;
+pub const LIGHT_HASH_MIX_1: u32 = 0x85eb_ca6b;
+pub const LIGHT_HASH_MIX_2: u32 = 0xc2b2_ae35;
 
 /// The home entry of a light cube (before the capacity mask): a multiply-xor of the coordinates and the edge,
 /// then murmur3's finaliser so neighbouring voxels land far apart.
 pub fn light_hash(min: IVec3, size: i32) -> u32 {
-    let mut h = (min.x as u32).wrapping_mul(0x8da6_b343)
-        ^ (min.y as u32).wrapping_mul(0xd816_3841)
-        ^ (min.z as u32).wrapping_mul(0xcb1a_b31f)
+    let mut h = (min.x as u32).wrapping_mul(LIGHT_HASH_X)
+        ^ (min.y as u32).wrapping_mul(LIGHT_HASH_Y)
+        ^ (min.z as u32).wrapping_mul(LIGHT_HASH_Z)
         ^ size as u32;
     h ^= h >> 16;
-    h = h.wrapping_mul(0x85eb_ca6b);
+    h = h.wrapping_mul(LIGHT_HASH_MIX_1);
     h ^= h >> 13;
-    h = h.wrapping_mul(0xc2b2_ae35);
+    h = h.wrapping_mul(LIGHT_HASH_MIX_2);
     h ^ (h >> 16)
 }
 

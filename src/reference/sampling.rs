@@ -48,8 +48,9 @@ pub struct LightPoint {
     pub pdf_area: f32,
 }
 
-/// Within this many face sizes of a face's centre, its point is drawn by solid angle instead of area.
-const NEAR_FACE: f32 = 4.0;
+/// Within this many face sizes of a face's centre, its point is drawn by solid angle instead of area. The GPU's
+/// candidates switch at the same distance (shared through `render::gpu_types::shared_constants`).
+pub const NEAR_FACE: u32 = 4;
 
 /// Chooses uniformly one of the cube faces whose front side sees `p` and that touch air, then a point on it:
 /// uniform in area, or uniform in the solid angle it subtends when `p` is near it (whose estimate stays bounded
@@ -93,7 +94,7 @@ pub fn sample_light_point(
     edge_b[b] = size;
     let centre = corner + 0.5 * (edge_a + edge_b);
     if near_by_solid_angle
-        && p.distance(centre) < NEAR_FACE * size
+        && p.distance(centre) < NEAR_FACE as f32 * size
         && let Some(rect) = SphericalRect::new(p, corner, edge_a, edge_b)
     {
         let position = rect.sample(u, v);

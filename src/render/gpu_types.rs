@@ -4,6 +4,7 @@
 //! constants of the same names; no number is written on both sides.
 
 use crate::dynamic::MAX_OBJECT_ID;
+use crate::lights::index;
 use crate::settings::{DebugView, Lighting};
 use crate::world::grid::{BRICK_SIZE, BRICK_VOXELS, POOLED_FLAG};
 use crate::world::traversal::RAY_OFFSET_INVERSE;
@@ -182,6 +183,29 @@ pub const GI_KEY_BYTES: u64 = 4;
 /// A cached GI ray (face hit, starting voxel in its cell and distance packed in a u32: `shaders/gi/cache.wgsl`).
 pub const GI_RAY_BYTES: u64 = 4;
 
+/// The GI work buffer (`gi_work` in `shaders/gi/cache.wgsl`, written by compact.wgsl), in u32 words: per table
+/// (static, then dynamic) an indirect dispatch size x, y, z and the count of entries listed. The dispatches read
+/// x, y, z at `4 * GI_WORK_STATIC_WORD` and `4 * GI_WORK_DYNAMIC_WORD` bytes.
+pub const GI_WORK_STATIC_WORD: u32 = 0;
+pub const GI_WORK_DYNAMIC_WORD: u32 = 4;
+/// The count's word within a table's four.
+pub const GI_WORK_COUNT_WORD: u32 = 3;
+pub const GI_WORK_WORDS: u32 = 8;
+const _: () = assert!(GI_WORK_STATIC_WORD + GI_WORK_COUNT_WORD < GI_WORK_DYNAMIC_WORD);
+const _: () = assert!(GI_WORK_DYNAMIC_WORD + GI_WORK_COUNT_WORD < GI_WORK_WORDS);
+/// What the work buffer holds before compaction: no workgroups (y = z = 1, so x alone decides) and nothing listed.
+pub const GI_EMPTY_WORK: [u32; GI_WORK_WORDS as usize] = {
+    let mut work = [0; GI_WORK_WORDS as usize];
+    let tables = [GI_WORK_STATIC_WORD as usize, GI_WORK_DYNAMIC_WORD as usize];
+    let mut t = 0;
+    while t < tables.len() {
+        work[tables[t] + 1] = 1;
+        work[tables[t] + 2] = 1;
+        t += 1;
+    }
+    work
+};
+
 // The shaders read these structs at exactly these sizes (WGSL alignment rules included).
 const _: () = assert!(size_of::<WorldInfo>() == 32);
 const _: () = assert!(size_of::<GpuMaterial>() == 32);
@@ -311,6 +335,16 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         // A light slot's packed edge and exposed faces.
         ("LIGHT_FACES_SHIFT", U32(LIGHT_FACES_SHIFT)),
         ("LIGHT_SIZE_MASK", U32(LIGHT_SIZE_MASK)),
+        // The light index (src/lights/index.rs): its empty entry and its hash's multipliers.
+        ("NO_COLUMN", U32(index::NO_COLUMN)),
+        ("LIGHT_HASH_X", U32(index::LIGHT_HASH_X)),
+        ("LIGHT_HASH_Y", U32(index::LIGHT_HASH_Y)),
+        ("LIGHT_HASH_Z", U32(index::LIGHT_HASH_Z)),
+        ("LIGHT_HASH_MIX_1", U32(index::LIGHT_HASH_MIX_1)),
+        ("LIGHT_HASH_MIX_2", U32(index::LIGHT_HASH_MIX_2)),
+        // Face sizes from a light face's centre within which its point is drawn by solid angle (the CPU
+        // reference switches at the same distance).
+        ("NEAR_FACE", U32(crate::reference::sampling::NEAR_FACE)),
         // Lighting modes and debug views (src/settings).
         ("LIGHTING_SUN", U32(Lighting::Sun as u32)),
         ("LIGHTING_NEE", U32(Lighting::Nee as u32)),
@@ -341,6 +375,10 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("GI_EDIT_RESTART", U32(GI_EDIT_RESTART)),
         ("GI_QMC", U32(GI_QMC)),
         ("GI_RESTART_SAMPLES", U32(super::gi::RESTART_DIRECT_SAMPLES)),
+        // The GI work buffer's words.
+        ("GI_WORK_STATIC_WORD", U32(GI_WORK_STATIC_WORD)),
+        ("GI_WORK_DYNAMIC_WORD", U32(GI_WORK_DYNAMIC_WORD)),
+        ("GI_WORK_COUNT_WORD", U32(GI_WORK_COUNT_WORD)),
         // The G-buffer's packed hit.
         ("GBUFFER_FACE_SHIFT", U32(GBUFFER_FACE_SHIFT)),
         ("GBUFFER_MATERIAL_SHIFT", U32(GBUFFER_MATERIAL_SHIFT)),

@@ -2,6 +2,8 @@
 //! `tests/gpu`.
 
 mod cli;
+#[path = "../shared/compose.rs"]
+mod compose;
 mod daylight;
 mod game_building;
 mod hostile_files;

@@ -1,73 +1,26 @@
 //! Every WGSL file composes (its imports resolved, the shared constants defined) and validates with naga, the
 //! composer and validator Bevy uses: a shader error fails `cargo test` on a machine without a GPU too, and names
-//! the two globals when bindings collide.
+//! the two globals when bindings collide. And every buffer the shaders bind has the layout of the Rust type
+//! that fills it, as naga lays the WGSL out.
 
-use bevy::shader::ShaderDefVal;
-use glowbrick::render::gpu_types::shader_defs;
+use crate::compose;
+use glowbrick::lights::AliasEntry;
+use glowbrick::render::gpu_types::*;
 use glowbrick::render::shaders::SOURCES;
 use naga::valid::{Capabilities, ValidationFlags, Validator};
-use naga_oil::compose::{
-    ComposableModuleDescriptor, Composer, NagaModuleDescriptor, ShaderDefValue, ShaderLanguage, ShaderType,
-};
-use std::collections::HashMap;
+use std::mem::offset_of;
 
-/// Bevy's `View` as far as our shaders read it (the real one lives in bevy_render's view.wgsl).
-const VIEW: &str = "#define_import_path bevy_render::view
-struct View {
-    clip_from_world: mat4x4<f32>,
-    world_from_clip: mat4x4<f32>,
-    clip_from_view: mat4x4<f32>,
-    world_position: vec3<f32>,
-    viewport: vec4<f32>,
-}
-";
-
-fn defs() -> HashMap<String, ShaderDefValue> {
-    shader_defs()
-        .into_iter()
-        .map(|d| match d {
-            ShaderDefVal::Bool(k, v) => (k, ShaderDefValue::Bool(v)),
-            ShaderDefVal::Int(k, v) => (k, ShaderDefValue::Int(v)),
-            ShaderDefVal::UInt(k, v) => (k, ShaderDefValue::UInt(v)),
-        })
-        .collect()
-}
-
-fn library(composer: &mut Composer, path: &str, source: &str) {
-    let added = composer
-        .add_composable_module(ComposableModuleDescriptor {
-            source,
-            file_path: path,
-            language: ShaderLanguage::Wgsl,
-            as_name: None,
-            additional_imports: &[],
-            shader_defs: defs(),
-        })
-        .map(|_| ());
-    if let Err(e) = added {
-        panic!("{path}: {}", e.emit_to_string(composer));
-    }
+/// Every pass shader composed with its imports, by path.
+fn composed_passes() -> Vec<(&'static str, naga::Module)> {
+    let mut composer = compose::composer();
+    let passes: Vec<_> = SOURCES.iter().filter(|(_, s)| !s.contains("#define_import_path")).collect();
+    assert!(passes.len() >= 8, "every pass shader is checked");
+    passes.into_iter().map(|&(path, source)| (path, compose::compose(&mut composer, path, source))).collect()
 }
 
 #[test]
 fn every_shader_composes_and_validates() {
-    let mut composer = Composer::default().with_capabilities(Capabilities::all());
-    library(&mut composer, "bevy_render/view.wgsl", VIEW);
-    let (libraries, passes): (Vec<_>, Vec<_>) = SOURCES.iter().partition(|(_, s)| s.contains("#define_import_path"));
-    for (path, source) in libraries {
-        library(&mut composer, path, source);
-    }
-    assert!(passes.len() >= 8, "every pass shader is checked");
-    for (path, source) in passes {
-        let module = composer
-            .make_naga_module(NagaModuleDescriptor {
-                source,
-                file_path: path,
-                shader_type: ShaderType::Wgsl,
-                shader_defs: defs(),
-                additional_imports: &[],
-            })
-            .unwrap_or_else(|e| panic!("{path}: {}", e.emit_to_string(&composer)));
+    for (path, module) in composed_passes() {
         if let Err(e) = Validator::new(ValidationFlags::all(), Capabilities::all()).validate(&module) {
             let globals: Vec<String> = module
                 .global_variables
@@ -77,4 +30,203 @@ fn every_shader_composes_and_validates() {
             panic!("{path}: {e:?}\nglobals:\n{}", globals.join("\n"));
         }
     }
+}
+
+/// A buffer binding and the Rust side that fills it.
+struct Twin {
+    /// The WGSL global, as declared (before naga_oil decorates it with its module).
+    global: &'static str,
+    /// The WGSL type of one element (a uniform's whole type), when it is a struct.
+    wgsl_struct: Option<&'static str>,
+    /// Bytes of one Rust element: the whole buffer for a uniform, one element of a storage array.
+    bytes: usize,
+    /// WGSL elements per Rust element (an edit-log record is two `vec4<i32>`).
+    per: usize,
+    /// The Rust struct's fields (padding left out) in the order the WGSL struct declares its members (padding,
+    /// named `_pad*`, left out): the WGSL member's name and the Rust field's offset. Empty where the Rust side is
+    /// only a size.
+    fields: Vec<(&'static str, usize)>,
+}
+
+/// A twin whose Rust side is a `repr(C)` struct: its size and the offsets of the listed fields, each named as in
+/// the WGSL (`field => "wgsl_name"` where the names differ).
+macro_rules! twin {
+    ($global:literal, $wgsl:literal, $rust:ty { $($field:ident $(=> $name:literal)?),* $(,)? }) => {
+        Twin {
+            global: $global,
+            wgsl_struct: Some($wgsl),
+            bytes: size_of::<$rust>(),
+            per: 1,
+            fields: vec![$(([$($name,)? stringify!($field)][0], offset_of!($rust, $field))),*],
+        }
+    };
+}
+
+/// A twin whose Rust side is only a size per element (`per` WGSL elements to it).
+fn sized(global: &'static str, wgsl_struct: Option<&'static str>, bytes: u64, per: usize) -> Twin {
+    Twin { global, wgsl_struct, bytes: bytes as usize, per, fields: Vec::new() }
+}
+
+/// Every buffer the shaders bind, with its Rust twin.
+fn twins() -> Vec<Twin> {
+    let word = size_of::<u32>() as u64;
+    vec![
+        // Group 0: the world.
+        twin!("world_info", "WorldInfo", WorldInfo { size, object_count, bricks }),
+        sized("top_cells", None, word, 1),
+        sized("brick_pool", None, word, 1),
+        twin!("materials", "Material", GpuMaterial { albedo, radiance }),
+        twin!("objects", "Object", GpuObject { min, id, size, offset, previous_min }),
+        sized("object_voxels", None, word, 1),
+        sized("counters", None, word, 1),
+        // Group 1: one view.
+        twin!(
+            "frame",
+            "FrameParams",
+            FrameParams {
+                prev_clip_from_world,
+                prev_camera,
+                debug_view,
+                exposure,
+                frame,
+                accumulated,
+                highlight_target,
+                selection_min,
+                selection_max,
+                candidates,
+                taps,
+                radius,
+                restir_flags,
+                denoise,
+            }
+        ),
+        sized("accumulation", None, ACCUMULATION_TEXEL_BYTES, 1),
+        sized("gbuffer", None, GBUFFER_TEXEL_BYTES, 1),
+        sized("prev_gbuffer", None, GBUFFER_TEXEL_BYTES, 1),
+        sized("reservoirs_temporal", Some("Reservoir"), RESERVOIR_BYTES, 1),
+        sized("reservoirs_final", Some("Reservoir"), RESERVOIR_BYTES, 1),
+        sized("noisy", None, DENOISE_TEXEL_BYTES, 1),
+        sized("history", None, DENOISE_TEXEL_BYTES, 1),
+        sized("prev_history", None, DENOISE_TEXEL_BYTES, 1),
+        sized("wavelet", None, DENOISE_TEXEL_BYTES, 1),
+        // Group 2: the lights.
+        twin!("lights", "Light", GpuLight { min, size_faces, radiance, generation }),
+        twin!("alias_table", "AliasEntry", AliasEntry { threshold, alias => "alias_column", slot, pdf }),
+        twin!(
+            "scene",
+            "SceneLighting",
+            SceneLighting { sun, sun_radiance, sky_zenith, sky_horizon, mode, power_pick, light_count, shadows }
+        ),
+        sized("light_index", None, word, 1),
+        // Group 3: the GI cache.
+        twin!(
+            "gi",
+            "GiParams",
+            GiParams {
+                enabled,
+                flags,
+                rays,
+                update_rays,
+                alpha,
+                epoch,
+                lost_epoch,
+                edit_count,
+                static_capacity,
+                dynamic_capacity,
+                frame,
+                iteration,
+                cell_pixels,
+                update_run,
+            }
+        ),
+        sized("gi_keys", None, GI_KEY_BYTES, 1),
+        twin!(
+            "gi_entries",
+            "GiEntry",
+            GiEntry { voxel, face, last_used, traced_epoch, samples, object, lo, last_seen, hi, level }
+        ),
+        sized("gi_irradiance", None, GI_RADIANCE_BYTES, 1),
+        sized("gi_filtered", None, GI_RADIANCE_BYTES, 1),
+        sized("gi_rays", None, GI_RAY_BYTES, 1),
+        sized("gi_edits", None, size_of::<GiEdit>() as u64, 2),
+        sized("gi_direct", None, GI_RADIANCE_BYTES, 1),
+        sized("gi_work", None, word, 1),
+        sized("gi_list", None, word, 1),
+    ]
+}
+
+/// Bindings whose other side is not ours: Bevy's view uniform.
+const NOT_OURS: [&str; 1] = ["view"];
+
+/// A name without naga_oil's module decoration.
+fn undecorated(name: &str) -> &str {
+    name.split("X_naga_oil_mod_X").next().unwrap_or(name)
+}
+
+/// Where a buffer binding's WGSL layout differs from its Rust twin's, in words; `None` when they agree.
+fn layout_mismatch(module: &naga::Module, global: &naga::GlobalVariable, twin: &Twin) -> Option<String> {
+    use naga::TypeInner;
+    let ty = &module.types[global.ty];
+    // A storage array: its elements; a uniform: the whole type.
+    let (element, bytes) = match ty.inner {
+        TypeInner::Array { base, stride, .. } => (base, stride as usize * twin.per),
+        TypeInner::Struct { span, .. } => (global.ty, span as usize * twin.per),
+        ref other => return Some(format!("an unexpected type {other:?}")),
+    };
+    if bytes != twin.bytes {
+        return Some(format!("{bytes} bytes in WGSL, {} in Rust", twin.bytes));
+    }
+    let element = &module.types[element];
+    let name = element.name.as_deref().map(undecorated);
+    if name != twin.wgsl_struct {
+        return Some(format!("WGSL type {name:?}, expected {:?}", twin.wgsl_struct));
+    }
+    if let TypeInner::Struct { members, .. } = &element.inner
+        && !twin.fields.is_empty()
+    {
+        let wgsl: Vec<(&str, usize)> = members
+            .iter()
+            .map(|m| (m.name.as_deref().unwrap_or("?"), m.offset as usize))
+            .filter(|(name, _)| !name.starts_with("_pad"))
+            .collect();
+        if wgsl != twin.fields {
+            return Some(format!("members (name, offset) {wgsl:?} in WGSL, {:?} in Rust", twin.fields));
+        }
+    }
+    None
+}
+
+/// Every buffer binding in every pass has the layout of its Rust twin: its size (a uniform's, or a storage
+/// array's element stride) and, for a struct, every member's offset. A field added, moved or retyped on one side
+/// only fails here, and so does a new binding without a twin.
+#[test]
+fn every_buffer_has_the_layout_of_its_rust_twin() {
+    let twins = twins();
+    let mut seen = vec![false; twins.len()];
+    let mut errors = Vec::new();
+    for (path, module) in composed_passes() {
+        for (_, global) in module.global_variables.iter() {
+            if !matches!(global.space, naga::AddressSpace::Uniform | naga::AddressSpace::Storage { .. }) {
+                continue;
+            }
+            let name = undecorated(global.name.as_deref().unwrap_or(""));
+            if NOT_OURS.contains(&name) {
+                continue;
+            }
+            let Some(i) = twins.iter().position(|t| t.global == name) else {
+                errors.push(format!("{path}: `{name}` has no Rust twin in this test's table"));
+                continue;
+            };
+            seen[i] = true;
+            if let Some(why) = layout_mismatch(&module, global, &twins[i]) {
+                errors.push(format!("{path}: `{name}`: {why}"));
+            }
+        }
+    }
+    for (twin, seen) in twins.iter().zip(seen) {
+        if !seen {
+            errors.push(format!("`{}` is in the table but no shader binds it", twin.global));
+        }
+    }
+    assert!(errors.is_empty(), "{}", errors.join("\n"));
 }

@@ -22,6 +22,8 @@
 mod bench_quick;
 mod cli;
 mod common;
+#[path = "../shared/compose.rs"]
+mod compose;
 mod daylight;
 mod denoise;
 mod extreme_scenes;
@@ -35,6 +37,7 @@ mod smoke;
 mod stress;
 #[path = "../shared/vox_scene.rs"]
 mod vox_scene;
+mod wgsl_twins;
 mod world_after_edits;
 
 use libtest_mimic::{Arguments, Completion, Failed, Trial};
@@ -124,6 +127,10 @@ fn tests() -> Vec<(&'static str, fn())> {
         ],
         smoke: [a_tiny_frame_matches_the_cpu_reference],
         stress: [quick_stress_run_finds_no_non_finite_value_and_no_drift],
+        wgsl_twins: [
+            the_light_hash_matches_the_cpu_light_index,
+            the_spherical_rectangle_sampler_matches_the_cpu_reference,
+        ],
         world_after_edits: [gpu_world_follows_edits],
     ]
 }

@@ -1,7 +1,10 @@
 //! The GI cache's GPU tables: the two hash tables (the static world's, sized by `gi_table`, and the moving
 //! objects') in one set of buffers, and the work buffer the compaction pass fills with this frame's dispatches.
 
-use crate::render::gpu_types::{GI_KEY_BYTES, GI_RADIANCE_BYTES, GI_RAY_BYTES, GiEntry};
+use crate::render::gpu_types::{
+    GI_EMPTY_WORK, GI_KEY_BYTES, GI_RADIANCE_BYTES, GI_RAY_BYTES, GI_WORK_DYNAMIC_WORD, GI_WORK_STATIC_WORD,
+    GI_WORK_WORDS, GiEntry,
+};
 use crate::settings::GiSettings;
 use bevy::render::render_resource::{Buffer, BufferDescriptor, BufferUsages};
 use bevy::render::renderer::RenderDevice;
@@ -14,8 +17,8 @@ pub const ENTRY_BYTES: u64 = GI_KEY_BYTES + size_of::<GiEntry>() as u64 + 3 * GI
 /// Bytes per cached ray (face and distance packed in a u32).
 pub const RAY_BYTES: u64 = GI_RAY_BYTES;
 /// Where the static and the dynamic table's dispatch sizes lie in the work buffer (x, y, z, then the count).
-pub const WORK_STATIC: u64 = 0;
-pub const WORK_DYNAMIC: u64 = 16;
+pub const WORK_STATIC: u64 = 4 * GI_WORK_STATIC_WORD as u64;
+pub const WORK_DYNAMIC: u64 = 4 * GI_WORK_DYNAMIC_WORD as u64;
 
 /// What the table buffers were sized for: nothing (GI off) or the static table's entries (the `gi_table` setting,
 /// a power of two) and K rays per entry; the dynamic table follows the static one in the same buffers.
@@ -118,9 +121,9 @@ impl Tables {
 }
 
 /// The work buffer: per table three dispatch sizes and a count.
-pub const WORK_BYTES: u64 = 32;
+pub const WORK_BYTES: u64 = 4 * GI_WORK_WORDS as u64;
 /// What the work buffer holds before compaction: no workgroups (y = z = 1) and no entries listed.
-pub const EMPTY_WORK: [u32; 8] = [0, 1, 1, 0, 0, 1, 1, 0];
+pub const EMPTY_WORK: [u32; GI_WORK_WORDS as usize] = GI_EMPTY_WORK;
 
 #[cfg(test)]
 mod tests {

@@ -1,0 +1,72 @@
+//! Composing the WGSL outside Bevy, as Bevy does (naga_oil, the shared constants as shader defs): for the CPU
+//! test that validates every shader and for the GPU tests that run a library function on their own inputs.
+
+use bevy::shader::ShaderDefVal;
+use glowbrick::render::gpu_types::shader_defs;
+use glowbrick::render::shaders::SOURCES;
+use naga::valid::Capabilities;
+use naga_oil::compose::{
+    ComposableModuleDescriptor, Composer, NagaModuleDescriptor, ShaderDefValue, ShaderLanguage, ShaderType,
+};
+use std::collections::HashMap;
+
+/// Bevy's `View` as far as our shaders read it (the real one lives in bevy_render's view.wgsl).
+const VIEW: &str = "#define_import_path bevy_render::view
+struct View {
+    clip_from_world: mat4x4<f32>,
+    world_from_clip: mat4x4<f32>,
+    clip_from_view: mat4x4<f32>,
+    world_position: vec3<f32>,
+    viewport: vec4<f32>,
+}
+";
+
+fn defs() -> HashMap<String, ShaderDefValue> {
+    shader_defs()
+        .into_iter()
+        .map(|d| match d {
+            ShaderDefVal::Bool(k, v) => (k, ShaderDefValue::Bool(v)),
+            ShaderDefVal::Int(k, v) => (k, ShaderDefValue::Int(v)),
+            ShaderDefVal::UInt(k, v) => (k, ShaderDefValue::UInt(v)),
+        })
+        .collect()
+}
+
+fn library(composer: &mut Composer, path: &str, source: &str) {
+    let added = composer
+        .add_composable_module(ComposableModuleDescriptor {
+            source,
+            file_path: path,
+            language: ShaderLanguage::Wgsl,
+            as_name: None,
+            additional_imports: &[],
+            shader_defs: defs(),
+        })
+        .map(|_| ());
+    if let Err(e) = added {
+        panic!("{path}: {}", e.emit_to_string(composer));
+    }
+}
+
+/// A composer holding every library shader (the files with a `#define_import_path`).
+pub fn composer() -> Composer {
+    let mut composer = Composer::default().with_capabilities(Capabilities::all());
+    library(&mut composer, "bevy_render/view.wgsl", VIEW);
+    for (path, source) in SOURCES.iter().filter(|(_, s)| s.contains("#define_import_path")) {
+        library(&mut composer, path, source);
+    }
+    composer
+}
+
+/// `source` (a pass, or a test's own shader importing the libraries) composed into one naga module.
+pub fn compose(composer: &mut Composer, path: &str, source: &str) -> naga::Module {
+    composer
+        .make_naga_module(NagaModuleDescriptor {
+            source,
+            file_path: path,
+            shader_type: ShaderType::Wgsl,
+            shader_defs: defs(),
+            additional_imports: &[],
+        })
+        .unwrap_or_else(|e| panic!("{path}: {}", e.emit_to_string(composer)))
+}
