@@ -2,7 +2,7 @@
 //! readback of the linear HDR result after the requested number of frames. Used by `glowbrick render` and tests.
 
 use crate::image_io::LinearImage;
-use crate::render::FramesRendered;
+use crate::render::CameraFramesRendered;
 use crate::render::camera::voxel_camera_bundle;
 use crate::render::gpu_types::COUNTERS;
 use crate::render::scene::counters::GpuCountersBuffer;
@@ -56,7 +56,7 @@ pub const MAX_IMAGE_EDGE: u32 = 8192;
 pub struct HeadlessRenderer {
     app: App,
     target: Handle<Image>,
-    frames: FramesRendered,
+    frames: CameraFramesRendered,
     width: u32,
     height: u32,
     timeout: Duration,
@@ -101,7 +101,7 @@ impl HeadlessRenderer {
         if let Some(saved) = saved_objects {
             crate::dynamic::saved::spawn_saved(app.world_mut(), &saved)?;
         }
-        let frames = app.world().resource::<FramesRendered>().clone();
+        let frames = app.world().resource::<CameraFramesRendered>().clone();
         Ok(HeadlessRenderer { app, target, frames, width: w, height: h, timeout: options.timeout })
     }
 
@@ -125,7 +125,7 @@ impl HeadlessRenderer {
     }
 
     /// Adds another voxel camera at `view`, rendering into an image of its own that is never read back (for tests
-    /// of what several cameras share). `frames_rendered` then counts each camera's frames.
+    /// of what several cameras share). `camera_frames_rendered` then counts each camera's frames.
     pub fn add_camera(&mut self, view: &CameraView) {
         let mut image = Image::new_target_texture(self.width, self.height, TextureFormat::Rgba32Float, None);
         image.texture_descriptor.usage |= TextureUsages::COPY_SRC;
@@ -133,8 +133,8 @@ impl HeadlessRenderer {
         self.app.world_mut().spawn((voxel_camera_bundle(view), Tonemapping::None, RenderTarget::Image(target.into())));
     }
 
-    /// Frames the primary pass has dispatched so far.
-    pub fn frames_rendered(&self) -> u32 {
+    /// Camera-frames the primary pass has dispatched so far (one per camera per frame).
+    pub fn camera_frames_rendered(&self) -> u32 {
         self.frames.0.load(Ordering::Relaxed)
     }
 
@@ -175,8 +175,9 @@ impl HeadlessRenderer {
     /// Renders `frames` more frames and returns the last one's linear HDR image.
     pub fn render(&mut self, frames: u32) -> Result<LinearImage, String> {
         check_frames(frames)?;
-        let goal = self.frames_rendered() + frames;
-        let copies = self.read_back(self.texture_readback(), 1, "the last frame", |r| r.frames_rendered() >= goal)?;
+        let goal = self.camera_frames_rendered() + frames;
+        let copies =
+            self.read_back(self.texture_readback(), 1, "the last frame", |r| r.camera_frames_rendered() >= goal)?;
         decode_rgba32f(&copies[0], self.width, self.height)
     }
 
@@ -252,7 +253,7 @@ impl HeadlessRenderer {
             |r, timeout| {
                 format!(
                     "timed out after {timeout:?} waiting for {what}: {} frames rendered (is a GPU adapter available?)",
-                    r.frames_rendered()
+                    r.camera_frames_rendered()
                 )
             },
         );

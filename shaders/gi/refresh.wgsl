@@ -1,7 +1,7 @@
 // GI cache refresh, one thread per static entry due this frame (listed by compact.wgsl), before the update: brings a due entry's K cached static hits up
 // to date. A new entry traces all K; after an edit, only the rays whose segments cross an edited brick are traced
 // again, and entries whose rays cannot reach any edit keep every hit (counted: COUNT_GI_RETRACED, COUNT_GI_RAYS_TRACED).
-// Without the static visibility cache (gi_cache=off, the default) nothing is kept: an entry an edit may reach
+// Without the static visibility cache (gi_cached_hits=off, the default) nothing is kept: an entry an edit may reach
 // (inside the box of the segments update.wgsl traced for it) restarts its blend. Then, either way, the entry's
 // own direct light.
 

@@ -68,10 +68,10 @@ pub fn measure_curve(
     let mut points = Vec::new();
     let mut goal = 1u32;
     while goal <= spec.frames.max(1) {
-        let before = renderer.frames_rendered();
+        let before = renderer.camera_frames_rendered();
         let image = renderer.render(goal.saturating_sub(before).max(1))?;
         // The readback lands a frame or two after the goal: the image holds every frame rendered so far.
-        let frames = renderer.frames_rendered().max(1);
+        let frames = renderer.camera_frames_rendered().max(1);
         let metrics = compare(&image, reference)?;
         let flip = flip(&image, Encoding::Linear, reference, Encoding::Linear)?.mean;
         points.push(CurvePoint {

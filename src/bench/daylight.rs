@@ -9,7 +9,7 @@ use crate::lights::daylight::Daylight;
 use crate::reference::REFERENCE_BOUNCES;
 use crate::reference::metrics::{Metrics, compare};
 use crate::settings::RenderSettings;
-use crate::world::scene::{generated_world, load_scene};
+use crate::world::recipe::{generated_world, load_scene};
 use crate::world::{CameraView, VoxelWorld};
 use bevy::math::UVec3;
 use std::path::Path;

@@ -18,7 +18,7 @@ use crate::render::adapter::adapter_name;
 use crate::render::denoise::DENOISE_PASS_NAMES;
 use crate::render::gi::GI_PASS_NAMES;
 use crate::settings::RenderSettings;
-use crate::world::scene::load_scene;
+use crate::world::recipe::load_scene;
 use crate::world::{CameraView, VoxelWorld};
 use std::path::Path;
 use std::time::Instant;

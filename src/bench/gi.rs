@@ -16,7 +16,7 @@ use crate::render::gpu_types::GpuCounter;
 use crate::render::primary::PRIMARY_PASS_NAME;
 use crate::settings::RenderSettings;
 use crate::world::events::EditRequest;
-use crate::world::scene::load_scene;
+use crate::world::recipe::load_scene;
 use crate::world::{CameraView, Edit, VoxelWorld};
 use bevy::math::IVec3;
 use std::path::Path;
@@ -48,10 +48,10 @@ const ROWS: &[(&str, &[&str])] = &[
     ("direct only", &["gi=off"]),
     ("fresh directions", &["gi=on"]),
     ("fresh, random rays", &["gi=on", "gi_qmc=off"]),
-    ("cached, K=16", &["gi=on", "gi_cache=on", "gi_rays=16"]),
-    ("cached, K=32", &["gi=on", "gi_cache=on", "gi_rays=32"]),
-    ("cached, K=64", &["gi=on", "gi_cache=on", "gi_rays=64"]),
-    ("cached, K=128", &["gi=on", "gi_cache=on", "gi_rays=128"]),
+    ("cached, K=16", &["gi=on", "gi_cached_hits=on", "gi_cached_rays=16"]),
+    ("cached, K=32", &["gi=on", "gi_cached_hits=on", "gi_cached_rays=32"]),
+    ("cached, K=64", &["gi=on", "gi_cached_hits=on", "gi_cached_rays=64"]),
+    ("cached, K=128", &["gi=on", "gi_cached_hits=on", "gi_cached_rays=128"]),
     ("no filter", &["gi=on", "gi_filter=off"]),
     ("one bounce", &["gi=on", "gi_bounces=off"]),
 ];
@@ -139,7 +139,7 @@ struct EditCost {
 /// Edits of growing size in the window room, each measured in the frame it reaches the cache.
 fn measure_edits(world: &VoxelWorld, view: &CameraView, config: &GiConfig) -> Result<Vec<EditCost>, String> {
     // The static visibility cache on: what is measured is how few of its cached hits an edit retraces.
-    let mut r = renderer(world, view, config, &["gi=on", "gi_cache=on", "gi_rays=64"])?;
+    let mut r = renderer(world, view, config, &["gi=on", "gi_cached_hits=on", "gi_cached_rays=64"])?;
     r.render(SETTLE_FRAMES / 2)?;
     let white = world.palette.id_of("plaster").unwrap_or(1);
     let edits: [(&'static str, Edit); 4] = [
@@ -287,7 +287,7 @@ fn markdown(rows: &[GiRow], edits: &[EditCost], config: &GiConfig) -> String {
             );
         }
     }
-    text += "\n## Cost of an edit (window room, `gi_cache=on`, K = 64)\n\nThe frame an edit reaches the cache, only the rays whose \
+    text += "\n## Cost of an edit (window room, `gi_cached_hits=on`, K = 64)\n\nThe frame an edit reaches the cache, only the rays whose \
              segments cross an edited brick are traced again.\n\n| edit | live entries | entries with a ray traced \
              again | rays traced again | of all cached rays |\n|---|---|---|---|---|\n";
     for e in edits {
@@ -304,7 +304,7 @@ fn markdown(rows: &[GiRow], edits: &[EditCost], config: &GiConfig) -> String {
     text += &format!(
         "\n## Memory\n\nPer entry: {ENTRY_BYTES} bytes (key, payload, blended and filtered radiance, direct light, \
          work-list slot) plus {RAY_BYTES} \
-         bytes per cached ray with `gi_cache=on`: {} bytes at K = 16, {} at K = 64, {} at K = 128; without (the \
+         bytes per cached ray with `gi_cached_hits=on`: {} bytes at K = 16, {} at K = 64, {} at K = 128; without (the \
          default) one placeholder ray, {} bytes. The tables hold {} static and {} dynamic entries: {:.1} MiB by \
          default, {:.1} MiB with the cache at K = 64; GI off keeps a 188-byte placeholder.\n",
         ENTRY_BYTES + 16 * RAY_BYTES,

@@ -7,7 +7,7 @@ use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::render::gi::{GI_PASS_NAMES, WARM_UP_FRAMES, static_capacity};
 use crate::render::gpu_types::GpuCounter;
 use crate::settings::RenderSettings;
-use crate::world::scene::load_scene;
+use crate::world::recipe::load_scene;
 use std::time::Instant;
 
 /// Scenes (and views) measured, and the sizes.

@@ -30,7 +30,7 @@ use crate::reference::metrics::Metrics;
 use crate::render::primary::PRIMARY_PASS_NAME;
 use crate::render::restir::RESTIR_PASS_NAMES;
 use crate::world::VoxelWorld;
-use crate::world::scene::load_scene;
+use crate::world::recipe::load_scene;
 
 /// A bench scene by name: a bundled recipe (`assets/scenes/NAME.ron`) or `thesis-NAME`, the thesis' `NAME.vx`
 /// from `../shared/scenes/thesis` (or the tests' copy).

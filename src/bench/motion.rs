@@ -16,7 +16,7 @@ use crate::reference::objects::ReferenceObjects;
 use crate::reference::{ReferenceOptions, render_reference};
 use crate::settings::RenderSettings;
 use crate::world::objects::{SavedMotion, SavedObject};
-use crate::world::scene::load_scene;
+use crate::world::recipe::load_scene;
 use crate::world::{CameraView, VoxelWorld, camera_ray, trace, view_transform, world_from_clip};
 use bevy::math::{UVec2, Vec3};
 use std::sync::Arc;

@@ -7,7 +7,7 @@ use crate::headless::HeadlessRenderer;
 use crate::image_io::LinearImage;
 use crate::settings::RenderSettings;
 use crate::world::events::EditRequest;
-use crate::world::scene::load_scene;
+use crate::world::recipe::load_scene;
 use crate::world::{CameraView, Edit, VoxelWorld};
 use bevy::math::IVec3;
 use std::time::Instant;

@@ -19,7 +19,7 @@ use super::scene::objects::GpuObjects;
 use super::scene::world::{GpuWorld, WorldLayout};
 use super::shaders::GlowbrickShaders;
 use super::view::{ViewResources, view_layout};
-use super::{FramesRendered, VoxelCamera, denoise, primary, restir};
+use super::{CameraFramesRendered, VoxelCamera, denoise, primary, restir};
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy::render::diagnostic::RecordDiagnostics;
@@ -202,7 +202,7 @@ pub fn view_frame(
     pipeline_cache: Res<PipelineCache>,
     view_uniforms: Res<ViewUniforms>,
     scene: SceneBindGroups,
-    frames: Res<FramesRendered>,
+    frames: Res<CameraFramesRendered>,
     mut ctx: RenderContext,
 ) {
     let (target, view_offset, resources) = view.into_inner();

@@ -43,9 +43,10 @@ pub struct Highlight {
     pub selection: Option<(IVec3, IVec3)>,
 }
 
-/// Frames the primary pass has dispatched, shared by both worlds (headless capture waits on it).
+/// Camera-frames the primary pass has dispatched: one per camera per frame, so two cameras count two a frame.
+/// Shared by both worlds (headless capture waits on it).
 #[derive(Resource, Clone, Default)]
-pub struct FramesRendered(pub Arc<AtomicU32>);
+pub struct CameraFramesRendered(pub Arc<AtomicU32>);
 
 /// Adds the voxel renderer. Needs `VoxelWorld` and `RenderSettings` resources in the main world.
 pub struct VoxelRenderPlugin;
@@ -53,7 +54,7 @@ pub struct VoxelRenderPlugin;
 impl Plugin for VoxelRenderPlugin {
     fn build(&self, app: &mut App) {
         let handles = shaders::GlowbrickShaders::load(&mut app.world_mut().resource_mut::<Assets<Shader>>());
-        let frames = app.world().get_resource::<FramesRendered>().cloned().unwrap_or_default();
+        let frames = app.world().get_resource::<CameraFramesRendered>().cloned().unwrap_or_default();
         app.insert_resource(handles.clone())
             .insert_resource(frames.clone())
             .init_resource::<RenderSettings>()

@@ -11,7 +11,7 @@ use super::restir::{self, RestirParams, RestirView};
 use super::scene::lights::GpuLights;
 use super::scene::objects::GpuObjects;
 use super::scene::world::GpuWorld;
-use super::{FramesRendered, Highlight, VoxelCamera};
+use super::{CameraFramesRendered, Highlight, VoxelCamera};
 use crate::settings::{RenderSettings, SEED_FRAMES};
 use bevy::prelude::*;
 use bevy::render::render_resource::binding_types::{
@@ -214,7 +214,7 @@ pub fn prepare_view_resources(
     gpu_world: Option<Res<GpuWorld>>,
     gpu_lights: Option<Res<GpuLights>>,
     objects: Option<Res<GpuObjects>>,
-    frames: Res<FramesRendered>,
+    frames: Res<CameraFramesRendered>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
 ) {

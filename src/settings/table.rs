@@ -327,9 +327,10 @@ pub static SETTINGS: &[Setting] = &[
         field: &Choice { get: |s| s.gi.enabled, set: |s, v| s.gi.enabled = v },
     },
     Setting {
-        key: "gi_rays",
+        key: "gi_cached_rays",
         section: Section::Gi,
-        about: "Fixed directions per face entry (K) with gi_cache=on, traced against the static world once and cached.",
+        about: "Fixed directions per face entry (K) with gi_cached_hits=on (unused otherwise), traced against the \
+                static world once and cached. Was `gi_rays`, still read.",
         field: &Range {
             range: GI_RAYS_RANGE,
             step: Step::Double,
@@ -341,7 +342,7 @@ pub static SETTINGS: &[Setting] = &[
     Setting {
         key: "gi_update",
         section: Section::Gi,
-        about: "Rays each entry traces per frame: fresh directions, or with gi_cache=on the next of its K (round robin).",
+        about: "Rays each entry traces per frame: fresh directions, or with gi_cached_hits=on the next of its K (round robin).",
         field: &Range {
             range: GI_UPDATE_RAYS_RANGE,
             step: Step::Double,
@@ -365,7 +366,7 @@ pub static SETTINGS: &[Setting] = &[
     Setting {
         key: "gi_table",
         section: Section::Gi,
-        about: "Slots in the GI cache's table (rounded up to a power of two; 124 bytes each, 376 with gi_cache=on at gi_rays=64). A full \
+        about: "Slots in the GI cache's table (rounded up to a power of two; 124 bytes each, 376 with gi_cached_hits=on at gi_cached_rays=64). A full \
                 table leaves new faces without indirect light, counted as gi_full.",
         field: &Range {
             range: GI_TABLE_RANGE,
@@ -401,10 +402,11 @@ pub static SETTINGS: &[Setting] = &[
         field: &Choice { get: |s| s.gi.bounces, set: |s, v| s.gi.bounces = v },
     },
     Setting {
-        key: "gi_cache",
+        key: "gi_cached_hits",
         section: Section::Gi,
         about: "Cache each entry's static hits along K fixed directions until an edit reaches them (cheaper, but \
-                each entry keeps the error of its fixed set); off traces fresh directions every frame.",
+                each entry keeps the error of its fixed set); off traces fresh directions every frame. Was \
+                `gi_cache`, still read.",
         field: &Choice { get: |s| s.gi.cache, set: |s, v| s.gi.cache = v },
     },
     Setting {
@@ -424,8 +426,12 @@ pub static SETTINGS: &[Setting] = &[
     },
 ];
 
-/// The setting called `key`.
+/// Keys renamed since settings files and scripts were written with them: (old, new). The old key is still read.
+pub const RENAMED: [(&str, &str); 2] = [("gi_cache", "gi_cached_hits"), ("gi_rays", "gi_cached_rays")];
+
+/// The setting called `key` (or once called `key`).
 pub fn setting(key: &str) -> Option<&'static Setting> {
+    let key = RENAMED.iter().find(|(old, _)| *old == key).map_or(key, |(_, new)| *new);
     SETTINGS.iter().find(|s| s.key == key)
 }
 

@@ -20,8 +20,8 @@ fn the_messages_list_the_keys_and_values_as_before_the_table() {
          debug=none|albedo|normal|hit|depth|reservoir|variance|history, sun=on|off, time=<0..24>, \
          shadows=on|off, exposure=<0.001..1000>, seed=<0..1000>, denoise=on|off, \
          candidates=<1..64>, taps=<0..16>, radius=<0..100>, temporal=on|off, spatial=on|off, \
-         sample=area|point, reuse=biased|one-ray|unbiased, local_lights=on|off, gi=on|off, gi_rays=<4..128>, gi_update=<1..64>, \
-         gi_alpha=<0.001..1>, gi_table=<4096..4194304>, gi_cell=<1..16>, gi_filter=on|off, gi_bounces=on|off, gi_cache=on|off, gi_qmc=on|off, gi_warm_up=on|off"
+         sample=area|point, reuse=biased|one-ray|unbiased, local_lights=on|off, gi=on|off, gi_cached_rays=<4..128>, gi_update=<1..64>, \
+         gi_alpha=<0.001..1>, gi_table=<4096..4194304>, gi_cell=<1..16>, gi_filter=on|off, gi_bounces=on|off, gi_cached_hits=on|off, gi_qmc=on|off, gi_warm_up=on|off"
     );
 }
 
@@ -118,7 +118,7 @@ fn panel_steps_stay_within_what_set_accepts() {
     lighting.step(&mut s, -1);
     assert_eq!(s.lighting, Lighting::Nee);
     let mut s = RenderSettings::default();
-    (0..20).for_each(|_| setting("gi_rays").unwrap().step(&mut s, 1));
+    (0..20).for_each(|_| setting("gi_cached_rays").unwrap().step(&mut s, 1));
     assert_eq!(s.gi.rays, GI_RAYS_RANGE.1);
 }
 
@@ -149,7 +149,7 @@ fn the_summary_shows_the_sections_that_apply() {
         )
     );
     assert!(
-        summary.contains("gi_rays=64 gi_update=8 gi_alpha=0.03 gi_table=262144 gi_cell=4 gi_filter=on"),
+        summary.contains("gi_cached_rays=64 gi_update=8 gi_alpha=0.03 gi_table=262144 gi_cell=4 gi_filter=on"),
         "{summary}"
     );
 }
@@ -188,4 +188,15 @@ fn an_error_quoting_a_newline_from_a_settings_file_stays_one_line() {
 fn an_error_about_a_value_of_the_wrong_kind_stays_one_line() {
     let error = RenderSettings::default().with_ron("{\"temp\noral\": ()}", "t.ron").unwrap_err();
     assert!(!error.contains('\n') && error.contains("is not a string, number or bool"), "{error}");
+}
+
+/// Renamed keys are still read from old settings files and scripts, into the setting that replaced them.
+#[test]
+fn renamed_keys_still_set_their_settings() {
+    let old = RenderSettings::default().with_pairs(&["gi_cache=on".to_string(), "gi_rays=16".to_string()]).unwrap();
+    let new = RenderSettings::default()
+        .with_pairs(&["gi_cached_hits=on".to_string(), "gi_cached_rays=16".to_string()])
+        .unwrap();
+    assert_eq!((old.gi.cache, old.gi.rays), (true, 16));
+    assert_eq!(old, new);
 }

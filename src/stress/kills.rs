@@ -10,7 +10,7 @@
 use crate::game::save_load::{backup_path, save_with_backup};
 use crate::progress::Progress;
 use crate::world::format::{load_world, temporaries_of, world_to_string};
-use crate::world::scene::generated_world;
+use crate::world::recipe::generated_world;
 use crate::world::source::load_path;
 use crate::world::{Edit, VoxelWorld};
 use bevy::math::{IVec3, UVec3};

@@ -197,8 +197,8 @@ const SETTING_CYCLE: [Soaked; 11] = [
     Soaked::Restir(&[]),
     Soaked::Restir(&["gi=off"]),
     // The GI cache at its extremes (a new K also rebuilds its tables).
-    Soaked::Restir(&["gi=on", "gi_rays=4", "gi_update=1", "gi_alpha=1"]),
-    Soaked::Restir(&["gi=on", "gi_rays=128", "gi_update=64", "gi_alpha=0.001", "gi_filter=off"]),
+    Soaked::Restir(&["gi=on", "gi_cached_rays=4", "gi_update=1", "gi_alpha=1"]),
+    Soaked::Restir(&["gi=on", "gi_cached_rays=128", "gi_update=64", "gi_alpha=0.001", "gi_filter=off"]),
     Soaked::Restir(&["candidates=1"]),
     Soaked::Restir(&["candidates=64", "taps=16", "radius=100"]),
     Soaked::Restir(&["radius=0"]),
@@ -238,7 +238,7 @@ fn random_camera(world: &VoxelWorld, rng: &mut Pcg) -> CameraView {
 
 /// Runs the soak on `config.scene` and returns what it saw.
 pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
-    let mut world = crate::world::scene::load_scene(&config.scene).map_err(|e| e.to_string())?;
+    let mut world = crate::world::recipe::load_scene(&config.scene).map_err(|e| e.to_string())?;
     // A drifting lantern and a swinging block (the game's own objects) the whole time: every pass traces them,
     // the GI cache gives them their own table.
     let lantern = std::sync::Arc::new(crate::dynamic::model_for_world("lantern", &mut world)?);

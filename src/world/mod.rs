@@ -9,7 +9,7 @@ pub mod grid;
 pub mod import;
 pub mod objects;
 pub mod palette;
-pub mod scene;
+pub mod recipe;
 pub mod source;
 pub mod terrain;
 pub mod traversal;

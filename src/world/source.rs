@@ -2,7 +2,7 @@
 
 use super::VoxelWorld;
 use super::format::{LoadError, MAX_FILE_BYTES, parse_world, read_limited};
-use super::scene::{generated_world, load_scene, parse_recipe};
+use super::recipe::{generated_world, load_scene, parse_recipe};
 use bevy::math::UVec3;
 use std::path::PathBuf;
 

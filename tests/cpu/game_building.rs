@@ -11,7 +11,7 @@ use glowbrick::game::undo::HistoryAction;
 use glowbrick::lights::plugin::LightsPlugin;
 use glowbrick::world::events::{EditRequest, WorldEditPlugin};
 use glowbrick::world::format::world_to_string;
-use glowbrick::world::scene::load_scene;
+use glowbrick::world::recipe::load_scene;
 use glowbrick::world::{CameraView, Edit, VoxelWorld};
 use std::path::PathBuf;
 

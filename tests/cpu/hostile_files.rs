@@ -7,7 +7,7 @@ use glowbrick::alloc_watch::{HeapMark, is_installed};
 use glowbrick::stress::fuzz::corpus::seeds;
 use glowbrick::stress::fuzz::{FuzzConfig, MAX_INPUT_HEAP, Target, input, run_fuzz};
 use glowbrick::world::format::{parse_world, world_to_string};
-use glowbrick::world::scene::generated_world;
+use glowbrick::world::recipe::generated_world;
 
 #[test]
 fn corrupted_inputs_to_every_loader_load_or_fail_in_one_line() {
@@ -71,6 +71,6 @@ fn a_terrain_of_absurd_frequency_is_one_error_line() {
     let start = recipe.find("frequency: ").unwrap() + "frequency: ".len();
     let end = start + recipe[start..].find([',', ')']).unwrap();
     let hostile = format!("{}7.1e36{}", &recipe[..start], &recipe[end..]);
-    let error = glowbrick::world::scene::parse_recipe(&hostile, "r.ron").unwrap_err().to_string();
+    let error = glowbrick::world::recipe::parse_recipe(&hostile, "r.ron").unwrap_err().to_string();
     assert!(error.contains("terrain frequency 7100000000000000000000000000000000000 must be within"), "{error}");
 }

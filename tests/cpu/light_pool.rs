@@ -213,7 +213,7 @@ fn alias_table_falls_back_to_uniform() {
 
 #[test]
 fn cornell_has_256_brick_lights() {
-    let cornell = glowbrick::world::scene::load_scene("cornell").unwrap();
+    let cornell = glowbrick::world::recipe::load_scene("cornell").unwrap();
     let pool = LightPool::from_world(&cornell);
     assert_eq!(pool.counts(), (0, 256));
     // Each brick light shows its bottom face (64 voxel faces) to the room; the front row also its open front.

@@ -7,7 +7,7 @@ use glowbrick::reference::metrics::compare;
 use glowbrick::reference::objects::ReferenceObjects;
 use glowbrick::reference::sampling::Pcg;
 use glowbrick::reference::{ReferenceLights, ReferenceOptions, Scene, SurfaceHit, render_reference};
-use glowbrick::world::scene::load_scene;
+use glowbrick::world::recipe::load_scene;
 use glowbrick::world::{Edit, Material, Palette, VoxelWorld};
 
 /// A closed room whose every wall glows with radiance 1 and reflects half of what it receives: every surface

@@ -5,7 +5,7 @@
 
 use glowbrick::stress::kills::{run_kills, save_forever};
 use glowbrick::world::format::{remove_stale_temporaries, save_world};
-use glowbrick::world::scene::generated_world;
+use glowbrick::world::recipe::generated_world;
 use std::process::Command;
 
 #[test]

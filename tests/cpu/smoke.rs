@@ -3,7 +3,7 @@
 //! long tests run.
 
 use glowbrick::reference::{ReferenceOptions, render_reference};
-use glowbrick::world::scene::load_scene;
+use glowbrick::world::recipe::load_scene;
 
 #[test]
 fn smoke_a_shipped_scene_loads_and_the_cpu_reference_lights_it() {

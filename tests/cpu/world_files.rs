@@ -2,7 +2,7 @@
 
 use bevy::math::{IVec3, UVec3};
 use glowbrick::world::format::{load_world, parse_world, save_world, world_to_string};
-use glowbrick::world::scene::{generated_world, load_scene, parse_recipe};
+use glowbrick::world::recipe::{generated_world, load_scene, parse_recipe};
 use glowbrick::world::source::load_path;
 use glowbrick::world::{Edit, VoxelWorld};
 use std::path::PathBuf;

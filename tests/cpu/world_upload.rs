@@ -2,7 +2,7 @@
 
 use bevy::prelude::*;
 use glowbrick::render::scene::world::{UploadState, WorldUpload, stage_world_upload};
-use glowbrick::world::scene::load_scene;
+use glowbrick::world::recipe::load_scene;
 use glowbrick::world::{Edit, VoxelWorld};
 
 fn app_with(world: VoxelWorld) -> App {

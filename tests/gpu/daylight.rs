@@ -17,7 +17,7 @@ use glowbrick::lights::daylight::Daylight;
 use glowbrick::reference::metrics::compare;
 use glowbrick::reference::{ReferenceOptions, render_reference};
 use glowbrick::world::events::EditRequest;
-use glowbrick::world::scene::load_scene;
+use glowbrick::world::recipe::load_scene;
 use glowbrick::world::{CameraView, Edit, VoxelWorld};
 
 const W: u32 = 96;

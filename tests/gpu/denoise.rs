@@ -20,7 +20,7 @@ use glowbrick::reference::metrics::compare;
 use glowbrick::reference::{ReferenceOptions, render_reference};
 use glowbrick::render::denoise::DENOISE_PASS_NAMES;
 use glowbrick::world::events::EditRequest;
-use glowbrick::world::scene::load_scene;
+use glowbrick::world::recipe::load_scene;
 use glowbrick::world::{CameraView, Edit, VoxelWorld, camera_ray, trace, view_transform, world_from_clip};
 
 const W: u32 = 96;

@@ -23,7 +23,7 @@ use glowbrick::render::gpu_types::GpuCounter;
 use glowbrick::settings::RenderSettings;
 use glowbrick::world::events::EditRequest;
 use glowbrick::world::palette::{Material, Palette};
-use glowbrick::world::scene::load_scene;
+use glowbrick::world::recipe::load_scene;
 use glowbrick::world::{CameraView, Edit, VoxelWorld};
 
 const W: u32 = 96;
@@ -99,7 +99,7 @@ pub fn the_gi_cache_converges_to_the_path_traced_reference_in_the_cornell_box() 
 
 /// A closed 18 x 10 x 18 room whose only light is the noon sun and sky through a one-voxel hole in its ceiling.
 /// Seen from a face of the room, the hole and the sunlit spot below it cover a few hundredths of the hemisphere:
-/// a fixed set of 64 directions per entry (the static visibility cache, `gi_cache=on`) finds them through none,
+/// a fixed set of 64 directions per entry (the static visibility cache, `gi_cached_hits=on`) finds them through none,
 /// one or two of its directions, an error of its own per entry that no blend over frames averages; fresh
 /// directions every frame (the default) average hundreds. The cache's spatial filter and 4-pixel camera cells
 /// would average neighbouring entries' errors, so they are off here. 96x64, 100 warm-up frames, 128 accumulated,
@@ -123,7 +123,7 @@ pub fn a_sky_seen_through_a_small_hole_is_averaged_over_fresh_directions() {
     let own = compare(&references[0], &references[1]).unwrap().relmse / 4.0;
     let truth = LinearImage::mean_of(&references);
     let mut errors = vec![];
-    for cache in ["gi_cache=off", "gi_cache=on"] {
+    for cache in ["gi_cached_hits=off", "gi_cached_hits=on"] {
         let pairs = ["gi=on", "gi_alpha=0.1", "time=12", "gi_filter=off", "gi_cell=1", cache];
         let image = common::masked(&converged(&mut renderer(&world, &view, &pairs), 100, 128), &keep);
         let m = compare(&image, &truth).unwrap();
@@ -208,7 +208,7 @@ pub fn an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_foll
     // One entry per voxel face up close (`gi_cell=1`): the counts below need more entries than this 96x64 view
     // keeps with the default 4-pixel cells (about 70).
     // The static visibility cache on: this counts the cached hits an edit makes it trace again.
-    let pairs = ["lighting=nee", "gi=on", "gi_cell=1", "gi_cache=on"];
+    let pairs = ["lighting=nee", "gi=on", "gi_cell=1", "gi_cached_hits=on"];
     let mut r = renderer(&world, &view, &pairs);
     r.render(8).unwrap();
     let quiet = r.counters().unwrap();
@@ -411,7 +411,7 @@ pub fn freeing_entries_keeps_the_rest_of_their_probe_chains_reachable() {
         &there,
         48,
         32,
-        &["lighting=nee", "gi=on", "gi_table=16384", "gi_cell=1", "gi_cache=on"],
+        &["lighting=nee", "gi=on", "gi_table=16384", "gi_cell=1", "gi_cached_hits=on"],
     );
     r.render(16).unwrap();
     r.set_view(&back);

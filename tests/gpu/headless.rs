@@ -4,7 +4,7 @@ use bevy::prelude::*;
 use bevy::shader::Shader;
 use glowbrick::headless::{HeadlessOptions, HeadlessRenderer};
 use glowbrick::render::shaders::GlowbrickShaders;
-use glowbrick::world::scene::load_scene;
+use glowbrick::world::recipe::load_scene;
 use std::time::{Duration, Instant};
 
 /// Every wait (a frame, the next frame, a sequence, the GPU counters) fails within seconds with the pass's name and

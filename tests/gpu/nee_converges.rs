@@ -18,7 +18,7 @@ use glowbrick::image_io::LinearImage;
 use glowbrick::reference::metrics::compare;
 use glowbrick::reference::{ReferenceOptions, render_reference};
 use glowbrick::settings::RenderSettings;
-use glowbrick::world::scene::load_scene;
+use glowbrick::world::recipe::load_scene;
 use glowbrick::world::{CameraView, VoxelWorld};
 
 const W: u32 = 96;

@@ -12,7 +12,7 @@ use common::compare_hits;
 use glowbrick::headless::HeadlessOptions;
 use glowbrick::image_io::LinearImage;
 use glowbrick::settings::RenderSettings;
-use glowbrick::world::scene::{generated_world, load_scene};
+use glowbrick::world::recipe::{generated_world, load_scene};
 use glowbrick::world::{CameraView, VoxelWorld, trace};
 use glowbrick::world::{camera_ray, view_transform, world_from_clip};
 

@@ -18,7 +18,7 @@ use glowbrick::reference::metrics::{Metrics, compare};
 use glowbrick::reference::{ReferenceOptions, render_reference};
 use glowbrick::world::events::EditRequest;
 use glowbrick::world::palette::{Material, Palette};
-use glowbrick::world::scene::load_scene;
+use glowbrick::world::recipe::load_scene;
 use glowbrick::world::{CameraView, Edit, VoxelWorld};
 
 const W: u32 = 96;

@@ -7,7 +7,7 @@ use crate::common;
 
 use glowbrick::reference::metrics::compare;
 use glowbrick::reference::{ReferenceOptions, render_reference};
-use glowbrick::world::scene::load_scene;
+use glowbrick::world::recipe::load_scene;
 
 const W: u32 = 48;
 const H: u32 = 32;

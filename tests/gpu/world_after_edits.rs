@@ -14,7 +14,7 @@ use glowbrick::render::scene::world::GpuWorld;
 use glowbrick::render::scene::world::WorldUpload;
 use glowbrick::settings::RenderSettings;
 use glowbrick::world::events::EditRequest;
-use glowbrick::world::scene::load_scene;
+use glowbrick::world::recipe::load_scene;
 use glowbrick::world::{Edit, VoxelWorld};
 
 fn gpu_light_state(app: &mut App) -> (u32, bool) {

@@ -4,7 +4,7 @@
 //! pass inserts the entries of the faces it sees; `shaders/gi/refresh.wgsl` keeps the entry's own direct light (one
 //! shadow ray a frame, `direct.wgsl`) and restarts entries an edit reached (the edit log below); `update.wgsl`
 //! traces a few fresh directions per entry and frame (a ray reads the direct light of the face it hits from that
-//! face's entry). With `gi_cache=on` refresh instead keeps K fixed directions' static hits per entry, traced once and
+//! face's entry). With `gi_cached_hits=on` refresh instead keeps K fixed directions' static hits per entry, traced once and
 //! again only for rays that cross a brick edited since, and update re-shades a few of them; `filter.wgsl` averages
 //! same-orientation neighbours; the shading passes interpolate. With GI off the buffers
 //! shrink to a placeholder and no GI pass is dispatched; without moving objects their passes are not either.
@@ -180,7 +180,7 @@ impl GiCache {
         let shape = Shape::of(gi, max_binding);
         if shape.halved(gi) && shape != self.shape {
             warn!(
-                "gi_table={} with gi_rays={} needs more than this GPU binds in one buffer ({max_binding} bytes): \
+                "gi_table={} with gi_cached_rays={} needs more than this GPU binds in one buffer ({max_binding} bytes): \
                  the GI table holds {} slots",
                 static_capacity(gi),
                 gi.rays,

@@ -32,7 +32,7 @@ pub struct Shape {
 impl Shape {
     /// The shape for `settings` on a device whose storage bindings hold at most `max_binding` bytes: the static
     /// table halves (down to 4,096 slots) until its rays buffer, the largest, fits (`gi_table` at 262,144 with
-    /// `gi_rays=128` needs 136 MB; lavapipe binds 128 MiB).
+    /// `gi_cached_rays=128` needs 136 MB; lavapipe binds 128 MiB).
     pub fn of(settings: &GiSettings, max_binding: u64) -> Shape {
         if settings.enabled {
             // Without the static visibility cache no hit is kept: one placeholder ray per entry.

@@ -7,7 +7,7 @@ use super::Target;
 use crate::settings::SETTINGS;
 use crate::world::format::{FORMAT_TAG, world_to_string};
 use crate::world::import::vx;
-use crate::world::scene::generated_world;
+use crate::world::recipe::generated_world;
 use bevy::math::UVec3;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};

@@ -19,7 +19,7 @@ use crate::world::VoxelWorld;
 use crate::world::format::{parse_world, text_from_bytes};
 use crate::world::grid::MAX_WORLD_EDGE;
 use crate::world::import::{vox, vx};
-use crate::world::scene::parse_recipe;
+use crate::world::recipe::parse_recipe;
 use corpus::Seed;
 use mutate::{Kind, mutate};
 use std::path::{Path, PathBuf};
