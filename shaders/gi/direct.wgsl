@@ -79,9 +79,8 @@ fn cell_sample_point(k: u32, rotation: vec2<u32>, rng: ptr<function, Rng>) -> ve
 
 // Blends one direct-light sample into the entry's estimate: over frames the estimate becomes the face's
 // average direct light, which is what a ray hitting anywhere on the face reads. After a change of light
-// (GI_RESTART) it starts over from GI_RESTART_SAMPLES samples: with one, a whole room swung with the few faces
-// the light reaches first (every entry's bounces read them), a lamp switched off left the room at 70-200% of its
-// new light for several frames.
+// (GI_RESTART) it starts over from GI_RESTART_SAMPLES samples: with one, a whole room swings with the few faces
+// the light reaches first, since every entry's bounces read them (docs/bench/why.md).
 fn update_direct(slot: u32, e: GiEntry) {
     if voxel_at(e.voxel) == 0u {
         gi_direct[slot] = vec4(0.0);

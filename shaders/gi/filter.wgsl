@@ -14,7 +14,7 @@ fn filter_entry(slot: u32) {
     }
     var filtered = gi_irradiance[slot].rgb;
     // A coarse entry is a cell's average already: a 3x3x3 block of cells would blur light across 3 x 2^level
-    // voxels (the window room's bias grew from +1.2% to +2.7% with it).
+    // voxels and add bias (docs/bench/why.md).
     if (gi.flags & GI_FILTER) != 0u && e.level == 0u {
         var sum = vec3(0.0);
         var count = 0.0;

@@ -126,8 +126,9 @@ fn refresh_static(@builtin(global_invocation_id) id: vec3<u32>) {
     } else if e.traced_epoch != gi.epoch {
         // Fresh directions (nothing cached): an edit inside the bounds of the segments traced so far restarts the
         // blend as a retraced hit does (one sample marks it for update.wgsl's GI_EDIT_RESTART), counted as
-        // retraced. Setting the blend back only part way (to the weights of a 6-frame-old entry) left an opened
-        // doorway's far side at 79% of its new light by frame 4 and 90% by frame 30: each bounce lagged the last.
+        // retraced. The blend restarts fully rather than part way: a partial restart leaves every bounce lagging
+        // the one before it, so an opened doorway's far side takes tens of frames to reach its new light
+        // (docs/bench/why.md).
         let forgotten = e.traced_epoch < gi.lost_epoch;
         if e.samples > 1u && e.traced_epoch != NEVER_TRACED && (forgotten || maybe_stale(e)) {
             gi_entries[slot].samples = 1u;

@@ -95,9 +95,9 @@ fn primary_ray_dir(pixel: vec2<u32>, size: vec2<f32>) -> vec3<f32> {
     let uv = (vec2<f32>(pixel) + 0.5) / size;
     let ndc = vec2(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
     // Reverse-Z infinite projection: depth 0 is the point at infinity, whose homogeneous w is 0, so the product
-    // is the direction itself. (The near-plane point minus the camera's position cancelled: with the camera 900
-    // voxels from the origin, as in the thesis' scenes, the direction lost ~1e-3 of itself and 6% of the pixels of
-    // a 320x180 view hit a neighbour of the CPU's voxel.)
+    // is the direction itself. (Not the near-plane point minus the camera's position: far from the origin, as in
+    // the thesis' scenes, that difference cancels digits and the GPU's rays drift from the CPU's;
+    // docs/bench/why.md.)
     return normalize((view.world_from_clip * vec4(ndc, 0.0, 1.0)).xyz);
 }
 

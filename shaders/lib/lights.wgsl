@@ -117,8 +117,8 @@ struct PickedLight {
 }
 
 // The high word of r x n (32x32 -> 64 bits, from 16-bit halves): a column among n that every column gets
-// floor or ceil of 2^32 / n codes of, as `lights::alias::column_of` on the CPU. floor(u * n) with a 24-bit u
-// was off by up to 4% per light at 10^6 lights and could not reach past 2^24.
+// floor or ceil of 2^32 / n codes of, as `lights::alias::column_of` on the CPU. Not floor(u * n) with a float u:
+// its 24 bits give columns unequal shares at large n and cannot reach past 2^24 (docs/bench/why.md).
 fn column_of(r: u32, n: u32) -> u32 {
     let r_lo = r & 0xffffu;
     let r_hi = r >> 16u;

@@ -30,8 +30,7 @@ fn rng_next(rng: ptr<function, Rng>) -> f32 {
 // point (0.32) keeps k exact to 2^32. In 2D Roberts' R2 (the plastic number's generators). In 4D R2's two
 // (first, for a direction) then the golden ratio's and sqrt(2)'s: every 1D and 2D projection of that set
 // integrates boxes better than random points, while Roberts' own R4 has 7 a1 within 0.003 of 6, so its first
-// coordinate repeats every 7 points and a run of 64 frames of 8 rays drew its elevations from 7 values (the
-// doorway test missed its 30 frames).
+// coordinate nearly repeats every 7 points and a long run draws its elevations from a handful of values.
 fn r2_point(k: u32, rotation: vec2<u32>) -> vec2<f32> {
     let x = vec2(k * 3242174889u, k * 2447445414u) + rotation;
     return vec2<f32>(x >> vec2(8u)) * (1.0 / 16777216.0);

@@ -46,9 +46,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 
     if (frame.restir_flags & RESTIR_TEMPORAL) != 0u && frame.prev_camera.w > 0.0 {
         // A moving object's surface has no temporal reuse: the reuse would weigh the old sample at the object's
-        // old place against this frame's geometry (the objects buffer holds only where objects are now), and
-        // following the object so brightened a sliding block by 160%; without the object test, reuse across its
-        // edges by 17% (the motion bench, docs/bench/denoise.md). Its candidates and spatial reuse remain.
+        // old place against this frame's geometry (the objects buffer holds only where objects are now); both
+        // following the object and reusing across its edges brighten a sliding block (the motion bench,
+        // docs/bench/denoise.md). Its candidates and spatial reuse remain.
         let moving = any(object_motion(surface.object) != vec3(0.0));
         let prev_pixel = select(previous_pixel(x.point, size), vec3(-1), moving);
         if prev_pixel.z == 1 {

@@ -102,8 +102,8 @@ impl AliasTable {
 }
 
 /// The column a uniform 32-bit number picks among `n`: the high word of `r x n` (a 32x32 -> 64-bit multiply), so
-/// every column gets floor or ceil of 2^32 / n codes. `floor(u x n)` with a 24-bit float `u` gave each of 10^6
-/// columns 16 or 17 of 2^24 codes (-4.4% / +1.6% off its pdf) and could not reach columns past 2^24.
+/// every column gets floor or ceil of 2^32 / n codes. Not `floor(u x n)` with a float `u`: its 24 bits give
+/// columns unequal shares at large n and cannot reach columns past 2^24 (docs/bench/why.md).
 /// `shaders/lib/lights.wgsl` (`column_of`) computes the same.
 pub fn column_of(r: u32, n: u32) -> u32 {
     ((r as u64 * n as u64) >> 32) as u32
