@@ -13,7 +13,7 @@
 //!    darkened the image by 5%: a dark pixel refused a bright neighbour's light); the last remodulates (albedo x
 //!    filtered + emission), draws the highlight and writes the image.
 //!
-//! Its per-view state (`DenoiseView`): the noisy frame, the history (this and last frame's), the wavelet's
+//! Its per-view state (`DenoiseView`): the noisy frame, the history (this and last frame's, swapped), the wavelet's
 //! ping-pong, and the rule that restarts the history on frames where an edit changed the world or its lights,
 //! so a lamp switched on or off shows at once, noisier for a few frames. Off (`denoise=off`, `render`'s
 //! default) none of the passes runs and the shading passes write the image themselves.
@@ -21,8 +21,9 @@
 use super::frame::{Dispatch, VoxelPass};
 use super::gpu_types::{DENOISE_HISTORY, DENOISE_ON, DENOISE_TEXEL_BYTES};
 use crate::settings::RenderSettings;
-use bevy::render::render_resource::{BindingResource, Buffer, BufferDescriptor, BufferUsages, CommandEncoder};
+use bevy::render::render_resource::{BindingResource, Buffer, BufferDescriptor, BufferUsages};
 use bevy::render::renderer::RenderDevice;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 const fn pass(name: &'static str, shader: &'static str, entry_point: &'static str) -> VoxelPass {
     VoxelPass { name, shader, entry_point, dispatch: Dispatch::Pixels }
@@ -55,12 +56,14 @@ pub fn frame_flags(ran_last_frame: bool, runs: bool, world_changed: bool) -> u32
 }
 
 /// One view's denoiser buffers (group 1, bindings 8 to 11): the shading passes' noisy frame; per pixel two
-/// texels of history (demodulated colour and length, luminance moments), this frame's and last frame's; the
-/// wavelet's two halves (colour and variance).
+/// texels of history (demodulated colour and length, luminance moments), this frame's and last frame's, two
+/// buffers that swap roles each denoised frame (the temporal pass writes every pixel's), so last frame's is never
+/// copied; the wavelet's two halves (colour and variance).
 pub struct DenoiseView {
     noisy: Buffer,
-    history: Buffer,
-    prev_history: Buffer,
+    histories: [Buffer; 2],
+    /// Which history this frame writes.
+    current: AtomicUsize,
     wavelet: Buffer,
     ran_last_frame: bool,
     /// Whether this frame runs the passes (set in prepare, read by the frame).
@@ -69,19 +72,19 @@ pub struct DenoiseView {
 
 impl DenoiseView {
     pub fn new(device: &RenderDevice, pixels: u64) -> Self {
-        let buffer = |label: &'static str, texels: u64, usage: BufferUsages| {
+        let buffer = |label: &'static str, texels: u64| {
             device.create_buffer(&BufferDescriptor {
                 label: Some(label),
                 size: texels * pixels * DENOISE_TEXEL_BYTES,
-                usage: BufferUsages::STORAGE | usage,
+                usage: BufferUsages::STORAGE,
                 mapped_at_creation: false,
             })
         };
         DenoiseView {
-            noisy: buffer("glowbrick_denoise_noisy", 1, BufferUsages::empty()),
-            history: buffer("glowbrick_denoise_history", 2, BufferUsages::COPY_SRC),
-            prev_history: buffer("glowbrick_denoise_prev_history", 2, BufferUsages::COPY_DST),
-            wavelet: buffer("glowbrick_denoise_wavelet", 2, BufferUsages::empty()),
+            noisy: buffer("glowbrick_denoise_noisy", 1),
+            histories: [buffer("glowbrick_denoise_history_a", 2), buffer("glowbrick_denoise_history_b", 2)],
+            current: AtomicUsize::new(0),
+            wavelet: buffer("glowbrick_denoise_wavelet", 2),
             ran_last_frame: false,
             runs: false,
         }
@@ -95,17 +98,18 @@ impl DenoiseView {
         flags
     }
 
-    /// Keeps last frame's history before this frame's temporal pass overwrites it.
-    pub fn keep_history(&self, encoder: &mut CommandEncoder) {
-        encoder.copy_buffer_to_buffer(&self.history, 0, &self.prev_history, 0, self.history.size());
+    /// Starts a denoised frame: last frame's history becomes the previous one.
+    pub fn swap_history(&self) {
+        self.current.fetch_xor(1, Ordering::Relaxed);
     }
 
     /// Bindings 8 to 11 of the view's group.
     pub fn bindings(&self) -> [BindingResource<'_>; 4] {
+        let current = self.current.load(Ordering::Relaxed);
         [
             self.noisy.as_entire_binding(),
-            self.history.as_entire_binding(),
-            self.prev_history.as_entire_binding(),
+            self.histories[current].as_entire_binding(),
+            self.histories[current ^ 1].as_entire_binding(),
             self.wavelet.as_entire_binding(),
         ]
     }

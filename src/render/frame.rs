@@ -219,18 +219,15 @@ pub fn view_frame(
     };
     let Some(view_binding) = view_uniforms.uniforms.binding() else { return };
     let size = target.main_texture().size();
+    // Last frame's G-buffer and denoiser history become the previous ones that the temporal reprojections read.
+    resources.gbuffers.swap();
+    if denoise.is_some() {
+        resources.denoise.swap_history();
+    }
     let layout = pipeline_cache.get_bind_group_layout(&layouts.view);
     let view_group = resources.bind_group(ctx.render_device(), &layout, target, view_binding);
     let diagnostics = ctx.diagnostic_recorder();
     let encoder = ctx.command_encoder();
-    // Last frame's G-buffer and denoiser history, kept for the temporal reprojections before this frame
-    // overwrites them; modes without a reprojection skip the copies.
-    if restir.is_some() || denoise.is_some() {
-        resources.gbuffers.keep_previous(encoder);
-    }
-    if denoise.is_some() {
-        resources.denoise.keep_history(encoder);
-    }
     let mut recorder = PassRecorder {
         encoder,
         diagnostics: diagnostics.as_deref(),

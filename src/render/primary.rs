@@ -3,12 +3,13 @@
 //! reads, touching the GI cache entries the camera sees, and lighting the hit itself (sun and sky, or one
 //! next-event-estimation sample of the light pool) unless Voxel ReSTIR shades it. Also the debug views.
 //!
-//! Its per-view state is the G-buffer, this frame's and last frame's (`GBuffers`).
+//! Its per-view state is the G-buffer, this frame's and last frame's (`GBuffers`, swapped, never copied).
 
 use super::frame::{Dispatch, VoxelPass};
 use super::gpu_types::GBUFFER_TEXEL_BYTES;
-use bevy::render::render_resource::{BindingResource, Buffer, BufferDescriptor, BufferUsages, CommandEncoder};
+use bevy::render::render_resource::{BindingResource, Buffer, BufferDescriptor, BufferUsages};
 use bevy::render::renderer::RenderDevice;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 pub const PRIMARY: VoxelPass =
     VoxelPass { name: "glowbrick_primary", shader: "primary.wgsl", entry_point: "main", dispatch: Dispatch::Pixels };
@@ -17,35 +18,38 @@ pub const PRIMARY: VoxelPass =
 pub const PRIMARY_PASS_NAME: &str = PRIMARY.name;
 
 /// A view's G-buffer (group 1, bindings 4 and 5): this frame's, which the primary pass writes, and last frame's,
-/// which the temporal reprojections of ReSTIR and the denoiser read.
+/// which the temporal reprojections of ReSTIR and the denoiser read. Two buffers that swap roles each frame (the
+/// primary pass writes every pixel of this frame's), so last frame's is never copied.
 pub struct GBuffers {
-    current: Buffer,
-    previous: Buffer,
+    buffers: [Buffer; 2],
+    /// Which of the two this frame writes.
+    current: AtomicUsize,
 }
 
 impl GBuffers {
     pub fn new(device: &RenderDevice, pixels: u64) -> Self {
-        let buffer = |label: &'static str, usage: BufferUsages| {
+        let buffer = |label: &'static str| {
             device.create_buffer(&BufferDescriptor {
                 label: Some(label),
                 size: pixels * GBUFFER_TEXEL_BYTES,
-                usage: BufferUsages::STORAGE | usage,
+                usage: BufferUsages::STORAGE,
                 mapped_at_creation: false,
             })
         };
         GBuffers {
-            current: buffer("glowbrick_gbuffer", BufferUsages::COPY_SRC),
-            previous: buffer("glowbrick_prev_gbuffer", BufferUsages::COPY_DST),
+            buffers: [buffer("glowbrick_gbuffer_a"), buffer("glowbrick_gbuffer_b")],
+            current: AtomicUsize::new(0),
         }
     }
 
-    /// Keeps last frame's G-buffer before this frame's primary pass overwrites it.
-    pub fn keep_previous(&self, encoder: &mut CommandEncoder) {
-        encoder.copy_buffer_to_buffer(&self.current, 0, &self.previous, 0, self.current.size());
+    /// Starts a frame of the primary pass: last frame's G-buffer becomes the previous one.
+    pub fn swap(&self) {
+        self.current.fetch_xor(1, Ordering::Relaxed);
     }
 
-    /// Bindings 4 and 5 of the view's group.
+    /// Bindings 4 and 5 of the view's group: this frame's, then last frame's.
     pub fn bindings(&self) -> [BindingResource<'_>; 2] {
-        [self.current.as_entire_binding(), self.previous.as_entire_binding()]
+        let current = self.current.load(Ordering::Relaxed);
+        [self.buffers[current].as_entire_binding(), self.buffers[current ^ 1].as_entire_binding()]
     }
 }
