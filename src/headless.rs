@@ -219,8 +219,8 @@ impl HeadlessRenderer {
     }
 
     /// The one loop every read-back waits in: steps frames until `copies` copies of `readback` arrived and
-    /// returns them. `armed(renderer)`, asked before each step, says whether the readback should be on by then
-    /// (once on, it stays on: it copies every frame after). A voxel pass whose pipeline failed fails the wait at
+    /// returns them. `armed(renderer)` runs before every step (where a sequence sets its next frame up) and says
+    /// whether the readback should be on by then (once on, it stays on: it copies every frame after). A voxel pass whose pipeline failed fails the wait at
     /// once, with its name, rather than waiting out the timeout for frames that will never come.
     fn read_back(
         &mut self,
@@ -236,7 +236,9 @@ impl HeadlessRenderer {
             self,
             timeout,
             |r| {
-                if entity.is_none() && armed(r) {
+                // Asked every step, even once armed: a sequence sets each of its frames up here.
+                let arm = armed(r);
+                if entity.is_none() && arm {
                     let sink = delivered.clone();
                     let observer = move |event: On<ReadbackComplete>| {
                         if let Ok(mut all) = sink.lock() {

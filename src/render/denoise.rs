@@ -65,8 +65,7 @@ pub struct DenoiseView {
     /// Which history this frame writes.
     current: AtomicUsize,
     wavelet: Buffer,
-    ran_last_frame: bool,
-    /// Whether this frame runs the passes (set in prepare, read by the frame).
+    /// Whether this frame runs the passes (set in prepare, read by the frame; last frame's until then).
     pub runs: bool,
 }
 
@@ -85,15 +84,13 @@ impl DenoiseView {
             histories: [buffer("glowbrick_denoise_history_a", 2), buffer("glowbrick_denoise_history_b", 2)],
             current: AtomicUsize::new(0),
             wavelet: buffer("glowbrick_denoise_wavelet", 2),
-            ran_last_frame: false,
             runs: false,
         }
     }
 
     /// Starts this frame: `FrameParams::denoise`, the `DENOISE_*` flags.
     pub fn begin_frame(&mut self, runs: bool, world_changed: bool) -> u32 {
-        let flags = frame_flags(self.ran_last_frame, runs, world_changed);
-        self.ran_last_frame = runs;
+        let flags = frame_flags(self.runs, runs, world_changed);
         self.runs = runs;
         flags
     }

@@ -182,15 +182,30 @@ impl PassRecorder<'_> {
     }
 }
 
-/// The compiled pipelines of a technique's passes when `runs`: `Some(None)` when it does not run, `None` while
-/// its pipelines compile (a frame waits for all of them rather than showing half a frame).
-fn technique_pipelines<'a>(
-    runs: bool,
-    pipelines: &VoxelPipelines,
-    cache: &'a PipelineCache,
-    passes: &[VoxelPass],
-) -> Option<Option<Vec<&'a ComputePipeline>>> {
-    if runs { pipelines.get(cache, passes).map(Some) } else { Some(None) }
+/// A technique's passes this frame.
+enum TechniquePipelines<'a> {
+    /// It does not run.
+    Skipped,
+    /// It runs, but its pipelines are still compiling: the frame waits for all of them rather than showing half.
+    Compiling,
+    Ready(Vec<&'a ComputePipeline>),
+}
+
+impl<'a> TechniquePipelines<'a> {
+    fn of(runs: bool, pipelines: &VoxelPipelines, cache: &'a PipelineCache, passes: &[VoxelPass]) -> Self {
+        if !runs {
+            return TechniquePipelines::Skipped;
+        }
+        pipelines.get(cache, passes).map_or(TechniquePipelines::Compiling, TechniquePipelines::Ready)
+    }
+
+    /// The pipelines to dispatch: none when skipped.
+    fn dispatched(self) -> Vec<&'a ComputePipeline> {
+        match self {
+            TechniquePipelines::Ready(ready) => ready,
+            _ => Vec::new(),
+        }
+    }
 }
 
 /// One camera's frame, top to bottom.
@@ -212,16 +227,17 @@ pub fn view_frame(
     };
     let Some(gi_group) = scene.gi.as_ref().and_then(|g| g.bind_group.as_ref()) else { return };
     let Some(primary_pipeline) = pipelines.get(&pipeline_cache, &[primary::PRIMARY]).map(|p| p[0]) else { return };
-    let cache = &pipeline_cache;
-    let Some(restir) = technique_pipelines(resources.restir.runs, &pipelines, cache, &restir::PASSES) else { return };
-    let Some(denoise) = technique_pipelines(resources.denoise.runs, &pipelines, cache, &denoise::PASSES) else {
+    let restir = TechniquePipelines::of(resources.restir.runs, &pipelines, &pipeline_cache, &restir::PASSES);
+    let denoise = TechniquePipelines::of(resources.denoise.runs, &pipelines, &pipeline_cache, &denoise::PASSES);
+    if matches!(restir, TechniquePipelines::Compiling) || matches!(denoise, TechniquePipelines::Compiling) {
         return;
-    };
+    }
+    let denoised = matches!(denoise, TechniquePipelines::Ready(_));
     let Some(view_binding) = view_uniforms.uniforms.binding() else { return };
     let size = target.main_texture().size();
     // Last frame's G-buffer and denoiser history become the previous ones that the temporal reprojections read.
     resources.gbuffers.swap();
-    if denoise.is_some() {
+    if denoised {
         resources.denoise.swap_history();
     }
     let layout = pipeline_cache.get_bind_group_layout(&layouts.view);
@@ -242,11 +258,11 @@ pub fn view_frame(
     // 1. G-buffer, GI cache entries touched; the image too unless ReSTIR shades it.
     recorder.dispatch(&primary::PRIMARY, primary_pipeline, size);
     // 2-4. Voxel ReSTIR: candidates + temporal reuse, spatial reuse, shading.
-    for (pass, pipeline) in restir::PASSES.iter().zip(restir.into_iter().flatten()) {
+    for (pass, pipeline) in restir::PASSES.iter().zip(restir.dispatched()) {
         recorder.dispatch(pass, pipeline, size);
     }
     // 5-9. The denoiser: temporal accumulation, then the wavelet's iterations, the last writing the image.
-    for (pass, pipeline) in denoise::PASSES.iter().zip(denoise.into_iter().flatten()) {
+    for (pass, pipeline) in denoise::PASSES.iter().zip(denoise.dispatched()) {
         recorder.dispatch(pass, pipeline, size);
     }
     frames.0.fetch_add(1, Ordering::Relaxed);

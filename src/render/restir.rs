@@ -85,8 +85,7 @@ impl RestirParams {
 pub struct RestirView {
     reservoirs_temporal: Buffer,
     reservoirs_final: Buffer,
-    ran_last_frame: bool,
-    /// Whether this frame runs the passes (set in prepare, read by the frame).
+    /// Whether this frame runs the passes (set in prepare, read by the frame; last frame's until then).
     pub runs: bool,
 }
 
@@ -103,15 +102,13 @@ impl RestirView {
         RestirView {
             reservoirs_temporal: buffer("glowbrick_reservoirs_temporal"),
             reservoirs_final: buffer("glowbrick_reservoirs_final"),
-            ran_last_frame: false,
             runs: false,
         }
     }
 
     /// Starts this frame: whether the passes run, and whether last frame's reservoirs are its history.
     pub fn begin_frame(&mut self, runs: bool, lights_changed: bool) -> bool {
-        let history = history_is_valid(self.ran_last_frame, runs, lights_changed);
-        self.ran_last_frame = runs;
+        let history = history_is_valid(self.runs, runs, lights_changed);
         self.runs = runs;
         history
     }
