@@ -165,7 +165,8 @@ pub(crate) mod tests {
         ]
     }
 
-    fn permutations<T: Clone>(items: &[T]) -> Vec<Vec<T>> {
+    /// Every order of `items`.
+    pub(crate) fn permutations<T: Clone>(items: &[T]) -> Vec<Vec<T>> {
         if items.is_empty() {
             return vec![Vec::new()];
         }

@@ -401,7 +401,7 @@ fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &World
 mod tests {
     use super::*;
     use crate::render::scene::staging::BufferOp;
-    use crate::render::scene::staging::tests::run;
+    use crate::render::scene::staging::tests::{permutations, run};
     use crate::world::Edit;
 
     /// The GPU world's buffers as `prepare_gpu_world` leaves them, on the CPU.
@@ -475,21 +475,6 @@ mod tests {
         }
     }
 
-    fn permutations(items: &[Change]) -> Vec<Vec<Change>> {
-        if items.is_empty() {
-            return vec![Vec::new()];
-        }
-        let mut out = Vec::new();
-        for i in 0..items.len() {
-            let mut rest = items.to_vec();
-            let first = rest.remove(i);
-            for mut tail in permutations(&rest) {
-                tail.insert(0, first);
-                out.push(tail);
-            }
-        }
-        out
-    }
 
     /// Full and partial world uploads queued in every order, drained in one or two batches, into a GPU world
     /// that exists already or is created by the first full upload in the batch: the GPU holds the CPU world's
