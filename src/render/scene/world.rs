@@ -475,7 +475,6 @@ mod tests {
         }
     }
 
-
     /// Full and partial world uploads queued in every order, drained in one or two batches, into a GPU world
     /// that exists already or is created by the first full upload in the batch: the GPU holds the CPU world's
     /// bytes. Partial uploads behind the creating full upload, and the material table across a full upload that
