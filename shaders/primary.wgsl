@@ -6,14 +6,19 @@
 #import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, primary_ray_dir, lit_view,
     pixel_footprint, NOT_A_VOXEL}
 #import glowbrick::gi::cache::{gi_on, gi_touch_surface, gi_incoming, camera_level}
-#import glowbrick::traversal::{Hit, trace_scene, face_normal, INF}
+#import glowbrick::traversal::{Hit, trace_scene, face_normal, INF, count_rays}
 #import glowbrick::lights::{scene, sky, background, direct_sample, disk_sample, sky_sample}
 #import glowbrick::random::{Rng, pcg}
-#import glowbrick::constants::{LIGHTING_NEE, LIGHTING_EMITTERS, LIGHTING_FULL, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
+#import glowbrick::constants::{COUNT_RAYS_PRIMARY, LIGHTING_NEE, LIGHTING_EMITTERS, LIGHTING_FULL, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
     DEBUG_RESERVOIR, RAY_OFFSET}
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    primary_pixel(id);
+    count_rays(COUNT_RAYS_PRIMARY);
+}
+
+fn primary_pixel(id: vec3<u32>) {
     let size = vec2<u32>(view.viewport.zw);
     if any(id.xy >= size) {
         return;

@@ -4,8 +4,20 @@
 
 #import glowbrick::world::{world_info, brick_cell, pooled_voxel, objects, object_count, object_voxel, Object}
 #import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT}
+#import glowbrick::counters::counters
 
 const INF: f32 = 3.0e38;
+
+// Brick-grid rays (calls of `trace`) this invocation traced, added to a pass's per-frame counter once per
+// invocation by a pass whose entry point ends with `count_rays` (same-address atomics from a SIMD group are
+// combined by the compiler on GPUs; a workgroup sum with two barriers cost more on software Vulkan).
+var<private> rays_traced: u32;
+
+fn count_rays(counter: u32) {
+    if rays_traced > 0u {
+        atomicAdd(&counters[counter], rays_traced);
+    }
+}
 
 struct Hit {
     // The voxel hit: world coordinates, or the object's local ones when `object` is not 0.
@@ -114,6 +126,7 @@ fn trace_in_brick(origin: vec3<f32>, dir: vec3<f32>, inv: vec3<f32>, brick: vec3
 
 // The first solid voxel along the ray (unit `dir`) within max_distance.
 fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
+    rays_traced += 1u;
     let size = vec3<f32>(world_info.size);
     let entry = box_entry(origin, dir, vec3(0.0), size);
     let t_end = min(entry.y, max_distance);

@@ -1,6 +1,8 @@
 // Voxel ReSTIR pass 1: M_init candidates per pixel by resampled importance sampling, one visibility ray for the
 // chosen one, then temporal reuse of last frame's final reservoir at the reprojected pixel.
 
+#import glowbrick::traversal::{count_rays}
+#import glowbrick::constants::COUNT_RAYS_RESTIR_INITIAL
 #import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index, previous_pixel}
 #import glowbrick::constants::RESTIR_TEMPORAL
 #import glowbrick::world::object_motion
@@ -13,6 +15,11 @@ const HISTORY_CAP: f32 = 20.0;
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    initial_pixel(id);
+    count_rays(COUNT_RAYS_RESTIR_INITIAL);
+}
+
+fn initial_pixel(id: vec3<u32>) {
     let size = vec2<u32>(view.viewport.zw);
     if any(id.xy >= size) {
         return;

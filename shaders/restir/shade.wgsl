@@ -4,6 +4,8 @@
 // again, and its M still says how many candidates found this pixel's light occluded. (Emptying it instead, M = 0,
 // forgets that evidence and measurably brightens penumbrae.)
 
+#import glowbrick::traversal::{count_rays}
+#import glowbrick::constants::COUNT_RAYS_RESTIR_SHADE
 #import glowbrick::world::materials
 #import glowbrick::frame::{frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output,
     primary_ray_dir, pixel_footprint}
@@ -15,6 +17,11 @@
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    shade_pixel(id);
+    count_rays(COUNT_RAYS_RESTIR_SHADE);
+}
+
+fn shade_pixel(id: vec3<u32>) {
     let size = vec2<u32>(view.viewport.zw);
     if any(id.xy >= size) {
         return;

@@ -1,6 +1,8 @@
 // Voxel ReSTIR pass 2: spatial reuse. Each pixel merges its reservoir with k neighbours' in a disk of radius r
 // pixels that share its face orientation and depth (within 10%). With spatial reuse off, it copies.
 
+#import glowbrick::traversal::{count_rays}
+#import glowbrick::constants::COUNT_RAYS_RESTIR_SPATIAL
 #import glowbrick::frame::{frame, view, gbuffer, unpack_surface, pixel_index}
 #import glowbrick::constants::{RESTIR_SPATIAL, MAX_TAPS, PI}
 #import glowbrick::random::{Rng, rng_next}
@@ -9,6 +11,11 @@
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    spatial_pixel(id);
+    count_rays(COUNT_RAYS_RESTIR_SPATIAL);
+}
+
+fn spatial_pixel(id: vec3<u32>) {
     let size = vec2<u32>(view.viewport.zw);
     if any(id.xy >= size) {
         return;

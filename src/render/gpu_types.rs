@@ -240,16 +240,24 @@ pub enum GpuCounter {
     GiBorrowed = 7,
     /// GI ray hits whose face had no direct-light estimate yet and traced their own shadow ray.
     GiDirectTraced = 8,
+    /// Brick-grid rays (walks of the world's DDA) the primary pass traced this frame.
+    RaysPrimary = 9,
+    /// Brick-grid rays ReSTIR's candidates + temporal pass traced this frame.
+    RaysRestirInitial = 10,
+    /// Brick-grid rays ReSTIR's spatial pass traced this frame.
+    RaysRestirSpatial = 11,
+    /// Brick-grid rays ReSTIR's shading pass traced this frame.
+    RaysRestirShade = 12,
     /// Since the start: ReSTIR reservoirs read with a non-finite field (reset to empty).
-    ReservoirResets = 9,
+    ReservoirResets = 13,
     /// Since the start: GI estimates that came out non-finite (replaced by zero).
-    GiResets = 10,
+    GiResets = 14,
     /// Since the start: GI entries freed (unused, their object gone, or their face lost to an edit).
-    GiFreedTotal = 11,
+    GiFreedTotal = 15,
 }
 
 impl GpuCounter {
-    pub const ALL: [(GpuCounter, &'static str); 12] = [
+    pub const ALL: [(GpuCounter, &'static str); 16] = [
         (GpuCounter::GiUpdated, "COUNT_GI_UPDATED"),
         (GpuCounter::GiRetraced, "COUNT_GI_RETRACED"),
         (GpuCounter::GiLive, "COUNT_GI_LIVE"),
@@ -259,6 +267,10 @@ impl GpuCounter {
         (GpuCounter::GiRaysTraced, "COUNT_GI_RAYS_TRACED"),
         (GpuCounter::GiBorrowed, "COUNT_GI_BORROWED"),
         (GpuCounter::GiDirectTraced, "COUNT_GI_DIRECT_TRACED"),
+        (GpuCounter::RaysPrimary, "COUNT_RAYS_PRIMARY"),
+        (GpuCounter::RaysRestirInitial, "COUNT_RAYS_RESTIR_INITIAL"),
+        (GpuCounter::RaysRestirSpatial, "COUNT_RAYS_RESTIR_SPATIAL"),
+        (GpuCounter::RaysRestirShade, "COUNT_RAYS_RESTIR_SHADE"),
         (GpuCounter::ReservoirResets, "COUNT_RESERVOIR_RESETS"),
         (GpuCounter::GiResets, "COUNT_GI_RESETS"),
         (GpuCounter::GiFreedTotal, "COUNT_GI_FREED_TOTAL"),
@@ -267,8 +279,8 @@ impl GpuCounter {
 
 /// Words in the counters buffer, and how many of the first ones restart every frame.
 pub const COUNTERS: usize = 16;
-pub const PER_FRAME_COUNTERS: usize = 9;
-const _: () = assert!(GpuCounter::GiDirectTraced as usize + 1 == PER_FRAME_COUNTERS);
+pub const PER_FRAME_COUNTERS: usize = 13;
+const _: () = assert!(GpuCounter::RaysRestirShade as usize + 1 == PER_FRAME_COUNTERS);
 const _: () = assert!((GpuCounter::GiFreedTotal as usize) < COUNTERS);
 
 /// `restir_flags` bits.

@@ -32,6 +32,7 @@ mod headless;
 mod nee_converges;
 mod objects;
 mod primary_matches_cpu;
+mod ray_budget;
 mod restir;
 mod smoke;
 mod stress;
@@ -109,6 +110,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             a_lanterns_light_reaches_the_floor_through_the_gi_cache,
             with_an_object_in_view_restir_converges_to_the_reference,
         ],
+        ray_budget: [the_game_frame_keeps_to_its_rays_per_pixel],
         primary_matches_cpu: [
             a_rendered_sequence_returns_each_frame_with_its_own_camera,
             gpu_primary_rays_match_cpu_traversal,
