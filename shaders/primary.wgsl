@@ -9,14 +9,21 @@
 #import glowbrick::traversal::{Hit, trace_scene, face_normal, INF, count_rays}
 #import glowbrick::lights::{scene, sky, background, direct_sample, disk_sample, sky_sample}
 #import glowbrick::random::{Rng, pcg}
-#import glowbrick::constants::{COUNT_RAYS_PRIMARY, LIGHTING_NEE, LIGHTING_EMITTERS, LIGHTING_FULL, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
+#import glowbrick::counters::counters
+#import glowbrick::constants::{COUNT_RAYS_PRIMARY, COUNT_PRIMARY_HITS, LIGHTING_NEE, LIGHTING_EMITTERS, LIGHTING_FULL, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
     DEBUG_RESERVOIR, RAY_OFFSET}
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     primary_pixel(id);
     count_rays(COUNT_RAYS_PRIMARY);
+    if pixel_hit {
+        atomicAdd(&counters[COUNT_PRIMARY_HITS], 1u);
+    }
 }
+
+// Whether this invocation's primary ray hit a voxel (the bench's rays per hit pixel).
+var<private> pixel_hit: bool;
 
 fn primary_pixel(id: vec3<u32>) {
     let size = vec2<u32>(view.viewport.zw);
@@ -26,6 +33,7 @@ fn primary_pixel(id: vec3<u32>) {
     let origin = view.world_position;
     let dir = primary_ray_dir(id.xy, vec2<f32>(size));
     let hit = trace_scene(origin, dir, INF);
+    pixel_hit = hit.found;
     let point = origin + dir * hit.distance;
     gbuffer[pixel_index(id.xy)] =
         select(vec4(0.0), vec4(point, pack_surface(hit.face, hit.material, hit.object)), hit.found);

@@ -151,6 +151,14 @@ impl HeadlessRenderer {
             .and_then(|d| d.average())
     }
 
+    /// Forgets the GPU times recorded so far, so that `gpu_pass_ms` averages only the frames rendered from now on
+    /// (not the warm-up's).
+    pub fn clear_gpu_pass_times(&mut self) {
+        if let Some(mut store) = self.app.world_mut().get_resource_mut::<bevy::diagnostic::DiagnosticsStore>() {
+            store.iter_mut().for_each(|d| d.clear_history());
+        }
+    }
+
     /// The GPU counters of the next rendered frame (`render::gpu_types::GpuCounter` indexes them). Renders that
     /// frame (and any before the readback arrives).
     pub fn counters(&mut self) -> Result<[u32; COUNTERS], String> {

@@ -3,7 +3,7 @@
 #define_import_path glowbrick::traversal
 
 #import glowbrick::world::{world_info, brick_cell, pooled_voxel, objects, object_count, object_voxel, Object}
-#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT}
+#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, COUNT_BRICK_STEPS, COUNT_VOXEL_STEPS}
 #import glowbrick::counters::counters
 
 const INF: f32 = 3.0e38;
@@ -12,10 +12,18 @@ const INF: f32 = 3.0e38;
 // invocation by a pass whose entry point ends with `count_rays` (same-address atomics from a SIMD group are
 // combined by the compiler on GPUs; a workgroup sum with two barriers cost more on software Vulkan).
 var<private> rays_traced: u32;
+// Their steps at each level of the grid, each step one memory load: of the top grid (a brick), of the brick pool (a
+// voxel). Added to the frame's totals by the same call.
+var<private> brick_steps: u32;
+var<private> voxel_steps: u32;
 
 fn count_rays(counter: u32) {
     if rays_traced > 0u {
         atomicAdd(&counters[counter], rays_traced);
+        atomicAdd(&counters[COUNT_BRICK_STEPS], brick_steps);
+        if voxel_steps > 0u {
+            atomicAdd(&counters[COUNT_VOXEL_STEPS], voxel_steps);
+        }
     }
 }
 
@@ -105,6 +113,7 @@ fn trace_in_brick(origin: vec3<f32>, dir: vec3<f32>, inv: vec3<f32>, brick: vec3
     }
     // At most 22 steps cross an 8^3 brick; the bound guards against a non-finite t.
     for (var i = 0; i < 3 * BRICK_SIZE; i++) {
+        voxel_steps += 1u;
         let material = pooled_voxel(slot, voxel - lo);
         if material != 0u {
             return Hit(voxel, face_entered(axis, positive[axis]), t, material, true, 0u);
@@ -151,6 +160,7 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
     }
     let max_steps = last_brick.x + last_brick.y + last_brick.z + 3;
     for (var i = 0; i < max_steps; i++) {
+        brick_steps += 1u;
         let cell = brick_cell(brick);
         if cell != 0u {
             if (cell & POOLED_FLAG) == 0u {

@@ -4,7 +4,7 @@
 #import glowbrick::traversal::{count_rays}
 #import glowbrick::constants::COUNT_RAYS_RESTIR_INITIAL
 #import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index, previous_pixel}
-#import glowbrick::constants::RESTIR_TEMPORAL
+#import glowbrick::constants::{RESTIR_TEMPORAL, RESTIR_INITIAL_VISIBILITY}
 #import glowbrick::world::object_motion
 #import glowbrick::random::{Rng, rng_next}
 #import glowbrick::restir::common::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
@@ -45,8 +45,10 @@ fn initial_pixel(id: vec3<u32>) {
     let own_target = target_of(x, r);
     r.big_w = select(0.0, r.w_sum / (r.m * own_target), r.m * own_target > 0.0);
     r.target_value = own_target;
-    // Visibility reuse (thesis §4.4): an occluded choice keeps its M but contributes nothing when reused.
-    if r.big_w > 0.0 && !reservoir_visible(x, r) {
+    // Visibility reuse (thesis §4.4): an occluded choice keeps its M but contributes nothing when reused. Without
+    // this ray the shading pass's final shadow ray gives the same verdict to next frame's reuse.
+    let test_visibility = (frame.restir_flags & RESTIR_INITIAL_VISIBILITY) != 0u;
+    if test_visibility && r.big_w > 0.0 && !reservoir_visible(x, r) {
         r.big_w = 0.0;
         r.w_sum = 0.0;
     }
@@ -78,12 +80,14 @@ fn initial_pixel(id: vec3<u32>) {
                 var p_prev_at_current = target_of(prev_shading, current);
                 // This pixel's target at its own sample, computed above.
                 let p_current_at_current = current.target_value;
-                if unbiased() && p_current_at_prev > 0.0 && !reservoir_visible(x, prev) {
+                // (Each visibility ray below is skipped where the weight it decides multiplies a W of 0.)
+                if unbiased() && p_current_at_prev > 0.0 && prev.big_w > 0.0 && !reservoir_visible(x, prev) {
                     p_current_at_prev = 0.0;
                 }
-                // From the same point (a still camera) the current sample is visible or has W = 0: no ray.
+                // From the same point (a still camera) both inputs see with the same visibility: no ray.
                 let moved = any(prev_shading.point != x.point);
-                if own_sample_rays() && moved && p_prev_at_current > 0.0 && !reservoir_visible(prev_shading, current) {
+                if own_sample_rays() && moved && p_prev_at_current > 0.0 && current.big_w > 0.0
+                    && !reservoir_visible(prev_shading, current) {
                     p_prev_at_current = 0.0;
                 }
                 let m_prev = pair_weight(prev.m, p_prev_at_prev, current.m, p_current_at_prev, 1.0);

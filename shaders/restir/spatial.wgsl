@@ -71,14 +71,15 @@ fn spatial_pixel(id: vec3<u32>) {
         // visibility-tested target, as its MIS weights use it: with an unshadowed target, a sample this pixel
         // cannot see would get the neighbour's full weight with nothing to damp its W, and inflate w_sum.
         var p_own_at_tap = target_of(x, tap);
-        if unbiased() && p_own_at_tap > 0.0 && !reservoir_visible(x, tap) {
+        // (Each visibility ray below is skipped where the weight it decides multiplies a W of 0.)
+        if unbiased() && p_own_at_tap > 0.0 && tap.big_w > 0.0 && !reservoir_visible(x, tap) {
             p_own_at_tap = 0.0;
         }
         let m_tap = pair_weight(tap.m, target_of(neighbour, tap), m_share, p_own_at_tap, share);
         stream(&merged, tap, m_tap * p_own_at_tap * tap.big_w, tap.m, rng_next(&rng));
         // This pixel's sample, seen from the neighbour.
         var p_tap_at_own = target_of(neighbour, own);
-        if own_sample_rays() && p_tap_at_own > 0.0 && !reservoir_visible(neighbour, own) {
+        if own_sample_rays() && p_tap_at_own > 0.0 && own.big_w > 0.0 && !reservoir_visible(neighbour, own) {
             p_tap_at_own = 0.0;
         }
         m_own -= pair_weight(tap.m, p_tap_at_own, m_share, p_own_at_own, share);

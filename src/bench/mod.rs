@@ -1,4 +1,4 @@
-//! `glowbrick bench`: run time against error, in five modes, each in its own module with its own config and its
+//! `glowbrick bench`: run time against error, in six modes, each in its own module with its own config and its
 //! report writer beside its measures:
 //!
 //! - `sweep`: every scene x render setting against a direct-light reference, the equal-time comparison
@@ -7,6 +7,7 @@
 //! - `gi`: the GI cache (and `gi_scale`, at game sizes).
 //! - `daylight`: the game's lighting at three times of day.
 //! - `denoise`: the denoiser (with `reaction` for a lamp switched off and on, `motion` for ghosting).
+//! - `frame`: the game's frame pass by pass, GPU time and ray / step counters, no reference.
 //!
 //! Every mode measures against CPU references from one `reference_cache::ReferenceCache`. What is shared by
 //! several modes lives here.
@@ -15,6 +16,7 @@ pub mod convergence;
 pub mod daylight;
 pub mod denoise;
 pub mod equal_time;
+pub mod frame;
 pub mod gi;
 pub mod gi_scale;
 pub mod motion;

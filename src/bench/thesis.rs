@@ -119,12 +119,20 @@ fn render_mode(
     (label, out): (&str, &Path),
 ) -> Result<ThesisResult, String> {
     let radius = (30.0 * width as f32 / 1600.0).round().max(1.0);
-    let pairs = ["lighting=restir", "candidates=32", "taps=5", "temporal=on", "spatial=on", "reuse=biased"]
-        .iter()
-        .map(|p| p.to_string())
-        .chain([format!("radius={radius}"), format!("sample={sample}")])
-        .chain(extra.iter().cloned())
-        .collect::<Vec<_>>();
+    let pairs = [
+        "lighting=restir",
+        "candidates=32",
+        "taps=5",
+        "temporal=on",
+        "spatial=on",
+        "reuse=biased",
+        "initial_visibility=on",
+    ]
+    .iter()
+    .map(|p| p.to_string())
+    .chain([format!("radius={radius}"), format!("sample={sample}")])
+    .chain(extra.iter().cloned())
+    .collect::<Vec<_>>();
     let settings = RenderSettings::default().with_pairs(&pairs)?;
     let options = HeadlessOptions { width, height, settings, ..Default::default() };
     let mut renderer = HeadlessRenderer::new(world.clone(), view, &options)?;

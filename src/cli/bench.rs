@@ -1,4 +1,4 @@
-//! `glowbrick bench`: run time against error, in one of five modes. Each mode's flags are refused in the other
+//! `glowbrick bench`: run time against error, in one of six modes. Each mode's flags are refused in the other
 //! modes by clap, as a conflict or as a missing `--thesis`/`--gi`, so no flag is ever silently ignored. Conflicts
 //! are listed flag by flag, not by group: clap names every member of a group in its error, given or not.
 
@@ -6,18 +6,20 @@ use super::args::parse_camera;
 use super::on_gpu;
 use crate::bench::daylight::{DaylightConfig, run_daylight_bench};
 use crate::bench::denoise::{DenoiseConfig, DenoiseSection, check_scenes, run_denoise_bench};
+use crate::bench::frame::{CASES, FrameCase, FrameConfig, run_frame_bench};
 use crate::bench::gi::{GiConfig, run_gi_bench};
 use crate::bench::reference_cache::check_lattice;
 use crate::bench::sweep::{ALL_SCENES, QUICK_SCENES, SweepConfig, run_bench};
 use crate::bench::thesis::{ThesisOptions, run_thesis_bench};
+use crate::settings::RenderSettings;
 use crate::world::CameraView;
 use clap::{ArgGroup, Args};
 use std::path::{Path, PathBuf};
 
-/// The flags of the settings sweep alone (its `--scenes` also picks the denoiser bench's scenes) and the flags
-/// that pick another mode: each set refuses the other.
-const SWEEP: [&str; 3] = ["quick", "settings", "camera"];
-const MODES: [&str; 4] = ["thesis", "gi", "daylight", "denoise"];
+/// The flags `--spp` is refused with: the sweep's own
+/// (its reference's samples are fixed) and the frame profile (no reference).
+const SPP_REFUSED: [&str; 4] = ["quick", "settings", "camera", "frame"];
+const MODES: [&str; 5] = ["thesis", "gi", "daylight", "denoise", "frame"];
 
 #[derive(Args)]
 #[command(group(ArgGroup::new("mode").args(MODES)))]
@@ -26,8 +28,9 @@ pub struct BenchArgs {
     /// --denoise: only these of its one-frame scenes (window-room, cornell, letters, apartments).
     #[arg(long, value_delimiter = ',', conflicts_with_all = ["thesis", "gi", "daylight", "motion", "reaction", "cost"])]
     scenes: Vec<String>,
-    /// A small, fast run (96x64, few frames, 256-spp references) for CI.
-    #[arg(long, conflicts_with_all = MODES)]
+    /// A small, fast run (96x64, few frames, 256-spp references) for CI. With --frame: the test suite's run
+    /// (48x32, four scenes, counters held to the frame's ray budget; fails over it).
+    #[arg(long, conflicts_with_all = ["thesis", "gi", "daylight", "denoise"])]
     quick: bool,
     /// The thesis protocol instead: its .vx scenes and views, 32 frames, M = 32, area and point, the cornell
     /// box with brick lights on and off; writes thesis.md beside the thesis' Table 3.
@@ -46,6 +49,11 @@ pub struct BenchArgs {
     /// adds, flicker, reaction to a lamp switched off and on, cost at 320x180 and 1280x720; writes denoise.md.
     #[arg(long)]
     denoise: bool,
+    /// The frame profile instead: the game's frame (and emitters only) pass by pass, GPU ms per pass and the ray,
+    /// step and GI counters, on six scenes at 320x180 and 1280x720 (or --sizes; --scenes picks cases by label);
+    /// writes frame.md and frame.csv.
+    #[arg(long)]
+    frame: bool,
     /// With --denoise: only its section on ghosting under motion (a camera path and a sliding block, every
     /// frame against its own reference); writes denoise-motion.md.
     #[arg(long, requires = "denoise")]
@@ -67,8 +75,8 @@ pub struct BenchArgs {
     /// moves by a percent or two between seeds, more at night), which this averages.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16), requires = "denoise", conflicts_with = "motion")]
     seeds: u32,
-    /// With --denoise: a setting on top of the game's frame for every measure (repeatable), e.g. `gi_qmc=off`;
-    /// with --thesis, on top of the protocol's, e.g. `denoise=on`.
+    /// With --denoise or --frame: a setting on top of the game's frame for every measure (repeatable), e.g.
+    /// `gi_qmc=off`; with --thesis, on top of the protocol's, e.g. `denoise=on`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
     /// With --denoise: the image size of its one-frame and reaction measures (WxH, default 160x90), e.g. a game's
@@ -79,7 +87,7 @@ pub struct BenchArgs {
     /// ms per pass, the table's load); writes gi-scale.md.
     #[arg(long, requires = "gi")]
     game_sizes: bool,
-    /// With --game-sizes or --denoise --cost: only these sizes (WxH, comma-separated; default
+    /// With --game-sizes, --denoise --cost or --frame: only these sizes (WxH, comma-separated; default
     /// 320x180,1280x720), e.g. a GPU's 1920x1080.
     #[arg(long, value_delimiter = ',', value_parser = parse_size)]
     sizes: Vec<(u32, u32)>,
@@ -100,7 +108,7 @@ pub struct BenchArgs {
     #[arg(long, requires = "thesis")]
     area_only: bool,
     /// With --thesis, --gi, --daylight or --denoise: samples per pixel of the CPU reference.
-    #[arg(long, default_value_t = 1024, requires = "mode", conflicts_with_all = SWEEP)]
+    #[arg(long, default_value_t = 1024, requires = "mode", conflicts_with_all = SPP_REFUSED)]
     spp: u32,
     /// Comma-separated bench settings to run (default: all), e.g. restir,nee-power.
     #[arg(long, value_delimiter = ',', conflicts_with_all = MODES)]
@@ -133,6 +141,8 @@ enum BenchMode {
         scenes: Vec<String>,
         sizes: Vec<(u32, u32)>,
     },
+    /// The frame profile: frame.md, frame.csv.
+    Frame { quick: bool, sizes: Vec<(u32, u32)>, scenes: Vec<String>, set: Vec<String> },
 }
 
 impl BenchArgs {
@@ -144,12 +154,12 @@ impl BenchArgs {
         if self.lattice != 1 && !(self.thesis || self.denoise) {
             return Err("--lattice needs --thesis or --denoise".into());
         }
-        if !self.set.is_empty() && !(self.thesis || self.denoise) {
-            return Err("--set needs --thesis or --denoise".into());
+        if !self.set.is_empty() && !(self.thesis || self.denoise || self.frame) {
+            return Err("--set needs --thesis, --denoise or --frame".into());
         }
-        // clap's `requires` names one flag; --sizes has two homes.
-        if !self.sizes.is_empty() && !(self.game_sizes || (self.denoise && self.cost)) {
-            return Err("--sizes needs --gi --game-sizes or --denoise --cost".into());
+        // clap's `requires` names one flag; --sizes has three homes.
+        if !self.sizes.is_empty() && !(self.game_sizes || (self.denoise && self.cost) || self.frame) {
+            return Err("--sizes needs --gi --game-sizes, --denoise --cost or --frame".into());
         }
         match self.mode() {
             BenchMode::Settings { scenes, quick, only, camera } => run_settings(scenes, quick, only, camera, &out),
@@ -175,6 +185,16 @@ impl BenchArgs {
                     ..DenoiseConfig::new(width, height, spp)
                 };
                 on_gpu(|| run_denoise_bench(&config, &out)).map(|text| println!("{text}"))
+            }
+            BenchMode::Frame { quick, sizes, scenes, set } => {
+                let mut config = if quick { FrameConfig::quick() } else { FrameConfig::full(sizes.clone()) };
+                if quick && !sizes.is_empty() {
+                    config.sizes = sizes;
+                }
+                config.cases = pick_cases(config.cases, &scenes)?;
+                RenderSettings::game().with_pairs(&set)?;
+                config.extra = set;
+                on_gpu(|| run_frame_bench(&config, quick, &out))
             }
         }
     }
@@ -216,6 +236,8 @@ impl BenchArgs {
                 scenes: self.scenes,
                 sizes: self.sizes,
             }
+        } else if self.frame {
+            BenchMode::Frame { quick: self.quick, sizes: self.sizes, scenes: self.scenes, set: self.set }
         } else {
             BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }
         }
@@ -237,6 +259,18 @@ fn run_settings(
     let rows = on_gpu(|| run_bench(&scenes, &config, out))?;
     println!("wrote {} rows to {}/results.csv, report.md, plot.svg, strip-*.png", rows.len(), out.display());
     Ok(())
+}
+
+/// The frame profile's cases named by `--scenes` (all of `cases` when none is named).
+fn pick_cases(cases: Vec<FrameCase>, names: &[String]) -> Result<Vec<FrameCase>, String> {
+    if let Some(unknown) = names.iter().find(|n| !CASES.iter().any(|c| c.label == n.as_str())) {
+        let valid: Vec<&str> = CASES.iter().map(|c| c.label).collect();
+        return Err(format!("--frame has no scene '{unknown}' (valid: {})", valid.join(", ")));
+    }
+    if names.is_empty() {
+        return Ok(cases);
+    }
+    Ok(CASES.into_iter().filter(|c| names.iter().any(|n| n == c.label)).collect())
 }
 
 /// `WxH`, both at least 1.

@@ -129,7 +129,7 @@ mod tests {
             adjust(&mut s, row("taps"), 1);
             adjust(&mut s, row("radius"), 1);
         }
-        assert_eq!((s.restir.candidates, s.restir.taps, s.restir.radius), (64, 15, 80.0));
+        assert_eq!((s.restir.candidates, s.restir.taps, s.restir.radius), (64, 11, 80.0));
         for _ in 0..40 {
             adjust(&mut s, row("candidates"), -1);
             adjust(&mut s, row("taps"), -1);

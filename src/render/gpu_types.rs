@@ -248,16 +248,22 @@ pub enum GpuCounter {
     RaysRestirSpatial = 11,
     /// Brick-grid rays ReSTIR's shading pass traced this frame.
     RaysRestirShade = 12,
+    /// Pixels whose primary ray hit a voxel this frame (the pixels direct light is computed for).
+    PrimaryHits = 13,
+    /// Steps of the brick-level DDA (each one load of the top grid) of the per-pixel passes' rays this frame.
+    BrickSteps = 14,
+    /// Steps of the voxel-level DDA inside stored bricks (each one load of the brick pool) of the same rays.
+    VoxelSteps = 15,
     /// Since the start: ReSTIR reservoirs read with a non-finite field (reset to empty).
-    ReservoirResets = 13,
+    ReservoirResets = 16,
     /// Since the start: GI estimates that came out non-finite (replaced by zero).
-    GiResets = 14,
+    GiResets = 17,
     /// Since the start: GI entries freed (unused, their object gone, or their face lost to an edit).
-    GiFreedTotal = 15,
+    GiFreedTotal = 18,
 }
 
 impl GpuCounter {
-    pub const ALL: [(GpuCounter, &'static str); 16] = [
+    pub const ALL: [(GpuCounter, &'static str); COUNTERS] = [
         (GpuCounter::GiUpdated, "COUNT_GI_UPDATED"),
         (GpuCounter::GiRetraced, "COUNT_GI_RETRACED"),
         (GpuCounter::GiLive, "COUNT_GI_LIVE"),
@@ -271,6 +277,9 @@ impl GpuCounter {
         (GpuCounter::RaysRestirInitial, "COUNT_RAYS_RESTIR_INITIAL"),
         (GpuCounter::RaysRestirSpatial, "COUNT_RAYS_RESTIR_SPATIAL"),
         (GpuCounter::RaysRestirShade, "COUNT_RAYS_RESTIR_SHADE"),
+        (GpuCounter::PrimaryHits, "COUNT_PRIMARY_HITS"),
+        (GpuCounter::BrickSteps, "COUNT_BRICK_STEPS"),
+        (GpuCounter::VoxelSteps, "COUNT_VOXEL_STEPS"),
         (GpuCounter::ReservoirResets, "COUNT_RESERVOIR_RESETS"),
         (GpuCounter::GiResets, "COUNT_GI_RESETS"),
         (GpuCounter::GiFreedTotal, "COUNT_GI_FREED_TOTAL"),
@@ -278,9 +287,9 @@ impl GpuCounter {
 }
 
 /// Words in the counters buffer, and how many of the first ones restart every frame.
-pub const COUNTERS: usize = 16;
-pub const PER_FRAME_COUNTERS: usize = 13;
-const _: () = assert!(GpuCounter::RaysRestirShade as usize + 1 == PER_FRAME_COUNTERS);
+pub const COUNTERS: usize = 19;
+pub const PER_FRAME_COUNTERS: usize = 16;
+const _: () = assert!(GpuCounter::VoxelSteps as usize + 1 == PER_FRAME_COUNTERS);
 const _: () = assert!((GpuCounter::GiFreedTotal as usize) < COUNTERS);
 
 /// `restir_flags` bits.
@@ -291,6 +300,8 @@ pub const RESTIR_UNBIASED: u32 = 8;
 pub const RESTIR_ONE_RAY: u32 = 16;
 /// Some candidates are drawn among the lights beside the shaded face (`local_lights`).
 pub const RESTIR_LOCAL: u32 = 32;
+/// The initial pass tests its chosen candidate's visibility (`initial_visibility`).
+pub const RESTIR_INITIAL_VISIBILITY: u32 = 64;
 /// `FrameParams::denoise`: the denoiser runs this frame.
 pub const DENOISE_ON: u32 = 1;
 /// `FrameParams::denoise`: last frame's denoiser history is valid (same size, nothing in the scene changed).
@@ -377,6 +388,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("RESTIR_UNBIASED", U32(RESTIR_UNBIASED)),
         ("RESTIR_ONE_RAY", U32(RESTIR_ONE_RAY)),
         ("RESTIR_LOCAL", U32(RESTIR_LOCAL)),
+        ("RESTIR_INITIAL_VISIBILITY", U32(RESTIR_INITIAL_VISIBILITY)),
         ("DENOISE_ON", U32(DENOISE_ON)),
         ("DENOISE_HISTORY", U32(DENOISE_HISTORY)),
         ("MAX_TAPS", U32(MAX_TAPS)),

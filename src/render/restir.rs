@@ -9,7 +9,8 @@
 
 use super::frame::{Dispatch, VoxelPass};
 use super::gpu_types::{
-    RESERVOIR_BYTES, RESTIR_LOCAL, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL, RESTIR_TEMPORAL, RESTIR_UNBIASED,
+    RESERVOIR_BYTES, RESTIR_INITIAL_VISIBILITY, RESTIR_LOCAL, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL,
+    RESTIR_TEMPORAL, RESTIR_UNBIASED,
 };
 use crate::settings::{DebugView, LightSample, RenderSettings, Reuse};
 use bevy::render::render_resource::{BindingResource, Buffer, BufferDescriptor, BufferUsages};
@@ -76,7 +77,8 @@ impl RestirParams {
                 | flag(restir.sample == LightSample::Point, RESTIR_POINT)
                 | flag(restir.reuse == Reuse::Unbiased, RESTIR_UNBIASED)
                 | flag(restir.reuse == Reuse::OneRay, RESTIR_ONE_RAY)
-                | flag(restir.local_lights, RESTIR_LOCAL),
+                | flag(restir.local_lights, RESTIR_LOCAL)
+                | flag(restir.initial_visibility, RESTIR_INITIAL_VISIBILITY),
         }
     }
 }

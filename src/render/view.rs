@@ -250,7 +250,9 @@ pub fn prepare_view_resources(
 mod tests {
     use super::*;
     use crate::render::gpu_types::RESTIR_UNBIASED;
-    use crate::render::gpu_types::{RESTIR_LOCAL, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL, RESTIR_TEMPORAL};
+    use crate::render::gpu_types::{
+        RESTIR_INITIAL_VISIBILITY, RESTIR_LOCAL, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL, RESTIR_TEMPORAL,
+    };
     use crate::render::scene::lights::scene_lighting;
 
     /// The named choices reach the GPU as the bits the shaders test.
@@ -261,16 +263,21 @@ mod tests {
         };
         let default = settings(&[]);
         let params = frame_params(&default, &Highlight::default(), 0);
-        // Default: temporal, spatial, one ray per neighbour, local candidates.
-        assert_eq!(
-            (scene_lighting(&default, 3).power_pick, params.restir_flags),
-            (1, RESTIR_TEMPORAL | RESTIR_SPATIAL | RESTIR_ONE_RAY | RESTIR_LOCAL)
-        );
+        // Default: temporal, spatial, one ray per neighbour, local candidates, the chosen candidate's visibility.
+        let defaults = RESTIR_TEMPORAL | RESTIR_SPATIAL | RESTIR_ONE_RAY | RESTIR_LOCAL | RESTIR_INITIAL_VISIBILITY;
+        assert_eq!((scene_lighting(&default, 3).power_pick, params.restir_flags), (1, defaults));
         assert_eq!((RESTIR_TEMPORAL, RESTIR_SPATIAL, RESTIR_POINT, RESTIR_UNBIASED), (1, 2, 4, 8));
-        assert_eq!((RESTIR_ONE_RAY, RESTIR_LOCAL), (16, 32));
+        assert_eq!((RESTIR_ONE_RAY, RESTIR_LOCAL, RESTIR_INITIAL_VISIBILITY), (16, 32, 64));
         let biased = frame_params(&settings(&["reuse=biased"]), &Highlight::default(), 0);
-        assert_eq!(biased.restir_flags, RESTIR_TEMPORAL | RESTIR_SPATIAL | RESTIR_LOCAL);
-        let changed = settings(&["pick=uniform", "sample=point", "reuse=unbiased", "temporal=off", "local_lights=off"]);
+        assert_eq!(biased.restir_flags, defaults & !RESTIR_ONE_RAY);
+        let changed = settings(&[
+            "pick=uniform",
+            "sample=point",
+            "reuse=unbiased",
+            "temporal=off",
+            "local_lights=off",
+            "initial_visibility=off",
+        ]);
         let params = frame_params(&changed, &Highlight::default(), 0);
         assert_eq!(
             (scene_lighting(&changed, 3).power_pick, params.restir_flags),

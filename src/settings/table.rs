@@ -321,6 +321,13 @@ pub static SETTINGS: &[Setting] = &[
         field: &Choice { get: |s| s.restir.local_lights, set: |s, v| s.restir.local_lights = v },
     },
     Setting {
+        key: "initial_visibility",
+        section: Section::Restir,
+        about: "A visibility ray for each pixel's chosen candidate before reuse; off, the final shadow ray's \
+                verdict is what next frame reuses (one ray fewer).",
+        field: &Choice { get: |s| s.restir.initial_visibility, set: |s, v| s.restir.initial_visibility = v },
+    },
+    Setting {
         key: "gi",
         section: Section::General,
         about: "Indirect light from the per-face GI cache (play turns it on); off, no GI memory or pass.",

@@ -20,7 +20,7 @@ fn the_messages_list_the_keys_and_values_as_before_the_table() {
          debug=none|albedo|normal|hit|depth|reservoir|variance|history, sun=on|off, time=<0..24>, \
          shadows=on|off, exposure=<0.001..1000>, seed=<0..1000>, denoise=on|off, \
          candidates=<1..64>, taps=<0..16>, radius=<0..100>, temporal=on|off, spatial=on|off, \
-         sample=area|point, reuse=biased|one-ray|unbiased, local_lights=on|off, gi=on|off, gi_cached_rays=<4..128>, gi_update=<1..64>, \
+         sample=area|point, reuse=biased|one-ray|unbiased, local_lights=on|off, initial_visibility=on|off, gi=on|off, gi_cached_rays=<4..128>, gi_update=<1..64>, \
          gi_alpha=<0.001..1>, gi_table=<4096..4194304>, gi_cell=<1..16>, gi_filter=on|off, gi_bounces=on|off, gi_cached_hits=on|off, gi_qmc=on|off, gi_warm_up=on|off"
     );
 }
@@ -129,7 +129,7 @@ fn help_text_gives_every_key_its_values_and_default() {
         let line = format!("  {}={}  [default: {}]", setting.key, setting.accepts(), setting.default_value());
         assert!(help.contains(&line), "{line}\n{help}");
     }
-    assert!(help.contains("  candidates=<1..64>  [default: 32]") && help.contains("  lighting=full|emitters|nee|sun"));
+    assert!(help.contains("  candidates=<1..64>  [default: 16]") && help.contains("  lighting=full|emitters|nee|sun"));
 }
 
 #[test]
@@ -145,7 +145,7 @@ fn the_summary_shows_the_sections_that_apply() {
     assert_eq!(summary.lines().count(), 3, "{summary}");
     assert!(
         summary.contains(
-            "candidates=32 taps=5 radius=30 temporal=on spatial=on sample=point reuse=one-ray local_lights=on"
+            "candidates=16 taps=1 radius=30 temporal=on spatial=on sample=point reuse=one-ray local_lights=on"
         )
     );
     assert!(

@@ -205,6 +205,8 @@ fn conflicting_flags_are_refused() {
         (&["bench", "--denoise", "--motion", "--scenes", "cornell"], "--motion", "--scenes"),
         (&["bench", "--scale", "0.5", "--settings", "restir"], "--scale", "--settings"),
         (&["bench", "--quick", "--spp", "4"], "--spp", "--quick"),
+        (&["bench", "--frame", "--spp", "4"], "--spp", "--frame"),
+        (&["bench", "--frame", "--gi"], "--frame", "--gi"),
         (&["bench", "--scale", "0.5", "--out", NOWHERE], "--thesis", "required"),
         (&["bench", "--spp", "4", "--out", NOWHERE], "--thesis|--gi", "required"),
         (&["render", "--scene", "test-room", "--view", "top", camera], "--view", "--camera"),
@@ -247,7 +249,7 @@ fn each_bench_mode_takes_its_own_flags() {
     assert!(text(&out.stderr).contains("unknown setting 'bogus'"), "{}", text(&out.stderr));
     let out = glowbrick(&["bench", "--gi", "--set", "denoise=on", "--out", NOWHERE]);
     assert_eq!(out.status.code(), Some(1));
-    assert!(text(&out.stderr).contains("--set needs --thesis or --denoise"), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("--set needs --thesis, --denoise or --frame"), "{}", text(&out.stderr));
     let out = glowbrick(&["bench", "--lattice", "4", "--out", NOWHERE]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("--lattice needs --thesis or --denoise"), "{}", text(&out.stderr));
@@ -255,7 +257,15 @@ fn each_bench_mode_takes_its_own_flags() {
     let out = glowbrick(&["bench", "--denoise", "--one-frame", "--sizes", "1920x1080", "--out", NOWHERE]);
     assert_eq!(out.status.code(), Some(1));
     let stderr = text(&out.stderr);
-    assert!(stderr.contains("--sizes needs --gi --game-sizes or --denoise --cost"), "{stderr}");
+    assert!(stderr.contains("--sizes needs --gi --game-sizes, --denoise --cost or --frame"), "{stderr}");
+    // The frame profile names its cases when given another, and checks its settings before any GPU work.
+    let out = glowbrick(&["bench", "--frame", "--scenes", "cornell,mountain", "--out", NOWHERE]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("no scene 'mountain'") && stderr.contains("window-room, cornell"), "{stderr}");
+    let out = glowbrick(&["bench", "--frame", "--quick", "--set", "taps=99", "--out", NOWHERE]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("taps: 99 is out of range"), "{}", text(&out.stderr));
 }
 
 /// `src/main.rs` only parses and dispatches; the commands live in `src/cli/`.

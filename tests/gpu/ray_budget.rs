@@ -1,51 +1,35 @@
 //! The game's frame keeps to its ray budget: every per-pixel pass counts the brick-grid rays it traces
-//! (`COUNT_RAYS_*`), and a change that adds rays to a pass fails here. Cornell box, `RenderSettings::game()`'s
-//! frame (full lighting, GI cache, denoiser), a frame after the temporal history and the GI warm-up began.
+//! (`COUNT_RAYS_*`), and a change that adds rays to a pass fails here. This is `glowbrick bench --frame --quick`:
+//! the game's frame (full lighting, GI cache, denoiser) at 48x32 on four scenes, a frame after the temporal
+//! history and the GI warm-up began.
 
-use crate::common;
-
+use glowbrick::bench::frame::{FrameConfig, QUICK_HIT_PIXEL_BUDGET, RAY_BUDGET, run_quick};
 use glowbrick::render::gpu_types::GpuCounter;
-use glowbrick::world::recipe::load_scene;
-
-const W: u32 = 48;
-const H: u32 = 32;
-
-/// Rays per pixel each pass may trace at most: the primary ray; the chosen candidate's visibility; one per
-/// spatial tap (`taps`, 5 by default, with `reuse=one-ray`); the final shadow ray and the sun's disk.
-const BUDGET: [(GpuCounter, &str, f64); 4] = [
-    (GpuCounter::RaysPrimary, "primary", 1.0),
-    (GpuCounter::RaysRestirInitial, "ReSTIR initial", 1.0),
-    (GpuCounter::RaysRestirSpatial, "ReSTIR spatial", 5.0),
-    (GpuCounter::RaysRestirShade, "ReSTIR shade", 2.0),
-];
-
-/// Rays per pixel of the whole direct light (primary included) at the test's size, in every scene below.
-const TOTAL_AT_TEST_SIZE: f64 = 3.5;
 
 pub fn the_game_frame_keeps_to_its_rays_per_pixel() {
-    for (scene, view) in [("cornell", "front"), ("window-room", "inside"), ("apartments", "street"), ("letters", "")] {
-        let world = load_scene(scene).unwrap();
-        let view = world.view((!view.is_empty()).then_some(view)).unwrap().clone();
-        let mut renderer = common::renderer_with(&world, &view, W, H, &["gi=on", "denoise=on"]);
-        renderer.render(4).unwrap();
-        let counters = renderer.counters().unwrap();
-        let pixels = (W * H) as f64;
-        let mut total = 0.0;
-        for (counter, pass, budget) in BUDGET {
-            let per_pixel = counters[counter as usize] as f64 / pixels;
-            eprintln!("{scene}: {pass}: {per_pixel:.3} rays per pixel (budget {budget})");
-            assert!(per_pixel <= budget, "{scene}: {pass} traces {per_pixel:.3} rays per pixel, over {budget}");
-            total += per_pixel;
+    let rows = run_quick().unwrap_or_else(|over| panic!("over the frame's ray budget: {over}"));
+    assert_eq!(rows.len(), FrameConfig::quick().cases.len());
+    for row in &rows {
+        for (counter, pass, budget) in RAY_BUDGET {
+            eprintln!("{}: {pass}: {:.3} rays per pixel (budget {budget})", row.case, row.rays_per_pixel(counter));
         }
-        eprintln!("{scene}: direct light: {total:.3} rays per pixel");
-        // At this size the four scenes trace 2.2-2.8 rays a pixel (primary included): a pass that adds one ray
-        // for a large share of the pixels crosses this line. (At 320x180 the spatial taps land inside the image
-        // more often: 2.6-4.2, docs/bench/rays.md.)
-        assert!(total <= TOTAL_AT_TEST_SIZE, "{scene}: {total:.3} rays per pixel, over {TOTAL_AT_TEST_SIZE}");
-        // Every pixel's primary ray walks the grid once, and the counters are live: ReSTIR's passes trace too.
-        assert_eq!(counters[GpuCounter::RaysPrimary as usize], W * H);
-        assert!(
-            counters[GpuCounter::RaysRestirInitial as usize] > 0 && counters[GpuCounter::RaysRestirShade as usize] > 0
+        let (brick, voxel) = row.steps_per_ray();
+        eprintln!(
+            "{}: direct light: {:.3} rays per pixel, {:.3} per hit pixel (budget {QUICK_HIT_PIXEL_BUDGET}), \
+             {brick:.1} brick + {voxel:.1} voxel steps per ray",
+            row.case,
+            row.direct_rays() / row.pixels(),
+            row.rays_per_hit_pixel()
         );
+        // Every pixel's primary ray walks the grid once, and the counters are live: ReSTIR's passes trace too.
+        let count = |c: GpuCounter| row.counters[c as usize];
+        assert_eq!(count(GpuCounter::RaysPrimary) as f64, row.pixels(), "{}", row.case);
+        assert!(count(GpuCounter::RaysRestirInitial) > 0 && count(GpuCounter::RaysRestirShade) > 0, "{}", row.case);
+        // Every view sees some voxels and some pixels see through to the sky or the world's edge, or all hit.
+        let hits = count(GpuCounter::PrimaryHits);
+        assert!(hits > 0 && hits as f64 <= row.pixels(), "{}: {hits} hit pixels", row.case);
+        // A ray that reaches a stored brick steps through its voxels, and every ray takes at least one brick step
+        // (the rays that start outside the world's box and miss it take none, and none of these views has them).
+        assert!(brick >= 1.0 && voxel > 0.0, "{}: {brick} brick and {voxel} voxel steps per ray", row.case);
     }
 }
