@@ -5,13 +5,13 @@
 // (inside the box of the segments update.wgsl traced for it) restarts its blend. Then, either way, the entry's
 // own direct light.
 
-#import glowbrick::traversal::{trace, box_entry, INF}
+#import glowbrick::traversal::{trace, box_entry, INF, count_rays_only}
 #import glowbrick::gi::cache::{gi, gi_entries, gi_rays, gi_edits, gi_direct, GiEntry, listed_slot, ray_direction,
     ray_origin, slot_seed, world_exit, encode_hit, hit_face, hit_distance, is_surface, NEVER_TRACED, LOST_FACE, MISS_FACE, NOT_FOUND,
     WORK_STATIC}
 #import glowbrick::gi::direct::update_direct
 #import glowbrick::counters::counters
-#import glowbrick::constants::{GI_CACHE, COUNT_GI_RETRACED, COUNT_GI_RAYS_TRACED}
+#import glowbrick::constants::{GI_CACHE, COUNT_GI_RETRACED, COUNT_GI_RAYS_TRACED, COUNT_RAYS_GI}
 
 // Whether an edit since the entry's trace may have reached its rays at all: an edited brick overlaps the box
 // around its ray segments. Cheap; the rays themselves are tested only when it says yes.
@@ -103,6 +103,11 @@ fn refresh(slot: u32, e: GiEntry, origin: vec3<f32>) -> u32 {
 // light, one shadow ray (direct.wgsl), which the update pass reads wherever a cache ray hits this face.
 @compute @workgroup_size(64, 1, 1)
 fn refresh_static(@builtin(global_invocation_id) id: vec3<u32>) {
+    refresh_static_entry(id);
+    count_rays_only(COUNT_RAYS_GI);
+}
+
+fn refresh_static_entry(id: vec3<u32>) {
     let slot = listed_slot(WORK_STATIC, id.x);
     if slot == NOT_FOUND {
         return;

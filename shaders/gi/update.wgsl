@@ -6,12 +6,12 @@
 // bring the sky (lighting=full and the sun-only look).
 
 #import glowbrick::world::{materials, voxel_at, objects, object_index, object_count}
-#import glowbrick::traversal::{Hit, trace, trace_objects, trace_scene, face_normal, INF}
+#import glowbrick::traversal::{Hit, trace, trace_objects, trace_scene, face_normal, INF, count_rays_only}
 #import glowbrick::lights::{scene, sky}
 #import glowbrick::random::{Rng, pcg, rng_next, r4_point, rotation4}
 #import glowbrick::guards::finite3
 #import glowbrick::counters::counters
-#import glowbrick::constants::{RAY_OFFSET, LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, GI_QMC, COUNT_GI_BORROWED,
+#import glowbrick::constants::{RAY_OFFSET, LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, GI_QMC, COUNT_GI_BORROWED, COUNT_RAYS_GI,
     COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
 #import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_touch, gi_find,
     GiEntry, listed_slot, hit_level, used_within, slot_seed, world_exit, ray_direction, cosine_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
@@ -295,10 +295,12 @@ fn update_listed(work: u32, i: u32, local: u32) {
 @compute @workgroup_size(64, 1, 1)
 fn update_static(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) local: u32) {
     update_listed(WORK_STATIC, id.x, local);
+    count_rays_only(COUNT_RAYS_GI);
 }
 
 // The moving objects' table, dispatched only while objects exist.
 @compute @workgroup_size(64, 1, 1)
 fn update_dynamic(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) local: u32) {
     update_listed(WORK_DYNAMIC, id.x, local);
+    count_rays_only(COUNT_RAYS_GI);
 }

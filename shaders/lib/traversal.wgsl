@@ -17,6 +17,13 @@ var<private> rays_traced: u32;
 var<private> brick_steps: u32;
 var<private> voxel_steps: u32;
 
+// For the GI cache's passes: their rays only (their steps are not the per-pixel passes' totals).
+fn count_rays_only(counter: u32) {
+    if rays_traced > 0u {
+        atomicAdd(&counters[counter], rays_traced);
+    }
+}
+
 fn count_rays(counter: u32) {
     if rays_traced > 0u {
         atomicAdd(&counters[counter], rays_traced);

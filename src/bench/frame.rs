@@ -1,7 +1,7 @@
 //! `glowbrick bench --frame`: the game's frame pass by pass. Every voxel pass's GPU time (timestamp queries, where
 //! the adapter has them), the frame's wall-clock time beside their sum, and the deterministic counters that hold on
 //! any adapter: rays per pixel of each per-pixel pass, rays per hit pixel of the direct light, brick and voxel
-//! steps per ray (each step one memory load), candidates per hit pixel, GI entries updated and GI rays traced.
+//! steps per ray (each step one memory load), candidates per hit pixel, GI entries updated and the GI passes' rays.
 //! The scenes are the bundled rooms, the generated world a player opens (noon and night) and the thesis' letters.
 //!
 //! Its quick mode (`--quick`, and the GPU test `ray_budget`) holds each pass to the frame's ray budget
@@ -291,7 +291,7 @@ const GROUPS: [(&str, &str); 10] = [
 pub fn csv(rows: &[FrameRow]) -> String {
     let mut text = String::from(
         "adapter,case,lighting,width,height,wall_ms,gpu_total_ms,pass,pass_gpu_ms,rays_primary,rays_initial,\
-         rays_spatial,rays_shade,primary_hits,brick_steps,voxel_steps,candidates,gi_updated,gi_rays_traced\n",
+         rays_spatial,rays_shade,primary_hits,brick_steps,voxel_steps,candidates,gi_updated,gi_rays\n",
     );
     let adapter = crate::render::adapter::adapter_name().replace(',', ";");
     for r in rows {
@@ -307,7 +307,7 @@ pub fn csv(rows: &[FrameRow]) -> String {
             c(GpuCounter::VoxelSteps),
             r.candidates,
             c(GpuCounter::GiUpdated),
-            c(GpuCounter::GiRaysTraced)
+            c(GpuCounter::RaysGi)
         );
         let total = r.gpu_total_ms().map_or(String::new(), |ms| format!("{ms:.4}"));
         let head = format!("{adapter},{},{},{},{},{:.3},{total}", r.case, r.lighting, r.size.0, r.size.1, r.wall_ms);
@@ -353,7 +353,8 @@ pub fn markdown(rows: &[FrameRow], config: &FrameConfig) -> String {
     text += "\n## Counters (one frame after the timed ones)\n\nRays per pixel of each per-pixel pass (all pixels), \
              the direct light's rays per pixel whose primary ray hit (its primary ray and ReSTIR's rays), the share of such pixels, steps per ray at \
              each level of the grid (each step one memory load: the top grid, the brick pool) over those rays, \
-             ReSTIR's candidates per hit pixel, and the GI cache's entries updated and rays traced in the frame.\n\n\
+             ReSTIR's candidates per hit pixel, and the GI cache's entries updated and brick-grid rays traced (refresh and \
+             update passes) in the frame.\n\n\
              | case | lighting | size | primary | initial | spatial | shade | rays / hit pixel | hit share | brick \
              steps / ray | voxel steps / ray | candidates | GI updated | GI rays |\n\
              |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -373,7 +374,7 @@ pub fn markdown(rows: &[FrameRow], config: &FrameConfig) -> String {
             voxel,
             r.candidates,
             r.counters[GpuCounter::GiUpdated as usize],
-            r.counters[GpuCounter::GiRaysTraced as usize]
+            r.counters[GpuCounter::RaysGi as usize]
         );
     }
     text

@@ -254,12 +254,15 @@ pub enum GpuCounter {
     BrickSteps = 14,
     /// Steps of the voxel-level DDA inside stored bricks (each one load of the brick pool) of the same rays.
     VoxelSteps = 15,
+    /// Brick-grid rays the GI cache's refresh and update passes traced this frame (cached hits, fresh
+    /// directions, the entries' own shadow rays).
+    RaysGi = 16,
     /// Since the start: ReSTIR reservoirs read with a non-finite field (reset to empty).
-    ReservoirResets = 16,
+    ReservoirResets = 17,
     /// Since the start: GI estimates that came out non-finite (replaced by zero).
-    GiResets = 17,
+    GiResets = 18,
     /// Since the start: GI entries freed (unused, their object gone, or their face lost to an edit).
-    GiFreedTotal = 18,
+    GiFreedTotal = 19,
 }
 
 impl GpuCounter {
@@ -280,6 +283,7 @@ impl GpuCounter {
         (GpuCounter::PrimaryHits, "COUNT_PRIMARY_HITS"),
         (GpuCounter::BrickSteps, "COUNT_BRICK_STEPS"),
         (GpuCounter::VoxelSteps, "COUNT_VOXEL_STEPS"),
+        (GpuCounter::RaysGi, "COUNT_RAYS_GI"),
         (GpuCounter::ReservoirResets, "COUNT_RESERVOIR_RESETS"),
         (GpuCounter::GiResets, "COUNT_GI_RESETS"),
         (GpuCounter::GiFreedTotal, "COUNT_GI_FREED_TOTAL"),
@@ -287,9 +291,9 @@ impl GpuCounter {
 }
 
 /// Words in the counters buffer, and how many of the first ones restart every frame.
-pub const COUNTERS: usize = 19;
-pub const PER_FRAME_COUNTERS: usize = 16;
-const _: () = assert!(GpuCounter::VoxelSteps as usize + 1 == PER_FRAME_COUNTERS);
+pub const COUNTERS: usize = 20;
+pub const PER_FRAME_COUNTERS: usize = 17;
+const _: () = assert!(GpuCounter::RaysGi as usize + 1 == PER_FRAME_COUNTERS);
 const _: () = assert!((GpuCounter::GiFreedTotal as usize) < COUNTERS);
 
 /// `restir_flags` bits.

@@ -129,7 +129,7 @@ fn help_text_gives_every_key_its_values_and_default() {
         let line = format!("  {}={}  [default: {}]", setting.key, setting.accepts(), setting.default_value());
         assert!(help.contains(&line), "{line}\n{help}");
     }
-    assert!(help.contains("  candidates=<1..64>  [default: 16]") && help.contains("  lighting=full|emitters|nee|sun"));
+    assert!(help.contains("  candidates=<1..64>  [default: 32]") && help.contains("  lighting=full|emitters|nee|sun"));
 }
 
 #[test]
@@ -145,7 +145,7 @@ fn the_summary_shows_the_sections_that_apply() {
     assert_eq!(summary.lines().count(), 3, "{summary}");
     assert!(
         summary.contains(
-            "candidates=16 taps=1 radius=30 temporal=on spatial=on sample=point reuse=one-ray local_lights=on"
+            "candidates=32 taps=1 radius=30 temporal=on spatial=on sample=point reuse=one-ray local_lights=on"
         )
     );
     assert!(
