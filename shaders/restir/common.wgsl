@@ -179,17 +179,6 @@ fn face_solid_angle(p: vec3<f32>, lo: vec3<f32>, size: f32, face: u32) -> f32 {
     return triangle_solid_angle(v0, v1, v2) + triangle_solid_angle(v0, v2, v3);
 }
 
-// The solid angle of face `face` of the cube [lo, lo + size]^3 seen from p, far from it: the face's area times the
-// cosine at its centre over the squared distance (no trigonometry). Positive for a face whose front side sees p.
-fn face_solid_angle_far(p: vec3<f32>, lo: vec3<f32>, size: f32, face: u32) -> f32 {
-    let axis = face / 2u;
-    var centre = lo + vec3(0.5 * size);
-    centre[axis] += select(-0.5 * size, 0.5 * size, (face & 1u) == 0u);
-    let to_centre = centre - p;
-    let d2 = dot(to_centre, to_centre);
-    return size * size * abs(to_centre[axis]) * inverseSqrt(d2) / d2;
-}
-
 // A point of face `face` of the cube [lo, lo + size]^3 drawn uniformly in the solid angle the face subtends from
 // p (the spherical-rectangle parametrisation of Urena, Fajardo and King 2013), as (u, v) on the face, with that
 // solid angle; solid angle 0 when it is too small to sample this way in f32. Beside a lamp lying on the floor a
@@ -354,10 +343,6 @@ fn sample_candidate(x: Shading, local: ptr<function, LocalLights>, rng: ptr<func
         var omega: array<f32, 3>;
         var faces: array<u32, 3>;
         var total = 0.0;
-        // Faces are picked in proportion to their solid angle: exact near the light, from the face's centre
-        // beyond NEAR_FACE sizes, where the two differ little and the exact one costs two atan2 per face. The pdf
-        // below uses the same shares it picked with, so either keeps the estimate unbiased.
-        let far = distance(x.point, lo + vec3(0.5 * size)) > f32(NEAR_FACE) * size;
         for (var axis = 0u; axis < 3u; axis++) {
             var face = 6u;
             if x.point[axis] > lo[axis] + size && face_exposed(light, axis * 2u) {
@@ -368,11 +353,7 @@ fn sample_candidate(x: Shading, local: ptr<function, LocalLights>, rng: ptr<func
             faces[axis] = face;
             omega[axis] = 0.0;
             if face != 6u {
-                if far {
-                    omega[axis] = face_solid_angle_far(x.point, lo, size, face);
-                } else {
-                    omega[axis] = max(face_solid_angle(x.point, lo, size, face), 0.0);
-                }
+                omega[axis] = max(face_solid_angle(x.point, lo, size, face), 0.0);
                 total += omega[axis];
             }
         }
