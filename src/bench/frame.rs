@@ -154,10 +154,6 @@ impl FrameRow {
         (self.count(GpuCounter::BrickSteps) / rays, self.count(GpuCounter::VoxelSteps) / rays)
     }
 
-    pub fn gpu_ms(&self, name: &str) -> Option<f64> {
-        self.passes.iter().find(|(n, _)| *n == name).map(|(_, ms)| *ms)
-    }
-
     /// GPU ms of the passes whose names start with `prefix`, or None when none ran or were timed.
     pub fn gpu_ms_of(&self, prefix: &str) -> Option<f64> {
         let times: Vec<f64> = self.passes.iter().filter(|(n, _)| n.starts_with(prefix)).map(|(_, ms)| *ms).collect();
