@@ -1,9 +1,10 @@
-// Ray traversal of the brick grid: DDA over bricks (skipping empty ones), then over voxels of pooled bricks.
-// Mirrors src/world/traversal.rs step for step (same boundary formulas and tie rules) so GPU and CPU agree.
+// Ray traversal of the brick grid through its occupancy hierarchy: empty cells of 128, 32, 8 and 2 voxels are
+// jumped whole. Mirrors src/world/traversal.rs step for step (same boundary formulas and tie rules) so GPU and CPU
+// agree.
 #define_import_path glowbrick::traversal
 
-#import glowbrick::world::{world_info, brick_cell, pooled_voxel, objects, object_count, object_voxel, Object}
-#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, COUNT_BRICK_STEPS, COUNT_VOXEL_STEPS}
+#import glowbrick::world::{world_info, top_cells, occupancy, pooled_voxel, objects, object_count, object_voxel, Object}
+#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, COUNT_TRACE_STEPS, COUNT_TRACE_LOADS}
 #import glowbrick::counters::counters
 
 const INF: f32 = 3.0e38;
@@ -12,10 +13,10 @@ const INF: f32 = 3.0e38;
 // invocation by a pass whose entry point ends with `count_rays` (same-address atomics from a SIMD group are
 // combined by the compiler on GPUs; a workgroup sum with two barriers cost more on software Vulkan).
 var<private> rays_traced: u32;
-// Their steps at each level of the grid, each step one memory load: of the top grid (a brick), of the brick pool (a
-// voxel). Added to the frame's totals by the same call.
-var<private> brick_steps: u32;
-var<private> voxel_steps: u32;
+// Their steps (cells visited at any level of the occupancy hierarchy) and memory loads (masks, top cells, voxels).
+// Added to the frame's totals by the same call.
+var<private> trace_steps: u32;
+var<private> trace_loads: u32;
 
 // For the GI cache's passes: their rays only (their steps are not the per-pixel passes' totals).
 fn count_rays_only(counter: u32) {
@@ -27,10 +28,8 @@ fn count_rays_only(counter: u32) {
 fn count_rays(counter: u32) {
     if rays_traced > 0u {
         atomicAdd(&counters[counter], rays_traced);
-        atomicAdd(&counters[COUNT_BRICK_STEPS], brick_steps);
-        if voxel_steps > 0u {
-            atomicAdd(&counters[COUNT_VOXEL_STEPS], voxel_steps);
-        }
+        atomicAdd(&counters[COUNT_TRACE_STEPS], trace_steps);
+        atomicAdd(&counters[COUNT_TRACE_LOADS], trace_loads);
     }
 }
 
@@ -104,26 +103,100 @@ fn min_axis(v: vec3<f32>) -> u32 {
     return 2u;
 }
 
-// Voxel DDA inside the pooled brick `brick` (pool slot `slot`), entered at parameter t through `entry_axis`.
-fn trace_in_brick(origin: vec3<f32>, dir: vec3<f32>, inv: vec3<f32>, brick: vec3<i32>, slot: u32, t_start: f32,
-                  t_end: f32, entry_axis: u32) -> Hit {
-    let step = vec3<i32>(sign(dir));
-    let positive = dir > vec3(0.0);
-    let lo = brick * BRICK_SIZE;
-    let hi = min(lo + vec3(BRICK_SIZE), world_info.size) - vec3(1);
-    var t = t_start;
-    var axis = entry_axis;
-    var voxel = clamp(vec3<i32>(floor(origin + dir * t)), lo, hi);
-    var t_max: vec3<f32>;
-    for (var a = 0u; a < 3u; a++) {
-        t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(voxel[a] + select(0, 1, positive[a])));
+// The occupancy hierarchy (src/world/occupancy.rs): log2 of the cell edge of each level, voxel (0), 2^3 cell (1),
+// brick (2), sector (3), region (4).
+fn level_shift(level: u32) -> u32 {
+    return select(select(select(7u, 5u, level == 3u), 3u, level == 2u), level, level < 2u);
+}
+
+// Bit of the child cell holding voxel v inside its parent, where `level` is the child's.
+fn child_bit(v: vec3<i32>, level: u32) -> u32 {
+    let c = vec3<u32>((v >> vec3(level_shift(level))) & vec3(3));
+    return c.x + 4u * (c.y + 4u * c.z);
+}
+
+fn has_child(m: vec2<u32>, bit: u32) -> bool {
+    let word = select(m.y, m.x, bit < 32u);
+    return ((word >> (bit & 31u)) & 1u) != 0u;
+}
+
+fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
+    return u32(c.x + dims.x * (c.y + dims.y * c.z));
+}
+
+// The first solid voxel along the ray (unit `dir`) within max_distance.
+//
+// One flat loop over the occupancy hierarchy, step for step as `trace_counted` in src/world/traversal.rs: at
+// `level` the ray is in the cell holding voxel v; an occupied cell is entered (v re-found from the ray at t and
+// clamped into it), an empty one left through its nearest face, going up as many levels as that face closes. The
+// masks of the cells the ray is in stay in registers, so an empty step at levels 1-3 loads nothing.
+fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
+    rays_traced += 1u;
+    let size = world_info.size;
+    let entry = box_entry(origin, dir, vec3(0.0), vec3<f32>(size));
+    let t_end = min(entry.y, max_distance);
+    var t = max(entry.x, 0.0);
+    if !(t <= t_end) || all(dir == vec3(0.0)) {
+        return miss();
     }
-    // At most 22 steps cross an 8^3 brick; the bound guards against a non-finite t.
-    for (var i = 0; i < 3 * BRICK_SIZE; i++) {
-        voxel_steps += 1u;
-        let material = pooled_voxel(slot, voxel - lo);
-        if material != 0u {
-            return Hit(voxel, face_entered(axis, positive[axis]), t, material, true, 0u);
+    let inv = inverse_dir(dir);
+    let positive = dir > vec3(0.0);
+    var axis = u32(entry.z);
+    if entry.x < 0.0 {
+        let o = floor(origin);
+        axis = u32(box_entry(origin, dir, o, o + vec3(1.0)).z);
+    }
+    let last = size - vec3(1);
+    var v = clamp(vec3<i32>(floor(origin + dir * t)), vec3(0), last);
+    var level = 4u;
+    // The child masks of the region, sector and brick the ray is in, and the brick's pool slot.
+    var region_mask = vec2(0u);
+    var sector_mask = vec2(0u);
+    var brick_mask = vec2(0u);
+    var slot = 0u;
+    let max_steps = 5 * (size.x + size.y + size.z) + 8;
+    for (var i = 0; i < max_steps; i++) {
+        trace_steps += 1u;
+        var occupied = false;
+        if level == 0u {
+            trace_loads += 1u;
+            let material = pooled_voxel(slot, v & vec3(BRICK_SIZE - 1));
+            if material != 0u {
+                return Hit(v, face_entered(axis, positive[axis]), t, material, true, 0u);
+            }
+        } else if level == 4u {
+            trace_loads += 1u;
+            region_mask = occupancy[world_info.region_base + mask_index(v >> vec3(7u), world_info.regions)];
+            occupied = any(region_mask != vec2(0u));
+        } else {
+            let parent = select(select(region_mask, sector_mask, level == 2u), brick_mask, level == 1u);
+            occupied = has_child(parent, child_bit(v, level));
+        }
+        let shift = level_shift(level);
+        let lo = (v >> vec3(shift)) << vec3(shift);
+        let edge = 1 << shift;
+        if occupied {
+            v = clamp(vec3<i32>(floor(origin + dir * t)), lo, min(lo + vec3(edge - 1), last));
+            if level == 3u {
+                trace_loads += 1u;
+                sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(5u), world_info.sectors)];
+            } else if level == 2u {
+                trace_loads += 2u;
+                let b = v >> vec3(BRICK_SHIFT);
+                let index = mask_index(b, world_info.bricks);
+                let cell = top_cells[index];
+                if cell != 0u && (cell & POOLED_FLAG) == 0u {
+                    return Hit(v, face_entered(axis, positive[axis]), t, cell, true, 0u);
+                }
+                slot = cell & ~POOLED_FLAG;
+                brick_mask = occupancy[index];
+            }
+            level -= 1u;
+            continue;
+        }
+        var t_max: vec3<f32>;
+        for (var a = 0u; a < 3u; a++) {
+            t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(lo[a] + select(0, edge, positive[a])));
         }
         let a = min_axis(t_max);
         t = t_max[a];
@@ -131,67 +204,14 @@ fn trace_in_brick(origin: vec3<f32>, dir: vec3<f32>, inv: vec3<f32>, brick: vec3
             break;
         }
         axis = a;
-        voxel[a] += step[a];
-        if voxel[a] < lo[a] || voxel[a] > hi[a] {
+        let before = v[a];
+        v[a] = select(lo[a] - 1, lo[a] + edge, positive[a]);
+        if v[a] < 0 || v[a] > last[a] {
             break;
         }
-        t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(voxel[a] + select(0, 1, positive[a])));
-    }
-    return miss();
-}
-
-// The first solid voxel along the ray (unit `dir`) within max_distance.
-fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
-    rays_traced += 1u;
-    let size = vec3<f32>(world_info.size);
-    let entry = box_entry(origin, dir, vec3(0.0), size);
-    let t_end = min(entry.y, max_distance);
-    var t = max(entry.x, 0.0);
-    if !(t <= t_end) || all(dir == vec3(0.0)) {
-        return miss();
-    }
-    let inv = inverse_dir(dir);
-    let step = vec3<i32>(sign(dir));
-    let positive = dir > vec3(0.0);
-    let edge = f32(BRICK_SIZE);
-    let last_brick = max((world_info.size - vec3(1)) >> vec3(BRICK_SHIFT), vec3(0));
-    var axis = u32(entry.z);
-    if entry.x < 0.0 {
-        let v = floor(origin);
-        axis = u32(box_entry(origin, dir, v, v + vec3(1.0)).z);
-    }
-    var brick = clamp(vec3<i32>(floor((origin + dir * t) / edge)), vec3(0), last_brick);
-    var brick_t_max: vec3<f32>;
-    for (var a = 0u; a < 3u; a++) {
-        brick_t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(brick[a] + select(0, 1, positive[a])) * edge);
-    }
-    let max_steps = last_brick.x + last_brick.y + last_brick.z + 3;
-    for (var i = 0; i < max_steps; i++) {
-        brick_steps += 1u;
-        let cell = brick_cell(brick);
-        if cell != 0u {
-            if (cell & POOLED_FLAG) == 0u {
-                let lo = brick * BRICK_SIZE;
-                let voxel = min(clamp(vec3<i32>(floor(origin + dir * t)), lo, lo + vec3(BRICK_SIZE - 1)),
-                                world_info.size - vec3(1));
-                return Hit(voxel, face_entered(axis, positive[axis]), t, cell, true, 0u);
-            }
-            let hit = trace_in_brick(origin, dir, inv, brick, cell & ~POOLED_FLAG, t, t_end, axis);
-            if hit.found {
-                return hit;
-            }
+        while level < 4u && (v[a] >> level_shift(level + 1u)) != (before >> level_shift(level + 1u)) {
+            level += 1u;
         }
-        let a = min_axis(brick_t_max);
-        t = brick_t_max[a];
-        if t > t_end {
-            break;
-        }
-        axis = a;
-        brick[a] += step[a];
-        if brick[a] < 0 || brick[a] > last_brick[a] {
-            break;
-        }
-        brick_t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(brick[a] + select(0, 1, positive[a])) * edge);
     }
     return miss();
 }

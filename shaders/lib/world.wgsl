@@ -10,6 +10,12 @@ struct WorldInfo {
     object_count: u32,
     bricks: vec3<i32>,
     _pad: u32,
+    // Sector grid size (4^3 bricks) and region grid size (4^3 sectors), and where their masks start in
+    // `occupancy`.
+    sectors: vec3<i32>,
+    sector_base: u32,
+    regions: vec3<i32>,
+    region_base: u32,
 }
 
 struct Material {
@@ -24,6 +30,10 @@ struct Material {
 // Pooled bricks, two u16 voxels per word, little-endian: voxel i of a slot is in word i / 2, low half when even.
 @group(0) @binding(2) var<storage, read> brick_pool: array<u32>;
 @group(0) @binding(3) var<storage, read> materials: array<Material>;
+// The occupancy masks (src/world/occupancy.rs), 64 bits each, low word first: per brick (by top-grid index) its
+// cells of 2^3 voxels that hold a solid voxel, then per sector its bricks that are not empty, then per region its
+// sectors that are not empty. Binding 6 is the counters (shaders/lib/counters.wgsl).
+@group(0) @binding(7) var<storage, read> occupancy: array<vec2<u32>>;
 
 // A moving voxel object (src/dynamic): a small voxel grid translated to `min`, never rotated.
 struct Object {

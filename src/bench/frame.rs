@@ -1,7 +1,7 @@
 //! `glowbrick bench --frame`: the game's frame pass by pass. Every voxel pass's GPU time (timestamp queries, where
 //! the adapter has them), the frame's wall-clock time beside their sum, and the deterministic counters that hold on
-//! any adapter: rays per pixel of each per-pixel pass, rays per hit pixel of the direct light, brick and voxel
-//! steps per ray (each step one memory load), candidates per hit pixel, GI entries updated and the GI passes' rays.
+//! any adapter: rays per pixel of each per-pixel pass, rays per hit pixel of the direct light, traversal
+//! steps and memory loads per ray, candidates per hit pixel, GI entries updated and the GI passes' rays.
 //! The scenes are the bundled rooms, the generated world a player opens (noon and night) and the thesis' letters.
 //!
 //! Its quick mode (`--quick`, and the GPU test `ray_budget`) holds each pass to the frame's ray budget
@@ -148,10 +148,11 @@ impl FrameRow {
         self.count(GpuCounter::PrimaryHits) / self.pixels()
     }
 
-    /// Brick-level and voxel-level steps (memory loads) per ray of the per-pixel passes.
+    /// Traversal steps (cells visited at any level of the occupancy hierarchy) and memory loads per ray of the
+    /// per-pixel passes.
     pub fn steps_per_ray(&self) -> (f64, f64) {
         let rays = self.direct_rays().max(1.0);
-        (self.count(GpuCounter::BrickSteps) / rays, self.count(GpuCounter::VoxelSteps) / rays)
+        (self.count(GpuCounter::TraceSteps) / rays, self.count(GpuCounter::TraceLoads) / rays)
     }
 
     /// GPU ms of the passes whose names start with `prefix`, or None when none ran or were timed.
@@ -229,9 +230,9 @@ pub fn measure_all(config: &FrameConfig) -> Result<Vec<FrameRow>, String> {
         for case in &config.cases {
             for &lighting in &config.lightings {
                 let row = measure(case, lighting, size, config)?;
-                let (brick, voxel) = row.steps_per_ray();
+                let (steps, loads) = row.steps_per_ray();
                 eprintln!(
-                    "frame: {} {} {}x{}: {:.1} ms wall, {} ms GPU, {:.2} rays per hit pixel, {:.1} + {:.1} steps per ray",
+                    "frame: {} {} {}x{}: {:.1} ms wall, {} ms GPU, {:.2} rays per hit pixel, {:.1} steps and {:.1} loads per ray",
                     row.case,
                     row.lighting,
                     size.0,
@@ -239,8 +240,8 @@ pub fn measure_all(config: &FrameConfig) -> Result<Vec<FrameRow>, String> {
                     row.wall_ms,
                     row.gpu_total_ms().map_or("n/a".into(), |ms| format!("{ms:.2}")),
                     row.rays_per_hit_pixel(),
-                    brick,
-                    voxel
+                    steps,
+                    loads
                 );
                 rows.push(row);
             }
@@ -287,7 +288,7 @@ const GROUPS: [(&str, &str); 10] = [
 pub fn csv(rows: &[FrameRow]) -> String {
     let mut text = String::from(
         "adapter,case,lighting,width,height,wall_ms,gpu_total_ms,pass,pass_gpu_ms,rays_primary,rays_initial,\
-         rays_spatial,rays_shade,primary_hits,brick_steps,voxel_steps,candidates,gi_updated,gi_rays\n",
+         rays_spatial,rays_shade,primary_hits,trace_steps,trace_loads,candidates,gi_updated,gi_rays\n",
     );
     let adapter = crate::render::adapter::adapter_name().replace(',', ";");
     for r in rows {
@@ -299,8 +300,8 @@ pub fn csv(rows: &[FrameRow]) -> String {
             c(GpuCounter::RaysRestirSpatial),
             c(GpuCounter::RaysRestirShade),
             c(GpuCounter::PrimaryHits),
-            c(GpuCounter::BrickSteps),
-            c(GpuCounter::VoxelSteps),
+            c(GpuCounter::TraceSteps),
+            c(GpuCounter::TraceLoads),
             r.candidates,
             c(GpuCounter::GiUpdated),
             c(GpuCounter::RaysGi)
@@ -347,15 +348,15 @@ pub fn markdown(rows: &[FrameRow], config: &FrameConfig) -> String {
         );
     }
     text += "\n## Counters (one frame after the timed ones)\n\nRays per pixel of each per-pixel pass (all pixels), \
-             the direct light's rays per pixel whose primary ray hit (its primary ray and ReSTIR's rays), the share of such pixels, steps per ray at \
-             each level of the grid (each step one memory load: the top grid, the brick pool) over those rays, \
+             the direct light's rays per pixel whose primary ray hit (its primary ray and ReSTIR's rays), the share of such pixels, steps per ray (cells \
+             visited at any level of the occupancy hierarchy) and memory loads per ray over those rays, \
              ReSTIR's candidates per hit pixel, and the GI cache's entries updated and brick-grid rays traced (refresh and \
              update passes) in the frame.\n\n\
-             | case | lighting | size | primary | initial | spatial | shade | rays / hit pixel | hit share | brick \
-             steps / ray | voxel steps / ray | candidates | GI updated | GI rays |\n\
+             | case | lighting | size | primary | initial | spatial | shade | rays / hit pixel | hit share | \
+             steps / ray | loads / ray | candidates | GI updated | GI rays |\n\
              |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {
-        let (brick, voxel) = r.steps_per_ray();
+        let (steps, loads) = r.steps_per_ray();
         let rays: Vec<String> = RAY_BUDGET.iter().map(|&(c, _, _)| format!("{:.2}", r.rays_per_pixel(c))).collect();
         text += &format!(
             "| {} | {} | {}x{} | {} | {:.2} | {:.2} | {:.1} | {:.1} | {} | {} | {} |\n",
@@ -366,8 +367,8 @@ pub fn markdown(rows: &[FrameRow], config: &FrameConfig) -> String {
             rays.join(" | "),
             r.rays_per_hit_pixel(),
             r.hit_share(),
-            brick,
-            voxel,
+            steps,
+            loads,
             r.candidates,
             r.counters[GpuCounter::GiUpdated as usize],
             r.counters[GpuCounter::RaysGi as usize]

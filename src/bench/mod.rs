@@ -1,4 +1,4 @@
-//! `glowbrick bench`: run time against error, in six modes, each in its own module with its own config and its
+//! `glowbrick bench`: run time against error, in seven modes, each in its own module with its own config and its
 //! report writer beside its measures:
 //!
 //! - `sweep`: every scene x render setting against a direct-light reference, the equal-time comparison
@@ -8,6 +8,7 @@
 //! - `daylight`: the game's lighting at three times of day.
 //! - `denoise`: the denoiser (with `reaction` for a lamp switched off and on, `motion` for ghosting).
 //! - `frame`: the game's frame pass by pass, GPU time and ray / step counters, no reference.
+//! - `rays`: the CPU traversal's rays per second and steps / loads per ray, against the plain DDA.
 //!
 //! Every mode measures against CPU references from one `reference_cache::ReferenceCache`. What is shared by
 //! several modes lives here.
@@ -21,6 +22,7 @@ pub mod gi;
 pub mod gi_scale;
 pub mod motion;
 pub mod plot;
+pub mod rays;
 pub mod reaction;
 pub mod reference_cache;
 pub mod same_hit;

@@ -1,4 +1,4 @@
-//! `glowbrick bench`: run time against error, in one of six modes. Each mode's flags are refused in the other
+//! `glowbrick bench`: run time against error, in one of seven modes. Each mode's flags are refused in the other
 //! modes by clap, as a conflict or as a missing `--thesis`/`--gi`, so no flag is ever silently ignored. Conflicts
 //! are listed flag by flag, not by group: clap names every member of a group in its error, given or not.
 
@@ -8,6 +8,7 @@ use crate::bench::daylight::{DaylightConfig, run_daylight_bench};
 use crate::bench::denoise::{DenoiseConfig, DenoiseSection, check_scenes, run_denoise_bench};
 use crate::bench::frame::{CASES, FrameCase, FrameConfig, run_frame_bench};
 use crate::bench::gi::{GiConfig, run_gi_bench};
+use crate::bench::rays::{CASES as RAYS_CASES, RaysCase, RaysConfig, run_rays_bench};
 use crate::bench::reference_cache::check_lattice;
 use crate::bench::sweep::{ALL_SCENES, QUICK_SCENES, SweepConfig, run_bench};
 use crate::bench::thesis::{ThesisOptions, run_thesis_bench};
@@ -18,8 +19,8 @@ use std::path::{Path, PathBuf};
 
 /// The flags `--spp` is refused with: the sweep's own
 /// (its reference's samples are fixed) and the frame profile (no reference).
-const SPP_REFUSED: [&str; 4] = ["quick", "settings", "camera", "frame"];
-const MODES: [&str; 5] = ["thesis", "gi", "daylight", "denoise", "frame"];
+const SPP_REFUSED: [&str; 5] = ["quick", "settings", "camera", "frame", "rays"];
+const MODES: [&str; 6] = ["thesis", "gi", "daylight", "denoise", "frame", "rays"];
 
 #[derive(Args)]
 #[command(group(ArgGroup::new("mode").args(MODES)))]
@@ -54,6 +55,11 @@ pub struct BenchArgs {
     /// writes frame.md and frame.csv.
     #[arg(long)]
     frame: bool,
+    /// The CPU traversal bench instead: rays per second, steps and loads per ray of primary, shadow, diffuse and
+    /// sky rays, the occupancy traversal against the plain DDA on the same rays, on six scenes (--scenes picks by
+    /// label; --quick: 64x36 camera rays); writes rays.md and rays.csv. No GPU.
+    #[arg(long)]
+    rays: bool,
     /// With --denoise: only its section on ghosting under motion (a camera path and a sliding block, every
     /// frame against its own reference); writes denoise-motion.md.
     #[arg(long, requires = "denoise")]
@@ -143,6 +149,8 @@ enum BenchMode {
     },
     /// The frame profile: frame.md, frame.csv.
     Frame { quick: bool, sizes: Vec<(u32, u32)>, scenes: Vec<String>, set: Vec<String> },
+    /// The CPU traversal: rays.md, rays.csv.
+    Rays { quick: bool, scenes: Vec<String> },
 }
 
 impl BenchArgs {
@@ -196,6 +204,13 @@ impl BenchArgs {
                 config.extra = set;
                 on_gpu(|| run_frame_bench(&config, quick, &out))
             }
+            BenchMode::Rays { quick, scenes } => {
+                let config = if quick { RaysConfig::quick() } else { RaysConfig::full() };
+                let cases = pick_rays_cases(&scenes)?;
+                let rows = run_rays_bench(&cases, &config, &out)?;
+                println!("wrote {} rows to {}/rays.md, rays.csv", rows.len(), out.display());
+                Ok(())
+            }
         }
     }
 
@@ -238,6 +253,8 @@ impl BenchArgs {
             }
         } else if self.frame {
             BenchMode::Frame { quick: self.quick, sizes: self.sizes, scenes: self.scenes, set: self.set }
+        } else if self.rays {
+            BenchMode::Rays { quick: self.quick, scenes: self.scenes }
         } else {
             BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }
         }
@@ -271,6 +288,15 @@ fn pick_cases(cases: Vec<FrameCase>, names: &[String]) -> Result<Vec<FrameCase>,
         return Ok(cases);
     }
     Ok(CASES.into_iter().filter(|c| names.iter().any(|n| n == c.label)).collect())
+}
+
+/// The ray bench's cases named by `--scenes` (all when none is named).
+fn pick_rays_cases(names: &[String]) -> Result<Vec<RaysCase>, String> {
+    if let Some(unknown) = names.iter().find(|n| !RAYS_CASES.iter().any(|c| c.label == n.as_str())) {
+        let valid: Vec<&str> = RAYS_CASES.iter().map(|c| c.label).collect();
+        return Err(format!("--rays has no scene '{unknown}' (valid: {})", valid.join(", ")));
+    }
+    Ok(RAYS_CASES.into_iter().filter(|c| names.is_empty() || names.iter().any(|n| n == c.label)).collect())
 }
 
 /// `WxH`, both at least 1.

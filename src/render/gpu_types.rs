@@ -21,6 +21,12 @@ pub struct WorldInfo {
     /// World size in bricks.
     pub bricks: [i32; 3],
     pub _pad: u32,
+    /// Sector grid size (4^3 bricks each) and where the sector masks start in the occupancy buffer.
+    pub sectors: [i32; 3],
+    pub sector_base: u32,
+    /// Region grid size (4^3 sectors each) and where the region masks start.
+    pub regions: [i32; 3],
+    pub region_base: u32,
 }
 
 /// One material (`Material` in `shaders/lib/world.wgsl`), indexed by voxel id (entry 0 is air).
@@ -207,7 +213,7 @@ pub const GI_EMPTY_WORK: [u32; GI_WORK_WORDS as usize] = {
 };
 
 // The shaders read these structs at exactly these sizes (WGSL alignment rules included).
-const _: () = assert!(size_of::<WorldInfo>() == 32);
+const _: () = assert!(size_of::<WorldInfo>() == 64);
 const _: () = assert!(size_of::<GpuMaterial>() == 32);
 const _: () = assert!(size_of::<GpuObject>() == 48);
 const _: () = assert!(size_of::<GpuLight>() == 32);
@@ -250,10 +256,11 @@ pub enum GpuCounter {
     RaysRestirShade = 12,
     /// Pixels whose primary ray hit a voxel this frame (the pixels direct light is computed for).
     PrimaryHits = 13,
-    /// Steps of the brick-level DDA (each one load of the top grid) of the per-pixel passes' rays this frame.
-    BrickSteps = 14,
-    /// Steps of the voxel-level DDA inside stored bricks (each one load of the brick pool) of the same rays.
-    VoxelSteps = 15,
+    /// Traversal steps (cells visited at any level of the occupancy hierarchy) of the per-pixel passes' rays this
+    /// frame.
+    TraceSteps = 14,
+    /// Memory loads of the same rays' traversal (masks, top cells, voxels; a mask bit a ray holds is not one).
+    TraceLoads = 15,
     /// Brick-grid rays the GI cache's refresh and update passes traced this frame (cached hits, fresh
     /// directions, the entries' own shadow rays).
     RaysGi = 16,
@@ -281,8 +288,8 @@ impl GpuCounter {
         (GpuCounter::RaysRestirSpatial, "COUNT_RAYS_RESTIR_SPATIAL"),
         (GpuCounter::RaysRestirShade, "COUNT_RAYS_RESTIR_SHADE"),
         (GpuCounter::PrimaryHits, "COUNT_PRIMARY_HITS"),
-        (GpuCounter::BrickSteps, "COUNT_BRICK_STEPS"),
-        (GpuCounter::VoxelSteps, "COUNT_VOXEL_STEPS"),
+        (GpuCounter::TraceSteps, "COUNT_TRACE_STEPS"),
+        (GpuCounter::TraceLoads, "COUNT_TRACE_LOADS"),
         (GpuCounter::RaysGi, "COUNT_RAYS_GI"),
         (GpuCounter::ReservoirResets, "COUNT_RESERVOIR_RESETS"),
         (GpuCounter::GiResets, "COUNT_GI_RESETS"),

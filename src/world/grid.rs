@@ -5,6 +5,7 @@
 //! - `1..=0xFFFF`: homogeneous brick of that material id,
 //! - `POOLED_FLAG | slot`: the brick's 512 voxels live in pool slot `slot`.
 
+use super::occupancy::{self, Occupancy, SOLID_BRICK};
 use bevy::math::{IVec3, UVec3};
 use std::collections::BTreeSet;
 
@@ -65,6 +66,8 @@ pub struct BrickGrid {
     free_slots: Vec<u32>,
     /// Brick indices whose top cell or pooled voxels changed since the last `take_dirty`.
     dirty: BTreeSet<u32>,
+    /// Which cells of every level hold a solid voxel, kept current on every change (`world::occupancy`).
+    occupancy: Occupancy,
 }
 
 /// An edit or lookup outside the world.
@@ -106,6 +109,7 @@ impl BrickGrid {
             pool: Vec::new(),
             free_slots: Vec::new(),
             dirty: BTreeSet::new(),
+            occupancy: Occupancy::new(bricks),
         }
     }
 
@@ -143,6 +147,18 @@ impl BrickGrid {
             return BrickCell::Empty;
         }
         BrickCell::decode(self.top[self.brick_index(b)])
+    }
+
+    /// The occupancy masks rays skip empty space with.
+    #[inline]
+    pub fn occupancy(&self) -> &Occupancy {
+        &self.occupancy
+    }
+
+    /// The raw top cell of brick index `i`.
+    #[inline]
+    pub fn top_cell(&self, i: usize) -> u32 {
+        self.top[i]
     }
 
     /// Raw top grid, for GPU upload.
@@ -205,6 +221,7 @@ impl BrickGrid {
         };
         self.pool[slot as usize * BRICK_VOXELS + local] = voxel;
         self.collapse_if_uniform(index, slot);
+        self.update_cell_occupancy(index, p & 7_i32);
         self.dirty.insert(index as u32);
         Ok(true)
     }
@@ -293,6 +310,7 @@ impl BrickGrid {
             if let BrickCell::Pooled(slot) = BrickCell::decode(self.top[index]) {
                 self.collapse_if_uniform(index, slot);
             }
+            self.update_occupancy(index);
             self.dirty.insert(index as u32);
         }
         Ok(changed)
@@ -343,8 +361,35 @@ impl BrickGrid {
             }
             self.collapse_if_uniform(index, slot);
         }
+        self.update_occupancy(index);
         self.dirty.insert(index as u32);
         changed
+    }
+
+    /// Recomputes brick `index`'s occupancy mask from its cell (a pooled brick: its 512 voxels).
+    fn update_occupancy(&mut self, index: usize) {
+        let mask = match BrickCell::decode(self.top[index]) {
+            BrickCell::Empty => 0,
+            BrickCell::Homogeneous(_) => SOLID_BRICK,
+            BrickCell::Pooled(slot) => occupancy::brick_cells(self.pool_brick(slot)),
+        };
+        let b = self.brick_coord(index as u32);
+        self.occupancy.set_brick(index, b, mask);
+    }
+
+    /// Updates brick `index`'s occupancy after one voxel (`local` inside it) changed: only that voxel's 2^3 cell
+    /// is looked at, so a voxel edit stays 8 reads whatever the brick holds.
+    fn update_cell_occupancy(&mut self, index: usize, local: IVec3) {
+        let BrickCell::Pooled(slot) = BrickCell::decode(self.top[index]) else {
+            return self.update_occupancy(index);
+        };
+        let old = self.occupancy.brick(index);
+        let bit = 1u64 << occupancy::child_bit(local, 1);
+        let mask = if occupancy::cell_solid(self.pool_brick(slot), local) { old | bit } else { old & !bit };
+        // A brick just expanded from a uniform one still carries that one's mask.
+        let mask = if old == SOLID_BRICK { occupancy::brick_cells(self.pool_brick(slot)) } else { mask };
+        let b = self.brick_coord(index as u32);
+        self.occupancy.set_brick(index, b, mask);
     }
 
     /// Moves brick `index` from a uniform state into a pool slot filled with `voxel`; returns the slot.
@@ -383,6 +428,7 @@ impl BrickGrid {
         let base = slot as usize * BRICK_VOXELS;
         self.pool[base..base + BRICK_VOXELS].copy_from_slice(voxels);
         self.collapse_if_uniform(index, slot);
+        self.update_occupancy(index);
         self.dirty.insert(index as u32);
     }
 

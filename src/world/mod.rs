@@ -8,6 +8,7 @@ pub mod format;
 pub mod grid;
 pub mod import;
 pub mod objects;
+pub mod occupancy;
 pub mod palette;
 pub mod recipe;
 pub mod source;

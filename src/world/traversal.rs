@@ -1,12 +1,14 @@
-//! CPU ray traversal: a DDA over bricks that skips empty cells, then a DDA over the voxels of non-uniform bricks
-//! (Amanatides & Woo). `shaders/lib/traversal.wgsl` mirrors this function step for step, so the GPU and CPU agree
-//! per pixel; keep the two in sync.
+//! CPU ray traversal: a DDA (Amanatides & Woo) over the occupancy hierarchy of the brick grid that jumps empty
+//! cells of 128, 32, 8 and 2 voxels (`world::occupancy`) and reads voxels only inside occupied 2^3 cells.
+//! `shaders/lib/traversal.wgsl` mirrors `trace_counted` step for step, so the GPU and CPU agree per pixel; keep the
+//! two in sync.
 //!
 //! Conventions shared by both: `t` is distance along the unit direction; every boundary crossing is computed as
 //! `(plane - origin) / dir` from the ray's own origin (never accumulated), so both sides round the same way; the
 //! hit face is the face the ray entered through; a ray starting inside a solid voxel hits it at `t = 0`.
 
-use super::grid::{BRICK_SIZE, BrickCell, BrickGrid, Voxel};
+use super::grid::{BRICK_SIZE, BRICK_VOXELS, BrickCell, BrickGrid, Voxel, local_index};
+use super::occupancy::{LEVEL_SHIFTS, TOP_LEVEL, child_bit, has_child};
 use bevy::math::{IVec3, Vec3};
 
 /// Secondary rays start this far off the surface they leave (the GPU passes use the same, as
@@ -109,23 +111,59 @@ pub fn box_entry(ray: &Ray, lo: Vec3, hi: Vec3) -> (f32, f32, usize) {
     (t_enter, t_exit, axis)
 }
 
-/// Finds the first solid voxel along `ray` within `max_distance`.
-pub fn trace(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
+/// What one trace did, for the benches: loop steps (a move to the next cell at some level, or a descent into an
+/// occupied one) and memory loads (mask words, top cells and voxels; a bit test of a mask a ray already holds is
+/// not a load).
+pub trait Tally {
+    /// A cell of `level` visited (`world::occupancy`: 0 voxel, 2 brick).
+    fn step(&mut self, level: usize);
+    fn load(&mut self);
+}
+
+/// Counts nothing: the game's and the reference's traces.
+pub struct NoTally;
+
+impl Tally for NoTally {
+    #[inline(always)]
+    fn step(&mut self, _level: usize) {}
+    #[inline(always)]
+    fn load(&mut self) {}
+}
+
+/// Counts steps and loads.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Counts {
+    pub rays: u64,
+    pub steps: u64,
+    pub loads: u64,
+    /// Steps by level.
+    pub levels: [u64; TOP_LEVEL + 1],
+}
+
+impl Tally for Counts {
+    #[inline(always)]
+    fn step(&mut self, level: usize) {
+        self.steps += 1;
+        self.levels[level] += 1;
+    }
+    #[inline(always)]
+    fn load(&mut self) {
+        self.loads += 1;
+    }
+}
+
+/// Where a ray enters the world: the clipped parameter range and the axis of the face it entered through, or
+/// `None` when it misses the world (or is not finite).
+fn enter_world(size: Vec3, ray: &Ray, max_distance: f32) -> Option<(f32, f32, usize)> {
     if ray.dir == Vec3::ZERO || !ray.origin.is_finite() || !ray.dir.is_finite() {
         return None;
     }
-    let size = grid.size().as_vec3();
     let (t_enter, t_exit, enter_axis) = box_entry(ray, Vec3::ZERO, size);
     let t_end = t_exit.min(max_distance);
-    let mut t = t_enter.max(0.0);
+    let t = t_enter.max(0.0);
     if t > t_end {
         return None;
     }
-    let inv = inverse_dir(ray.dir);
-    let step = ray.dir.signum().as_ivec3();
-    let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
-    let brick_edge = BRICK_SIZE as f32;
-    let last_brick = ((grid.size().as_ivec3() - IVec3::ONE) >> 3_i32).max(IVec3::ZERO);
     // The face through which the ray entered the current cell; a ray starting inside the world uses the axis of
     // its voxel's entry, as `box_entry` reports for a box around the origin.
     let mut axis = enter_axis;
@@ -133,7 +171,123 @@ pub fn trace(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
         let v = ray.origin.floor();
         axis = box_entry(ray, v, v + Vec3::ONE).2;
     }
+    Some((t, t_end, axis))
+}
 
+/// Finds the first solid voxel along `ray` within `max_distance`.
+#[inline]
+pub fn trace(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
+    trace_counted(grid, ray, max_distance, &mut NoTally)
+}
+
+/// `trace`, telling `tally` its steps and loads.
+///
+/// One flat loop over the occupancy hierarchy (`world::occupancy`): at level `level` the ray is in the cell holding
+/// voxel `v`; an occupied cell is entered (the level below, `v` re-found from the ray at `t` and clamped into the
+/// cell), an empty one left through its nearest face, going up as many levels as that face closes. Every face is
+/// a voxel boundary computed as in the plain DDA, and ties go to the first axis, so the hits are the DDA's save
+/// where a ray grazes an edge within rounding of `origin + dir * t`.
+pub fn trace_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
+    let size = grid.size().as_ivec3();
+    let (mut t, t_end, mut axis) = enter_world(size.as_vec3(), ray, max_distance)?;
+    let inv = inverse_dir(ray.dir);
+    let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
+    let occupancy = grid.occupancy();
+    let last = size - IVec3::ONE;
+    let mut v = ray.at(t).floor().as_ivec3().clamp(IVec3::ZERO, last);
+    let mut level = TOP_LEVEL;
+    // masks[l]: the child mask of the level-l cell the ray is in (valid while it stays there).
+    let mut masks = [0u64; TOP_LEVEL + 1];
+    let mut slot = 0u32;
+    // Every move crosses at least one voxel boundary and is followed by at most TOP_LEVEL descents.
+    let max_steps = (TOP_LEVEL as i32 + 1) * (size.x + size.y + size.z) + 8;
+    for _ in 0..max_steps {
+        tally.step(level);
+        let occupied = match level {
+            0 => {
+                tally.load();
+                let material = grid.pool()[slot as usize * BRICK_VOXELS + local_index(v & 7_i32)];
+                if material != 0 {
+                    return Some(Hit { voxel: v, face: Face::entered(axis, positive[axis]), distance: t, material });
+                }
+                false
+            }
+            TOP_LEVEL => {
+                tally.load();
+                masks[TOP_LEVEL] = occupancy.region(v);
+                masks[TOP_LEVEL] != 0
+            }
+            _ => has_child(masks[level + 1], child_bit(v, level)),
+        };
+        let shift = LEVEL_SHIFTS[level];
+        let lo = (v >> shift) << shift;
+        if occupied {
+            // Into the cell: the voxel the ray is in at t, within the cell.
+            let hi = (lo + IVec3::splat((1 << shift) - 1)).min(last);
+            v = ray.at(t).floor().as_ivec3().clamp(lo, hi);
+            match level {
+                3 => {
+                    tally.load();
+                    masks[3] = occupancy.sector(v);
+                }
+                2 => {
+                    tally.load();
+                    let index = grid.brick_index(v >> 3_i32);
+                    match BrickCell::decode(grid.top_cell(index)) {
+                        BrickCell::Homogeneous(material) => {
+                            let face = Face::entered(axis, positive[axis]);
+                            return Some(Hit { voxel: v, face, distance: t, material });
+                        }
+                        BrickCell::Pooled(s) => slot = s,
+                        // The sector said otherwise; never with masks kept current.
+                        BrickCell::Empty => {}
+                    }
+                    tally.load();
+                    masks[2] = occupancy.brick(index);
+                }
+                _ => {}
+            }
+            level -= 1;
+            continue;
+        }
+        // Out of the cell through the face the ray reaches first.
+        let edge = 1 << shift;
+        let mut t_max = Vec3::ZERO;
+        for a in 0..3 {
+            t_max[a] = cross_t(ray, inv, a, (lo[a] + if positive[a] { edge } else { 0 }) as f32);
+        }
+        let a = min_axis(t_max);
+        t = t_max[a];
+        if t > t_end {
+            return None;
+        }
+        axis = a;
+        let from = v[a];
+        v[a] = if positive[a] { lo[a] + edge } else { lo[a] - 1 };
+        if v[a] < 0 || v[a] > last[a] {
+            return None;
+        }
+        while level < TOP_LEVEL && (v[a] >> LEVEL_SHIFTS[level + 1]) != (from >> LEVEL_SHIFTS[level + 1]) {
+            level += 1;
+        }
+    }
+    None
+}
+
+/// The plain two-level DDA of the first version (bricks, then the voxels of pooled bricks), one load per step:
+/// kept as the baseline `bench --rays` measures against and a second oracle for the tests.
+pub fn trace_dda(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
+    trace_dda_counted(grid, ray, max_distance, &mut NoTally)
+}
+
+/// `trace_dda`, telling `tally` its steps (each one load).
+pub fn trace_dda_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
+    let (mut t, t_end, mut axis) = enter_world(grid.size().as_vec3(), ray, max_distance)?;
+    let inv = inverse_dir(ray.dir);
+    let step = ray.dir.signum().as_ivec3();
+    let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
+    let brick_edge = BRICK_SIZE as f32;
+    let last_brick = ((grid.size().as_ivec3() - IVec3::ONE) >> 3_i32).max(IVec3::ZERO);
     let start = ray.at(t);
     let mut brick = (start / brick_edge).floor().as_ivec3().clamp(IVec3::ZERO, last_brick);
     let mut brick_t_max = Vec3::ZERO;
@@ -143,6 +297,8 @@ pub fn trace(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
     }
 
     loop {
+        tally.step(2);
+        tally.load();
         match grid.cell(brick) {
             BrickCell::Empty => {}
             BrickCell::Homogeneous(material) => {
@@ -150,7 +306,7 @@ pub fn trace(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
                 return Some(Hit { voxel, face: Face::entered(axis, positive[axis]), distance: t, material });
             }
             BrickCell::Pooled(_) => {
-                if let Some(hit) = trace_in_brick(grid, ray, inv, brick, t, t_end, axis) {
+                if let Some(hit) = trace_in_brick(grid, ray, inv, brick, t, t_end, axis, tally) {
                     return Some(hit);
                 }
             }
@@ -171,6 +327,7 @@ pub fn trace(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
 }
 
 /// Voxel DDA inside one pooled brick, starting at parameter `t` where the ray entered it through `axis`.
+#[allow(clippy::too_many_arguments)]
 fn trace_in_brick(
     grid: &BrickGrid,
     ray: &Ray,
@@ -179,6 +336,7 @@ fn trace_in_brick(
     mut t: f32,
     t_end: f32,
     mut axis: usize,
+    tally: &mut impl Tally,
 ) -> Option<Hit> {
     let step = ray.dir.signum().as_ivec3();
     let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
@@ -190,6 +348,8 @@ fn trace_in_brick(
         t_max[a] = cross_t(ray, inv, a, (voxel[a] + positive[a] as i32) as f32);
     }
     loop {
+        tally.step(0);
+        tally.load();
         let material = grid.get(voxel);
         if material != 0 {
             return Some(Hit { voxel, face: Face::entered(axis, positive[axis]), distance: t, material });

@@ -72,13 +72,19 @@ fn twins() -> Vec<Twin> {
     let word = size_of::<u32>() as u64;
     vec![
         // Group 0: the world.
-        twin!("world_info", "WorldInfo", WorldInfo { size, object_count, bricks }),
+        twin!(
+            "world_info",
+            "WorldInfo",
+            WorldInfo { size, object_count, bricks, sectors, sector_base, regions, region_base }
+        ),
         sized("top_cells", None, word, 1),
         sized("brick_pool", None, word, 1),
         twin!("materials", "Material", GpuMaterial { albedo, radiance }),
         twin!("objects", "Object", GpuObject { min, id, size, offset, previous_min }),
         sized("object_voxels", None, word, 1),
         sized("counters", None, word, 1),
+        // One occupancy mask (`world::occupancy`): a u64 on the CPU, a vec2<u32> on the GPU.
+        sized("occupancy", None, size_of::<u64>() as u64, 1),
         // Group 1: one view.
         twin!(
             "frame",

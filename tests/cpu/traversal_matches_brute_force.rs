@@ -1,9 +1,13 @@
-//! CPU DDA traversal against a brute-force ray-box test of every solid voxel, on random worlds and rays.
+//! CPU traversal against a brute-force ray-box test of every solid voxel and against the plain DDA, on random
+//! worlds and rays; the occupancy masks against a rebuild after edits.
 
 use bevy::math::{IVec3, UVec3, Vec3};
-use glowbrick::world::grid::BrickGrid;
+use glowbrick::world::grid::{BrickCell, BrickGrid};
+use glowbrick::world::occupancy::{SOLID_BRICK, brick_cells};
 use glowbrick::world::terrain::hash_u32;
-use glowbrick::world::traversal::{Face, Ray, trace, trace_brute_force};
+use glowbrick::world::traversal::{
+    Counts, Face, Ray, trace, trace_brute_force, trace_counted, trace_dda, trace_dda_counted,
+};
 
 /// Deterministic uniform floats from a counter.
 struct Rng(u32);
@@ -137,4 +141,162 @@ fn a_subnormal_direction_component_on_a_boundary_plane_gives_a_finite_hit() {
     let hit = trace(&grid, &ray, f32::INFINITY).expect("the ray reaches the floor");
     assert!(hit.distance.is_finite(), "{hit:?}");
     assert_eq!(hit.voxel.y, 0);
+}
+
+/// A world wider than a region (128) with empty stretches, sparse voxels, thin walls and boxes, so every level of
+/// the occupancy hierarchy is both skipped and entered.
+fn large_sparse_world(rng: &mut Rng, size: UVec3) -> BrickGrid {
+    let mut grid = BrickGrid::new(size);
+    let s = size.as_ivec3();
+    let pick = |rng: &mut Rng, n: i32| ((rng.next() * n as f32) as i32).min(n - 1);
+    for _ in 0..(size.x * size.y * size.z / 1000) {
+        let p = IVec3::new(pick(rng, s.x), pick(rng, s.y), pick(rng, s.z));
+        grid.set(p, 1 + pick(rng, 3) as u16).unwrap();
+    }
+    for _ in 0..(size.x * size.z / 400) {
+        let a = IVec3::new(pick(rng, s.x), pick(rng, s.y), pick(rng, s.z));
+        let e = IVec3::new(1 + pick(rng, 40), 1 + pick(rng, 20), 1 + pick(rng, 3));
+        let e = if rng.next() < 0.5 { e } else { IVec3::new(e.z, e.y, e.x) };
+        grid.fill_box(a, (a + e).min(s), 2).unwrap();
+    }
+    // A hole in one box: a brick expanded from a homogeneous one.
+    grid.fill_box(IVec3::ZERO, IVec3::new(16, 16, 16), 3).unwrap();
+    grid.set(IVec3::new(3, 4, 5), 0).unwrap();
+    grid
+}
+
+/// The occupancy traversal finds the plain DDA's hit on worlds of several regions, ray for ray; a different voxel
+/// only where the ray meets two at the same distance (an edge or corner within rounding).
+#[test]
+fn occupancy_traversal_matches_the_plain_dda_on_large_worlds() {
+    let mut rng = Rng(777);
+    let (mut hits, mut ties, mut rays) = (0, 0, 0);
+    for world_index in 0..4 {
+        let size = UVec3::new(
+            100 + (rng.next() * 200.0) as u32,
+            40 + (rng.next() * 100.0) as u32,
+            100 + (rng.next() * 200.0) as u32,
+        );
+        let grid = large_sparse_world(&mut rng, size);
+        let s = size.as_vec3();
+        for ray_index in 0..3000 {
+            let origin = if ray_index % 3 == 0 {
+                Vec3::new(rng.range(-30.0, s.x + 30.0), rng.range(-30.0, s.y + 30.0), rng.range(-30.0, s.z + 30.0))
+            } else {
+                Vec3::new(rng.range(0.0, s.x), rng.range(0.0, s.y), rng.range(0.0, s.z))
+            };
+            let mut dir = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            if ray_index % 17 == 0 {
+                dir = Vec3::ZERO;
+                dir[ray_index % 3] = if rng.next() < 0.5 { -1.0 } else { 1.0 };
+            }
+            let ray = Ray::new(origin, dir);
+            let max_distance = if ray_index % 5 == 0 { rng.range(0.0, 200.0) } else { f32::INFINITY };
+            rays += 1;
+            let fast = trace(&grid, &ray, max_distance);
+            let plain = trace_dda(&grid, &ray, max_distance);
+            match (fast, plain) {
+                (None, None) => {}
+                (Some(f), Some(p)) => {
+                    hits += 1;
+                    assert_eq!(grid.get(f.voxel), f.material);
+                    if f != p {
+                        ties += 1;
+                        assert!(
+                            (f.distance - p.distance).abs() <= 1e-4,
+                            "world {world_index} ray {ray:?}: {f:?} vs {p:?}"
+                        );
+                    }
+                }
+                (f, p) => panic!("world {world_index} ray {ray_index} {ray:?}: occupancy {f:?} plain dda {p:?}"),
+            }
+        }
+    }
+    assert!(hits > rays / 8, "too few hits to mean anything: {hits} of {rays}");
+    assert!(ties * 500 < hits, "ties should be rare: {ties} of {hits}");
+}
+
+/// The occupancy traversal reads several times fewer words than the plain DDA across a sparse world.
+#[test]
+fn occupancy_traversal_loads_fewer_words_than_the_plain_dda() {
+    let mut rng = Rng(99);
+    let size = UVec3::new(256, 96, 256);
+    let grid = large_sparse_world(&mut rng, size);
+    let (mut fast, mut plain) = (Counts::default(), Counts::default());
+    for _ in 0..4000 {
+        let origin = Vec3::new(rng.range(0.0, 256.0), rng.range(0.0, 96.0), rng.range(0.0, 256.0));
+        let ray = Ray::new(origin, Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)));
+        trace_counted(&grid, &ray, f32::INFINITY, &mut fast);
+        trace_dda_counted(&grid, &ray, f32::INFINITY, &mut plain);
+    }
+    assert!(fast.loads * 3 < plain.loads, "loads: occupancy {} plain {}", fast.loads, plain.loads);
+    assert!(fast.steps * 4 < plain.steps * 3, "steps: occupancy {} plain {}", fast.steps, plain.steps);
+}
+
+/// After every kind of edit, each mask of the hierarchy is what a rebuild from the voxels gives.
+#[test]
+fn occupancy_masks_follow_every_kind_of_edit() {
+    let mut rng = Rng(4242);
+    let size = UVec3::new(150, 40, 70);
+    let mut grid = large_sparse_world(&mut rng, size);
+    let s = size.as_ivec3();
+    let pick = |rng: &mut Rng, n: i32| ((rng.next() * n as f32) as i32).min(n - 1);
+    for round in 0..60 {
+        let a = IVec3::new(pick(&mut rng, s.x), pick(&mut rng, s.y), pick(&mut rng, s.z));
+        let material = if rng.next() < 0.5 { 0 } else { 1 + pick(&mut rng, 3) as u16 };
+        match round % 4 {
+            0 => {
+                grid.set(a, material).unwrap();
+            }
+            1 => {
+                let b = (a + IVec3::new(1 + pick(&mut rng, 20), 1 + pick(&mut rng, 20), 1 + pick(&mut rng, 20))).min(s);
+                grid.fill_box(a, b, material).unwrap();
+            }
+            2 => {
+                let b = (a + IVec3::splat(1 + pick(&mut rng, 9))).min(s);
+                let e = b - a;
+                let voxels: Vec<u16> =
+                    (0..e.x * e.y * e.z).map(|_| if rng.next() < 0.7 { 0 } else { material }).collect();
+                grid.write_box(a, b, &voxels).unwrap();
+            }
+            _ => {
+                let b = (a >> 3_i32).min(grid.brick_dims().as_ivec3() - 1);
+                let mut voxels = [0u16; 512];
+                voxels[pick(&mut rng, 512) as usize] = 1 + material;
+                grid.set_brick(b, &voxels);
+            }
+        }
+        assert_masks_rebuilt(&grid, round);
+    }
+}
+
+fn assert_masks_rebuilt(grid: &BrickGrid, round: usize) {
+    let dims = grid.brick_dims().as_ivec3();
+    let occupancy = grid.occupancy();
+    let mut sectors = std::collections::HashMap::<IVec3, u64>::new();
+    let mut regions = std::collections::HashMap::<IVec3, u64>::new();
+    for z in 0..dims.z {
+        for y in 0..dims.y {
+            for x in 0..dims.x {
+                let b = IVec3::new(x, y, z);
+                let expected = match grid.cell(b) {
+                    BrickCell::Empty => 0,
+                    BrickCell::Homogeneous(_) => SOLID_BRICK,
+                    BrickCell::Pooled(_) => brick_cells(&grid.brick_voxels(b)),
+                };
+                assert_eq!(occupancy.brick(grid.brick_index(b)), expected, "round {round} brick {b}");
+                let bit = (b.x & 3) + 4 * ((b.y & 3) + 4 * (b.z & 3));
+                let sector = sectors.entry(b >> 2).or_default();
+                *sector |= ((expected != 0) as u64) << bit;
+            }
+        }
+    }
+    for (&s, &mask) in &sectors {
+        assert_eq!(occupancy.sector(s * 32), mask, "round {round} sector {s}");
+        let bit = (s.x & 3) + 4 * ((s.y & 3) + 4 * (s.z & 3));
+        *regions.entry(s >> 2).or_default() |= ((mask != 0) as u64) << bit;
+    }
+    for (&r, &mask) in &regions {
+        assert_eq!(occupancy.region(r * 128), mask, "round {round} region {r}");
+    }
 }

@@ -23,7 +23,7 @@ fn first_frame_is_full_then_only_dirty_bricks() {
     // Nothing changed: nothing to send.
     app.update();
     assert!(app.world().resource::<WorldUpload>().is_empty());
-    // One placed voxel in an empty brick: one top cell and one pooled brick.
+    // One placed voxel in an empty brick: one top cell, one pooled brick and its masks.
     app.world_mut().resource_mut::<VoxelWorld>().apply(Edit::Place { at: IVec3::new(9, 9, 9), material: 1 }).unwrap();
     app.update();
     let upload = app.world().resource::<WorldUpload>().clone();
@@ -32,7 +32,9 @@ fn first_frame_is_full_then_only_dirty_bricks() {
     assert_eq!(upload.top_cells.iter().map(|c| c.0).collect::<Vec<_>>(), vec![brick]);
     assert_eq!(upload.bricks.len(), 1);
     assert_eq!(upload.bricks[0].1[1 + 8 * (1 + 8)], 1, "the placed voxel is in the uploaded brick");
-    assert_eq!(upload.bytes(), 4 + 1024);
+    // The top cell, the brick's voxels, and the occupancy masks of the brick, its sector and its region.
+    assert_eq!(upload.occupancy.len(), 3);
+    assert_eq!(upload.bytes(), 4 + 1024 + 3 * 8);
     // A whole-brick fill uploads the top cell only (the brick is homogeneous, not pooled).
     app.world_mut()
         .resource_mut::<VoxelWorld>()

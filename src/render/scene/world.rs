@@ -58,6 +58,12 @@ pub struct FullWorld {
     pub size: UVec3,
     pub brick_dims: UVec3,
     pub top_cells: Arc<Vec<u32>>,
+    /// The occupancy masks (`world::occupancy`): bricks, then sectors, then regions.
+    pub occupancy: Arc<Vec<u64>>,
+    /// Where the sector and region masks start in `occupancy`, and their grid sizes.
+    pub occupancy_bases: (usize, usize),
+    pub sector_dims: UVec3,
+    pub region_dims: UVec3,
     /// Pool voxels of all slots, padded with air to `pool_slots` slots.
     pub pool: Arc<Vec<Voxel>>,
     pub pool_slots: u32,
@@ -70,6 +76,8 @@ pub struct WorldUpload {
     pub full: Option<Arc<FullWorld>>,
     /// Changed top cells: (brick index, encoded cell).
     pub top_cells: Vec<(u32, u32)>,
+    /// Occupancy masks an edited brick may have changed: (index in `FullWorld::occupancy`, mask).
+    pub occupancy: Vec<(u32, u64)>,
     /// Changed pooled bricks: (pool slot, its voxels).
     pub bricks: Vec<(u32, Arc<[Voxel]>)>,
     /// The material table, when it changed.
@@ -83,8 +91,13 @@ impl WorldUpload {
 
     /// Bytes this upload writes to GPU buffers (for the HUD and tests).
     pub fn bytes(&self) -> u64 {
-        let full = self.full.as_ref().map_or(0, |f| f.top_cells.len() as u64 * 4 + f.pool.len() as u64 * 2);
-        full + self.top_cells.len() as u64 * 4 + self.bricks.len() as u64 * BRICK_VOXELS as u64 * 2
+        let full = self
+            .full
+            .as_ref()
+            .map_or(0, |f| f.top_cells.len() as u64 * 4 + f.occupancy.len() as u64 * 8 + f.pool.len() as u64 * 2);
+        full + self.top_cells.len() as u64 * 4
+            + self.occupancy.len() as u64 * 8
+            + self.bricks.len() as u64 * BRICK_VOXELS as u64 * 2
     }
 }
 
@@ -125,6 +138,10 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
             size: grid.size(),
             brick_dims: grid.brick_dims(),
             top_cells: Arc::new(grid.top_cells().to_vec()),
+            occupancy: Arc::new(grid.occupancy().masks().to_vec()),
+            occupancy_bases: grid.occupancy().bases(),
+            sector_dims: grid.occupancy().sector_dims(),
+            region_dims: grid.occupancy().region_dims(),
             pool: Arc::new(pool),
             pool_slots,
         }));
@@ -132,13 +149,17 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
         state.gpu_pool_slots = pool_slots;
     } else if !world.grid.dirty().is_empty() {
         let grid = &mut world.grid;
+        let mut masks = std::collections::BTreeSet::new();
         for index in grid.take_dirty() {
             let raw = grid.top_cells()[index as usize];
             upload.top_cells.push((index, raw));
+            masks.extend(grid.occupancy().indices_of_brick(index as usize, grid.brick_coord(index)));
             if let BrickCell::Pooled(slot) = BrickCell::decode(raw) {
                 upload.bricks.push((slot, Arc::from(grid.pool_brick(slot))));
             }
         }
+        let all = grid.occupancy().masks();
+        upload.occupancy = masks.into_iter().map(|i| (i as u32, all[i])).collect();
     }
     if replaced || state.palette.as_ref() != Some(&world.palette) {
         upload.materials = Some(Arc::new(gpu_materials(&world.palette)));
@@ -151,9 +172,10 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
 /// written by `prepare_gpu_world`.
 #[derive(Resource, Default)]
 pub struct PendingUploads {
-    /// World size and brick grid size of the latest full upload.
-    layout: Option<(UVec3, UVec3)>,
+    /// The world info of the latest full upload (its object count not yet set).
+    layout: Option<WorldInfo>,
     top_cells: Staging<u32>,
+    occupancy: Staging<u64>,
     pool: Staging<Voxel>,
     materials: Staging<GpuMaterial>,
     /// Brick indices whose top cell changed after the latest full upload.
@@ -166,8 +188,9 @@ impl PendingUploads {
     /// Queues one frame's upload behind the ones already pending.
     pub fn push(&mut self, upload: &WorldUpload) {
         if let Some(full) = &upload.full {
-            self.layout = Some((full.size, full.brick_dims));
+            self.layout = Some(world_info(full, 0));
             self.top_cells.whole(full.top_cells.clone());
+            self.occupancy.whole(full.occupancy.clone());
             self.pool.whole(full.pool.clone());
             self.edited.clear();
             self.bytes = 0;
@@ -175,6 +198,9 @@ impl PendingUploads {
         for &(index, raw) in &upload.top_cells {
             self.top_cells.range(index as u64, &[raw]);
             self.edited.push(index);
+        }
+        for &(index, mask) in &upload.occupancy {
+            self.occupancy.range(index as u64, &[mask]);
         }
         for (slot, voxels) in &upload.bricks {
             self.pool.range(*slot as u64 * BRICK_VOXELS as u64, voxels);
@@ -186,9 +212,9 @@ impl PendingUploads {
         self.bytes += upload.bytes();
     }
 
-    /// World size and brick grid size for the buffers to create, when the batch holds a full upload, with an
-    /// air-only material table when no table came with it.
-    fn prepare_creation(&mut self) -> Option<(UVec3, UVec3)> {
+    /// The world info for the buffers to create, when the batch holds a full upload, with an air-only material
+    /// table when no table came with it.
+    fn prepare_creation(&mut self) -> Option<WorldInfo> {
         // Partial uploads need the buffers of a full one; the main world always sends one first.
         let layout = self.layout?;
         if !self.materials.has_whole() {
@@ -223,6 +249,8 @@ pub fn world_bind_group_layout() -> BindGroupLayoutDescriptor {
                 storage_buffer_read_only_sized(false, None),
                 // Counters (`super::counters`).
                 storage_buffer_sized(false, None),
+                // Occupancy masks (`world::occupancy`).
+                storage_buffer_read_only_sized(false, None),
             ),
         ),
     )
@@ -235,6 +263,7 @@ pub struct GpuWorld {
     pub info: WorldInfo,
     pub info_buffer: Buffer,
     pub top_cells: Buffer,
+    pub occupancy: Buffer,
     pub brick_pool: Buffer,
     pub materials: Buffer,
     pub bind_group: BindGroup,
@@ -263,6 +292,7 @@ impl GpuWorld {
 pub struct WorldLayout(pub BindGroupLayoutDescriptor);
 
 const TOP_CELLS_LABEL: &str = "glowbrick_top_cells";
+const OCCUPANCY_LABEL: &str = "glowbrick_occupancy";
 const BRICK_POOL_LABEL: &str = "glowbrick_brick_pool";
 const MATERIALS_LABEL: &str = "glowbrick_materials";
 
@@ -276,25 +306,44 @@ struct WorldBinding<'a> {
 }
 
 impl WorldBinding<'_> {
-    fn bind(&self, info: &Buffer, top_cells: &Buffer, brick_pool: &Buffer, materials: &Buffer) -> BindGroup {
+    fn bind(&self, gpu: &GpuWorldBuffers) -> BindGroup {
         self.device.create_bind_group(
             "glowbrick_world",
             &self.cache.get_bind_group_layout(self.layout),
             &BindGroupEntries::sequential((
-                info.as_entire_binding(),
-                top_cells.as_entire_binding(),
-                brick_pool.as_entire_binding(),
-                materials.as_entire_binding(),
+                gpu.info.as_entire_binding(),
+                gpu.top_cells.as_entire_binding(),
+                gpu.brick_pool.as_entire_binding(),
+                gpu.materials.as_entire_binding(),
                 self.objects.objects.as_entire_binding(),
                 self.objects.voxels.as_entire_binding(),
                 self.counters.as_entire_binding(),
+                gpu.occupancy.as_entire_binding(),
             )),
         )
     }
 }
 
-fn world_info(size: UVec3, brick_dims: UVec3, object_count: u32) -> WorldInfo {
-    WorldInfo { size: size.as_ivec3().to_array(), object_count, bricks: brick_dims.as_ivec3().to_array(), _pad: 0 }
+/// The buffers group 0 binds besides the objects and counters.
+struct GpuWorldBuffers<'a> {
+    info: &'a Buffer,
+    top_cells: &'a Buffer,
+    brick_pool: &'a Buffer,
+    materials: &'a Buffer,
+    occupancy: &'a Buffer,
+}
+
+fn world_info(full: &FullWorld, object_count: u32) -> WorldInfo {
+    WorldInfo {
+        size: full.size.as_ivec3().to_array(),
+        object_count,
+        bricks: full.brick_dims.as_ivec3().to_array(),
+        _pad: 0,
+        sectors: full.sector_dims.as_ivec3().to_array(),
+        sector_base: full.occupancy_bases.0 as u32,
+        regions: full.region_dims.as_ivec3().to_array(),
+        region_base: full.occupancy_bases.1 as u32,
+    }
 }
 
 /// Brick grid position of a brick index (x fastest).
@@ -339,22 +388,31 @@ pub fn prepare_gpu_world(
 
 /// The GPU world from a batch that holds a full upload (and whatever was queued behind it).
 fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &RenderQueue) -> Option<GpuWorld> {
-    let (size, brick_dims) = batch.prepare_creation()?;
+    let info = batch.prepare_creation()?;
+    let brick_dims = IVec3::from_array(info.bricks).as_uvec3();
     let device = binding.device;
-    let info = world_info(size, brick_dims, binding.objects.count);
+    let info = WorldInfo { object_count: binding.objects.count, ..info };
     let info_buffer = device.create_buffer_with_data(&BufferInitDescriptor {
         label: Some("glowbrick_world_info"),
         contents: bytemuck::bytes_of(&info),
         usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
     });
     let top_cells = upload(&mut batch.top_cells, None, Fit::Exact, TOP_CELLS_LABEL, device, queue)?;
+    let occupancy = upload(&mut batch.occupancy, None, Fit::Exact, OCCUPANCY_LABEL, device, queue)?;
     let brick_pool = upload(&mut batch.pool, None, Fit::Exact, BRICK_POOL_LABEL, device, queue)?;
     let materials = upload(&mut batch.materials, None, Fit::AtLeast, MATERIALS_LABEL, device, queue)?;
-    let bind_group = binding.bind(&info_buffer, &top_cells, &brick_pool, &materials);
+    let bind_group = binding.bind(&GpuWorldBuffers {
+        info: &info_buffer,
+        top_cells: &top_cells,
+        brick_pool: &brick_pool,
+        materials: &materials,
+        occupancy: &occupancy,
+    });
     Some(GpuWorld {
         info,
         info_buffer,
         top_cells,
+        occupancy,
         brick_pool,
         materials,
         bind_group,
@@ -369,15 +427,20 @@ fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &
 fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &WorldBinding, queue: &RenderQueue) {
     let device = binding.device;
     gpu.replaced = batch.layout.is_some();
-    if let Some((size, brick_dims)) = batch.layout {
-        gpu.brick_dims = brick_dims;
-        gpu.info = world_info(size, brick_dims, gpu.info.object_count);
+    if let Some(info) = batch.layout {
+        gpu.brick_dims = IVec3::from_array(info.bricks).as_uvec3();
+        gpu.info = WorldInfo { object_count: gpu.info.object_count, ..info };
         queue.write_buffer(&gpu.info_buffer, 0, bytemuck::bytes_of(&gpu.info));
     }
     let mut rebind = false;
     if let Some(buffer) = upload(&mut batch.top_cells, Some(&gpu.top_cells), Fit::Exact, TOP_CELLS_LABEL, device, queue)
     {
         gpu.top_cells = buffer;
+        rebind = true;
+    }
+    if let Some(buffer) = upload(&mut batch.occupancy, Some(&gpu.occupancy), Fit::Exact, OCCUPANCY_LABEL, device, queue)
+    {
+        gpu.occupancy = buffer;
         rebind = true;
     }
     if let Some(buffer) = upload(&mut batch.pool, Some(&gpu.brick_pool), Fit::Exact, BRICK_POOL_LABEL, device, queue) {
@@ -391,7 +454,13 @@ fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &World
         rebind = true;
     }
     if rebind {
-        gpu.bind_group = binding.bind(&gpu.info_buffer, &gpu.top_cells, &gpu.brick_pool, &gpu.materials);
+        gpu.bind_group = binding.bind(&GpuWorldBuffers {
+            info: &gpu.info_buffer,
+            top_cells: &gpu.top_cells,
+            brick_pool: &gpu.brick_pool,
+            materials: &gpu.materials,
+            occupancy: &gpu.occupancy,
+        });
     }
     gpu.edited_bricks = batch.edited.iter().map(|&i| brick_position(i, gpu.brick_dims)).collect();
     gpu.uploaded_bytes = batch.bytes;
@@ -408,6 +477,7 @@ mod tests {
     #[derive(Default)]
     struct SimulatedGpu {
         top_cells: Option<Vec<u8>>,
+        occupancy: Option<Vec<u8>>,
         pool: Option<Vec<u8>>,
         materials: Option<Vec<u8>>,
     }
@@ -421,6 +491,7 @@ mod tests {
             let size = |b: &Option<Vec<u8>>| b.as_ref().map(|b| b.len() as u64);
             let ops: Vec<BufferOp> = batch.top_cells.ops(size(&self.top_cells), Fit::Exact);
             run(&ops, &mut self.top_cells);
+            run(&batch.occupancy.ops(size(&self.occupancy), Fit::Exact), &mut self.occupancy);
             run(&batch.pool.ops(size(&self.pool), Fit::Exact), &mut self.pool);
             run(&batch.materials.ops(size(&self.materials), Fit::AtLeast), &mut self.materials);
             *batch = PendingUploads::default();
@@ -429,6 +500,9 @@ mod tests {
         fn assert_holds(&self, world: &VoxelWorld, order: &[Change]) {
             let top_cells = self.top_cells.as_ref().expect("top cells");
             assert_eq!(top_cells.as_slice(), bytemuck::cast_slice::<u32, u8>(world.grid.top_cells()), "{order:?}");
+            let occupancy = self.occupancy.as_ref().expect("occupancy");
+            let expected: &[u8] = bytemuck::cast_slice(world.grid.occupancy().masks());
+            assert_eq!(occupancy.as_slice(), expected, "occupancy after {order:?}");
             let pool = self.pool.as_ref().expect("pool");
             let expected = voxel_bytes(world.grid.pool());
             assert_eq!(&pool[..expected.len()], expected, "pool after {order:?}");

@@ -1,0 +1,228 @@
+//! The occupancy hierarchy over the brick grid: what lets a ray jump empty space whole cells at a time.
+//!
+//! Five levels, each cell 4^3 (or 2^3 at the bottom) of the level below, every one an integer shift of voxel
+//! coordinates (`LEVEL_SHIFTS`):
+//!
+//! | level | cell edge | what says it is occupied                                      |
+//! |-------|-----------|---------------------------------------------------------------|
+//! | 4     | 128       | its region mask is not 0                                       |
+//! | 3     | 32        | a bit of its region's mask (64 sectors)                        |
+//! | 2     | 8 (brick) | a bit of its sector's mask (64 bricks)                         |
+//! | 1     | 2         | a bit of its pooled brick's mask (64 cells of 2^3 voxels)      |
+//! | 0     | 1 (voxel) | its material                                                   |
+//!
+//! A ray holds the masks of the cells it is inside in registers, so a step through empty space at levels 1-3 costs
+//! no memory load at all; `world::traversal` and `shaders/lib/traversal.wgsl` walk it the same way. Every mask is
+//! 64 bits, child `(x & 3) + 4 (y & 3) + 16 (z & 3)` of the child coordinates; the GPU reads them as `vec2<u32>`
+//! (low word first). Memory: 8 bytes per brick (its cell mask) and per sector and region, i.e. under 1% of a
+//! pooled brick's 1 KiB.
+//!
+//! Kept current by `BrickGrid` on every change of a brick: one edit touches one brick mask, one sector mask and one
+//! region mask, whatever the world's size.
+
+use bevy::math::{IVec3, UVec3};
+
+use super::grid::{BRICK_SIZE, BRICK_VOXELS, Voxel};
+
+/// log2 of the cell edge of each level, voxel (0) to region (4).
+pub const LEVEL_SHIFTS: [i32; 5] = [0, 1, 3, 5, 7];
+/// The coarsest level.
+pub const TOP_LEVEL: usize = 4;
+/// log2 of a sector's edge in voxels (4^3 bricks).
+pub const SECTOR_SHIFT: i32 = LEVEL_SHIFTS[3];
+/// log2 of a region's edge in voxels (4^3 sectors).
+pub const REGION_SHIFT: i32 = LEVEL_SHIFTS[4];
+/// A homogeneous brick's mask: every cell solid.
+pub const SOLID_BRICK: u64 = u64::MAX;
+
+/// Bit of the child cell holding voxel `v` inside its level-`level + 1` parent, where `level` is the child's.
+#[inline]
+pub fn child_bit(v: IVec3, level: usize) -> u32 {
+    let c = (v >> LEVEL_SHIFTS[level]) & 3;
+    (c.x + 4 * (c.y + 4 * c.z)) as u32
+}
+
+/// Whether mask `m` has the child bit `bit`.
+#[inline]
+pub fn has_child(m: u64, bit: u32) -> bool {
+    (m >> bit) & 1 != 0
+}
+
+/// The cells of 2^3 voxels of one pooled brick that hold a solid voxel (local index `x + 8 (y + 8 z)`).
+pub fn brick_cells(voxels: &[Voxel]) -> u64 {
+    let mut mask = 0u64;
+    for (i, &v) in voxels.iter().enumerate().take(BRICK_VOXELS) {
+        if v != 0 {
+            mask |= 1 << cell_of_local(i);
+        }
+    }
+    mask
+}
+
+/// The 2^3 cell of local voxel index `i`.
+#[inline]
+fn cell_of_local(i: usize) -> u32 {
+    let (x, y, z) = (i & 7, (i >> 3) & 7, i >> 6);
+    ((x >> 1) + 4 * ((y >> 1) + 4 * (z >> 1))) as u32
+}
+
+/// Whether the 2^3 cell holding local voxel `local` of a pooled brick has a solid voxel.
+pub fn cell_solid(voxels: &[Voxel], local: IVec3) -> bool {
+    let base = local & !1;
+    (0..8).any(|k| {
+        let p = base + IVec3::new(k & 1, (k >> 1) & 1, k >> 2);
+        voxels[(p.x + BRICK_SIZE * (p.y + BRICK_SIZE * p.z)) as usize] != 0
+    })
+}
+
+/// Grid dimensions of `level` for a world of `bricks` bricks.
+fn dims(bricks: UVec3, shift_over_bricks: u32) -> UVec3 {
+    let edge = 1 << shift_over_bricks;
+    (bricks + UVec3::splat(edge - 1)) >> shift_over_bricks
+}
+
+#[inline]
+fn index(c: IVec3, dims: UVec3) -> usize {
+    (c.x as u32 + dims.x * (c.y as u32 + dims.y * c.z as u32)) as usize
+}
+
+/// The masks of levels 1-4 (level 0 is the brick pool itself), in one array as the GPU holds them: every brick's
+/// cell mask (by brick index, as the top grid), then every sector's brick mask, then every region's sector mask.
+#[derive(Clone, Debug)]
+pub struct Occupancy {
+    /// Bricks: their cells of 2^3 that hold a solid voxel (`SOLID_BRICK` homogeneous, 0 empty); sectors and
+    /// regions: their children that are not empty.
+    masks: Vec<u64>,
+    sector_dims: UVec3,
+    sector_base: usize,
+    region_dims: UVec3,
+    region_base: usize,
+}
+
+impl Occupancy {
+    /// All empty, for a grid of `bricks` bricks.
+    pub fn new(bricks: UVec3) -> Self {
+        let sector_dims = dims(bricks, 2);
+        let region_dims = dims(sector_dims, 2);
+        let count = |d: UVec3| (d.x * d.y * d.z) as usize;
+        let sector_base = count(bricks);
+        let region_base = sector_base + count(sector_dims);
+        Occupancy {
+            masks: vec![0; region_base + count(region_dims)],
+            sector_dims,
+            sector_base,
+            region_dims,
+            region_base,
+        }
+    }
+
+    /// The cell mask of brick index `i`.
+    #[inline]
+    pub fn brick(&self, i: usize) -> u64 {
+        self.masks[i]
+    }
+
+    /// The brick mask of the sector holding voxel `v` (inside the world).
+    #[inline]
+    pub fn sector(&self, v: IVec3) -> u64 {
+        self.masks[self.sector_base + index(v >> SECTOR_SHIFT, self.sector_dims)]
+    }
+
+    /// The sector mask of the region holding voxel `v` (inside the world).
+    #[inline]
+    pub fn region(&self, v: IVec3) -> u64 {
+        self.masks[self.region_base + index(v >> REGION_SHIFT, self.region_dims)]
+    }
+
+    pub fn sector_dims(&self) -> UVec3 {
+        self.sector_dims
+    }
+
+    pub fn region_dims(&self) -> UVec3 {
+        self.region_dims
+    }
+
+    /// Where the sector masks and the region masks start in `masks`.
+    pub fn bases(&self) -> (usize, usize) {
+        (self.sector_base, self.region_base)
+    }
+
+    /// Every mask, for GPU upload.
+    pub fn masks(&self) -> &[u64] {
+        &self.masks
+    }
+
+    /// Indices in `masks` of brick `b`'s (index `i`) own mask, its sector's and its region's: what an edit of the
+    /// brick may change.
+    pub fn indices_of_brick(&self, i: usize, b: IVec3) -> [usize; 3] {
+        [i, self.sector_base + index(b >> 2, self.sector_dims), self.region_base + index(b >> 4, self.region_dims)]
+    }
+
+    /// Sets brick `b` (index `i`)'s cell mask and the bits above it.
+    pub fn set_brick(&mut self, i: usize, b: IVec3, mask: u64) {
+        if self.masks[i] == mask {
+            return;
+        }
+        let was_empty = self.masks[i] == 0;
+        self.masks[i] = mask;
+        if was_empty == (mask == 0) {
+            return;
+        }
+        let [_, s, r] = self.indices_of_brick(i, b);
+        let v = b * BRICK_SIZE;
+        let sector_bit = 1u64 << child_bit(v, 2);
+        let sector_was_empty = self.masks[s] == 0;
+        if mask == 0 {
+            self.masks[s] &= !sector_bit;
+        } else {
+            self.masks[s] |= sector_bit;
+        }
+        if sector_was_empty == (self.masks[s] == 0) {
+            return;
+        }
+        let region_bit = 1u64 << child_bit(v, 3);
+        if self.masks[s] == 0 {
+            self.masks[r] &= !region_bit;
+        } else {
+            self.masks[r] |= region_bit;
+        }
+    }
+
+    /// Bytes the masks take (the same on the GPU).
+    pub fn bytes(&self) -> u64 {
+        8 * self.masks.len() as u64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn brick_cells_marks_the_cell_of_each_solid_voxel() {
+        let mut voxels = vec![0u16; BRICK_VOXELS];
+        assert_eq!(brick_cells(&voxels), 0);
+        // Voxel (7, 0, 3): cell (3, 0, 1) = bit 3 + 16.
+        voxels[7 + 8 * 8 * 3] = 5;
+        assert_eq!(brick_cells(&voxels), 1 << 19);
+        assert!(cell_solid(&voxels, IVec3::new(6, 1, 2)));
+        assert!(!cell_solid(&voxels, IVec3::new(5, 1, 2)));
+    }
+
+    #[test]
+    fn a_brick_sets_and_clears_its_sector_and_region_bits() {
+        let bricks = UVec3::new(20, 3, 9);
+        let mut occ = Occupancy::new(bricks);
+        let b = IVec3::new(17, 2, 5);
+        let i = (b.x + 20 * (b.y + 3 * b.z)) as usize;
+        occ.set_brick(i, b, 0b10);
+        let v = b * BRICK_SIZE;
+        assert_eq!(occ.sector(v), 1 << (1 + 4 * 2 + 16));
+        assert_eq!(occ.region(v), 1 << 16);
+        assert_eq!(occ.brick(i), 0b10);
+        occ.set_brick(i, b, 0);
+        assert_eq!((occ.sector(v), occ.region(v)), (0, 0));
+        assert_eq!(occ.sector_dims(), UVec3::new(5, 1, 3));
+        assert_eq!(occ.region_dims(), UVec3::new(2, 1, 1));
+    }
+}
