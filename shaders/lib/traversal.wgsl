@@ -1,9 +1,9 @@
-// Ray traversal of the brick grid through its occupancy hierarchy: empty cells of 128, 32, 8 and 2 voxels are
-// jumped whole. Mirrors src/world/traversal.rs step for step (same boundary formulas and tie rules) so GPU and CPU
-// agree.
+// Ray traversal of the brick grid, two ways to the same hits (the `traversal` setting): the plain two-level DDA,
+// and a walk through the occupancy hierarchy that jumps empty cells of 128, 32, 8 and 2 voxels whole. Mirrors
+// src/world/traversal.rs step for step (same boundary formulas and tie rules) so GPU and CPU agree.
 #define_import_path glowbrick::traversal
 
-#import glowbrick::world::{world_info, top_cells, occupancy, pooled_voxel, objects, object_count, object_voxel, Object}
+#import glowbrick::world::{world_info, top_cells, occupancy, brick_cell, pooled_voxel, objects, object_count, object_voxel, Object}
 #import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, COUNT_TRACE_STEPS, COUNT_TRACE_LOADS}
 #import glowbrick::counters::counters
 
@@ -104,15 +104,17 @@ fn min_axis(v: vec3<f32>) -> u32 {
 }
 
 // The occupancy hierarchy (src/world/occupancy.rs): log2 of the cell edge of each level, voxel (0), 2^3 cell (1),
-// brick (2), sector (3), region (4).
+// brick (2), sector (3), region (4): 0, 1, 3, 5, 7.
 fn level_shift(level: u32) -> u32 {
-    return select(select(select(7u, 5u, level == 3u), 3u, level == 2u), level, level < 2u);
+    return u32(max(2 * i32(level) - 1, 0));
 }
 
-// Bit of the child cell holding voxel v inside its parent, where `level` is the child's.
-fn child_bit(v: vec3<i32>, level: u32) -> u32 {
-    let c = vec3<u32>((v >> vec3(level_shift(level))) & vec3(3));
-    return c.x + 4u * (c.y + 4u * c.z);
+// The level a ray is at after a move along one axis from coordinate `before` to `after` at `level`: up as many
+// levels as the crossed face closes, i.e. to the first level whose cells hold both coordinates' highest differing
+// bit (bit h is inside level l's cells while h < level_shift(l + 1) = 2 l + 1).
+fn level_after_move(level: u32, before: i32, after: i32) -> u32 {
+    let h = firstLeadingBit(u32(before ^ after));
+    return max(level, min((h + 1u) / 2u, 4u));
 }
 
 fn has_child(m: vec2<u32>, bit: u32) -> bool {
@@ -124,14 +126,122 @@ fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
     return u32(c.x + dims.x * (c.y + dims.y * c.z));
 }
 
-// The first solid voxel along the ray (unit `dir`) within max_distance.
-//
-// One flat loop over the occupancy hierarchy, step for step as `trace_counted` in src/world/traversal.rs: at
+// The first solid voxel along the ray (unit `dir`) within max_distance, by the walk the `traversal` setting picks:
+// a shader def of its own pipelines (both walks in one shader cost lavapipe 10-40% of a frame, either one run);
+// both find the same voxel.
+fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
+    rays_traced += 1u;
+#ifdef TRAVERSAL_OCCUPANCY
+    return trace_occupancy(origin, dir, max_distance);
+#else
+    return trace_dda(origin, dir, max_distance);
+#endif
+}
+
+#ifndef TRAVERSAL_OCCUPANCY
+// Voxel DDA inside the pooled brick `brick` (pool slot `slot`), entered at parameter t through `entry_axis`.
+fn trace_in_brick(origin: vec3<f32>, dir: vec3<f32>, inv: vec3<f32>, brick: vec3<i32>, slot: u32, t_start: f32,
+                  t_end: f32, entry_axis: u32) -> Hit {
+    let step = vec3<i32>(sign(dir));
+    let positive = dir > vec3(0.0);
+    let lo = brick * BRICK_SIZE;
+    let hi = min(lo + vec3(BRICK_SIZE), world_info.size) - vec3(1);
+    var t = t_start;
+    var axis = entry_axis;
+    var voxel = clamp(vec3<i32>(floor(origin + dir * t)), lo, hi);
+    var t_max: vec3<f32>;
+    for (var a = 0u; a < 3u; a++) {
+        t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(voxel[a] + select(0, 1, positive[a])));
+    }
+    // At most 22 steps cross an 8^3 brick; the bound guards against a non-finite t.
+    for (var i = 0; i < 3 * BRICK_SIZE; i++) {
+        trace_steps += 1u;
+        trace_loads += 1u;
+        let material = pooled_voxel(slot, voxel - lo);
+        if material != 0u {
+            return Hit(voxel, face_entered(axis, positive[axis]), t, material, true, 0u);
+        }
+        let a = min_axis(t_max);
+        t = t_max[a];
+        if t > t_end {
+            break;
+        }
+        axis = a;
+        voxel[a] += step[a];
+        if voxel[a] < lo[a] || voxel[a] > hi[a] {
+            break;
+        }
+        t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(voxel[a] + select(0, 1, positive[a])));
+    }
+    return miss();
+}
+
+// The plain two-level DDA (traversal=dda): bricks, skipping empty ones, then the voxels of pooled bricks; one
+// load per step. Mirrors `trace_counted` in src/world/traversal.rs.
+fn trace_dda(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
+    let size = vec3<f32>(world_info.size);
+    let entry = box_entry(origin, dir, vec3(0.0), size);
+    let t_end = min(entry.y, max_distance);
+    var t = max(entry.x, 0.0);
+    if !(t <= t_end) || all(dir == vec3(0.0)) {
+        return miss();
+    }
+    let inv = inverse_dir(dir);
+    let step = vec3<i32>(sign(dir));
+    let positive = dir > vec3(0.0);
+    let edge = f32(BRICK_SIZE);
+    let last_brick = max((world_info.size - vec3(1)) >> vec3(BRICK_SHIFT), vec3(0));
+    var axis = u32(entry.z);
+    if entry.x < 0.0 {
+        let v = floor(origin);
+        axis = u32(box_entry(origin, dir, v, v + vec3(1.0)).z);
+    }
+    var brick = clamp(vec3<i32>(floor((origin + dir * t) / edge)), vec3(0), last_brick);
+    var brick_t_max: vec3<f32>;
+    for (var a = 0u; a < 3u; a++) {
+        brick_t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(brick[a] + select(0, 1, positive[a])) * edge);
+    }
+    let max_steps = last_brick.x + last_brick.y + last_brick.z + 3;
+    for (var i = 0; i < max_steps; i++) {
+        trace_steps += 1u;
+        trace_loads += 1u;
+        let cell = brick_cell(brick);
+        if cell != 0u {
+            if (cell & POOLED_FLAG) == 0u {
+                let lo = brick * BRICK_SIZE;
+                let voxel = min(clamp(vec3<i32>(floor(origin + dir * t)), lo, lo + vec3(BRICK_SIZE - 1)),
+                                world_info.size - vec3(1));
+                return Hit(voxel, face_entered(axis, positive[axis]), t, cell, true, 0u);
+            }
+            let hit = trace_in_brick(origin, dir, inv, brick, cell & ~POOLED_FLAG, t, t_end, axis);
+            if hit.found {
+                return hit;
+            }
+        }
+        let a = min_axis(brick_t_max);
+        t = brick_t_max[a];
+        if t > t_end {
+            break;
+        }
+        axis = a;
+        brick[a] += step[a];
+        if brick[a] < 0 || brick[a] > last_brick[a] {
+            break;
+        }
+        brick_t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(brick[a] + select(0, 1, positive[a])) * edge);
+    }
+    return miss();
+}
+
+#endif
+
+#ifdef TRAVERSAL_OCCUPANCY
+// traversal=occupancy: one flat loop over the occupancy hierarchy, step for step as `trace_occupancy_counted` in
+// src/world/traversal.rs: at
 // `level` the ray is in the cell holding voxel v; an occupied cell is entered (v re-found from the ray at t and
 // clamped into it), an empty one left through its nearest face, going up as many levels as that face closes. The
 // masks of the cells the ray is in stay in registers, so an empty step at levels 1-3 loads nothing.
-fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
-    rays_traced += 1u;
+fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
     let size = world_info.size;
     let entry = box_entry(origin, dir, vec3(0.0), vec3<f32>(size));
     let t_end = min(entry.y, max_distance);
@@ -141,6 +251,9 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
     }
     let inv = inverse_dir(dir);
     let positive = dir > vec3(0.0);
+    let no_dir = dir == vec3(0.0);
+    // 1 on the axes whose far face a cell is left through is its high one.
+    let far_side = select(vec3(0), vec3(1), positive);
     var axis = u32(entry.z);
     if entry.x < 0.0 {
         let o = floor(origin);
@@ -157,6 +270,9 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
     let max_steps = 5 * (size.x + size.y + size.z) + 8;
     for (var i = 0; i < max_steps; i++) {
         trace_steps += 1u;
+        let shift = level_shift(level);
+        let edge = 1 << shift;
+        let lo = v & vec3(~(edge - 1));
         var occupied = false;
         if level == 0u {
             trace_loads += 1u;
@@ -170,11 +286,9 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
             occupied = any(region_mask != vec2(0u));
         } else {
             let parent = select(select(region_mask, sector_mask, level == 2u), brick_mask, level == 1u);
-            occupied = has_child(parent, child_bit(v, level));
+            let c = vec3<u32>((v >> vec3(shift)) & vec3(3));
+            occupied = has_child(parent, c.x + 4u * (c.y + 4u * c.z));
         }
-        let shift = level_shift(level);
-        let lo = (v >> vec3(shift)) << vec3(shift);
-        let edge = 1 << shift;
         if occupied {
             v = clamp(vec3<i32>(floor(origin + dir * t)), lo, min(lo + vec3(edge - 1), last));
             if level == 3u {
@@ -182,8 +296,7 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
                 sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(5u), world_info.sectors)];
             } else if level == 2u {
                 trace_loads += 2u;
-                let b = v >> vec3(BRICK_SHIFT);
-                let index = mask_index(b, world_info.bricks);
+                let index = mask_index(v >> vec3(BRICK_SHIFT), world_info.bricks);
                 let cell = top_cells[index];
                 if cell != 0u && (cell & POOLED_FLAG) == 0u {
                     return Hit(v, face_entered(axis, positive[axis]), t, cell, true, 0u);
@@ -194,10 +307,9 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
             level -= 1u;
             continue;
         }
-        var t_max: vec3<f32>;
-        for (var a = 0u; a < 3u; a++) {
-            t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(lo[a] + select(0, edge, positive[a])));
-        }
+        // Out through the nearest face of the cell (the same planes and products as `cross_t`).
+        let planes = vec3<f32>(lo + far_side * edge);
+        let t_max = select((planes - origin) * inv, vec3(INF), no_dir);
         let a = min_axis(t_max);
         t = t_max[a];
         if t > t_end {
@@ -209,12 +321,12 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
         if v[a] < 0 || v[a] > last[a] {
             break;
         }
-        while level < 4u && (v[a] >> level_shift(level + 1u)) != (before >> level_shift(level + 1u)) {
-            level += 1u;
-        }
+        level = level_after_move(level, before, v[a]);
     }
     return miss();
 }
+
+#endif
 
 // The first solid voxel of object o along the ray, before max_distance: the object's box, then a DDA through its
 // voxels (at most 16 per side, so at most 48 steps).

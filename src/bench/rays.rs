@@ -1,13 +1,13 @@
 //! `glowbrick bench --rays`: the CPU traversal's rays per second, steps and memory loads per ray, for the four
 //! kinds of rays a frame traces (primary, shadow to a light, cosine diffuse, sky), the occupancy traversal
-//! (`world::traversal::trace`) against the plain two-level DDA it replaced (`trace_dda`) on the same rays in one
-//! run. The GPU walks the same loop (`shaders/lib/traversal.wgsl`); its steps and loads per ray are in the
-//! frame profile (`bench --frame`).
+//! (`world::traversal::trace_occupancy`) against the plain two-level DDA (`trace`) on the same rays in one run.
+//! The GPU walks the same loops (`shaders/lib/traversal.wgsl`, the `traversal` setting); its steps and loads per
+//! ray and its pass times are in the frame profile (`bench --frame --set traversal=occupancy`).
 
 use crate::reference::sampling::{Pcg, cosine_direction};
 use crate::world::camera::{camera_ray, view_transform, world_from_clip};
 use crate::world::recipe::generated_world;
-use crate::world::traversal::{Counts, RAY_OFFSET, Ray, trace_counted, trace_dda_counted};
+use crate::world::traversal::{Counts, RAY_OFFSET, Ray, trace_counted, trace_occupancy_counted};
 use crate::world::{CameraView, Hit, VoxelWorld};
 use bevy::math::{UVec2, UVec3, Vec3};
 use std::fmt::Write as _;
@@ -181,14 +181,14 @@ pub fn measure_case(case: &RaysCase, config: &RaysConfig) -> Result<Vec<RaysRow>
             continue;
         }
         let n = set.rays.len();
-        let (new_hits, new_counts) = run_set(&world, &set, trace_counted);
-        let (old_hits, old_counts) = run_set(&world, &set, trace_dda_counted);
+        let (new_hits, new_counts) = run_set(&world, &set, trace_occupancy_counted);
+        let (old_hits, old_counts) = run_set(&world, &set, trace_counted);
         let different = new_hits.iter().zip(&old_hits).filter(|(a, b)| a != b).count();
         let hits = new_hits.iter().filter(|h| h.is_some()).count();
         let (mut old_s, mut new_s) = (Vec::new(), Vec::new());
         for _ in 0..config.repeats.max(1) {
-            old_s.push(time_set(&world, &set, crate::world::traversal::trace_dda));
-            new_s.push(time_set(&world, &set, crate::world::trace));
+            old_s.push(time_set(&world, &set, crate::world::trace));
+            new_s.push(time_set(&world, &set, crate::world::traversal::trace_occupancy));
         }
         let measure = |counts: Counts, seconds: f64| Measure {
             rays_per_second: n as f64 / seconds.max(1e-9),

@@ -20,12 +20,14 @@ use super::scene::world::{GpuWorld, WorldLayout};
 use super::shaders::GlowbrickShaders;
 use super::view::{ViewResources, view_layout};
 use super::{CameraFramesRendered, VoxelCamera, denoise, primary, restir};
+use crate::settings::{RenderSettings, Traversal};
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::*;
 use bevy::render::renderer::{RenderContext, RenderDevice, ViewQuery};
 use bevy::render::view::{ViewTarget, ViewUniformOffset, ViewUniforms};
+use bevy::shader::ShaderDefVal;
 use std::sync::atomic::Ordering;
 
 /// One compute pass of the voxel renderer.
@@ -73,23 +75,83 @@ fn view_layouts() -> ViewLayouts {
     ViewLayouts { view: view_layout(), empty: BindGroupLayoutDescriptor::new("glowbrick_no_view_layout", &[]) }
 }
 
-/// Every pass's pipeline, in `all_passes` order, and the empty group 1 of world passes.
+/// Every pass's pipeline, in `all_passes` order, for the plain DDA and (queued the first time the `traversal`
+/// setting asks for it) for the occupancy traversal, a shader def of its own; and the empty group 1 of world passes.
 #[derive(Resource)]
 pub struct VoxelPipelines {
     passes: Vec<(VoxelPass, CachedComputePipelineId)>,
+    occupancy: Vec<(VoxelPass, CachedComputePipelineId)>,
+    /// The traversal this frame's passes use (the extracted setting).
+    traversal: Traversal,
     no_view: BindGroup,
 }
 
 impl VoxelPipelines {
-    /// The compiled pipelines of `passes`, or `None` until all of them are ready.
+    /// The compiled pipelines of `passes` for this frame's traversal, or `None` until all of them are ready.
     fn get<'a>(&self, cache: &'a PipelineCache, passes: &[VoxelPass]) -> Option<Vec<&'a ComputePipeline>> {
+        let set = match self.traversal {
+            Traversal::Dda => &self.passes,
+            Traversal::Occupancy => &self.occupancy,
+        };
         passes
             .iter()
             .map(|pass| {
-                let (_, id) = self.passes.iter().find(|(p, _)| p.name == pass.name)?;
+                let (_, id) = set.iter().find(|(p, _)| p.name == pass.name)?;
                 cache.get_compute_pipeline(*id)
             })
             .collect()
+    }
+}
+
+/// Every pass's pipeline for one traversal.
+fn queue_passes(
+    cache: &PipelineCache,
+    shaders: &GlowbrickShaders,
+    layouts: &ViewLayouts,
+    groups: [&BindGroupLayoutDescriptor; 3],
+    traversal: Traversal,
+) -> Vec<(VoxelPass, CachedComputePipelineId)> {
+    let mut defs = shader_defs();
+    if traversal == Traversal::Occupancy {
+        defs.push(ShaderDefVal::Bool("TRAVERSAL_OCCUPANCY".into(), true));
+    }
+    all_passes()
+        .into_iter()
+        .map(|pass| {
+            let group1 = if pass.dispatch == Dispatch::Pixels { &layouts.view } else { &layouts.empty };
+            let id = cache.queue_compute_pipeline(ComputePipelineDescriptor {
+                label: Some(pass.name.into()),
+                layout: vec![groups[0].clone(), group1.clone(), groups[1].clone(), groups[2].clone()],
+                shader: shaders.get(pass.shader),
+                shader_defs: defs.clone(),
+                entry_point: Some(pass.entry_point.into()),
+                ..default()
+            });
+            (pass, id)
+        })
+        .collect()
+}
+
+/// Follows the `traversal` setting: queues the occupancy pipelines the first time it is asked for.
+#[allow(clippy::too_many_arguments)]
+fn follow_traversal(
+    settings: Option<Res<RenderSettings>>,
+    pipelines: Option<ResMut<VoxelPipelines>>,
+    cache: Res<PipelineCache>,
+    shaders: Res<GlowbrickShaders>,
+    layouts: Option<Res<ViewLayouts>>,
+    world_layout: Res<WorldLayout>,
+    lights_layout: Res<LightsLayout>,
+    gi_layout: Res<gi::GiLayout>,
+) {
+    let (Some(mut pipelines), Some(layouts)) = (pipelines, layouts) else { return };
+    let traversal = settings.map_or(Traversal::default(), |s| s.traversal);
+    if traversal == Traversal::Occupancy && pipelines.occupancy.is_empty() {
+        let groups = [&world_layout.0, &lights_layout.0, &gi_layout.0];
+        pipelines.occupancy = queue_passes(&cache, &shaders, &layouts, groups, traversal);
+    }
+    if pipelines.traversal != traversal {
+        pipelines.traversal = traversal;
     }
 }
 
@@ -103,24 +165,11 @@ fn init_pipelines(
     gi_layout: Res<gi::GiLayout>,
 ) {
     let layouts = view_layouts();
-    let passes = all_passes()
-        .into_iter()
-        .map(|pass| {
-            let group1 = if pass.dispatch == Dispatch::Pixels { &layouts.view } else { &layouts.empty };
-            let id = pipeline_cache.queue_compute_pipeline(ComputePipelineDescriptor {
-                label: Some(pass.name.into()),
-                layout: vec![world_layout.0.clone(), group1.clone(), lights_layout.0.clone(), gi_layout.0.clone()],
-                shader: shaders.get(pass.shader),
-                shader_defs: shader_defs(),
-                entry_point: Some(pass.entry_point.into()),
-                ..default()
-            });
-            (pass, id)
-        })
-        .collect();
+    let groups = [&world_layout.0, &lights_layout.0, &gi_layout.0];
+    let passes = queue_passes(&pipeline_cache, &shaders, &layouts, groups, Traversal::Dda);
     let no_view =
         device.create_bind_group("glowbrick_no_view", &pipeline_cache.get_bind_group_layout(&layouts.empty), &[]);
-    commands.insert_resource(VoxelPipelines { passes, no_view });
+    commands.insert_resource(VoxelPipelines { passes, occupancy: Vec::new(), traversal: Traversal::Dda, no_view });
     commands.insert_resource(layouts);
 }
 
@@ -129,11 +178,13 @@ fn init_pipelines(
 pub fn pipeline_error(render_world: &World) -> Option<String> {
     let pipelines = render_world.get_resource::<VoxelPipelines>()?;
     let cache = render_world.resource::<PipelineCache>();
-    pipelines.passes.iter().find_map(|(pass, id)| match cache.get_compute_pipeline_state(*id) {
-        CachedPipelineState::Err(e) if !matches!(e, bevy::shader::ShaderCacheError::ShaderNotLoaded(_)) => {
-            Some(format!("the {} shader ({}) failed to compile: {e}", pass.name, pass.shader))
+    pipelines.passes.iter().chain(&pipelines.occupancy).find_map(|(pass, id)| {
+        match cache.get_compute_pipeline_state(*id) {
+            CachedPipelineState::Err(e) if !matches!(e, bevy::shader::ShaderCacheError::ShaderNotLoaded(_)) => {
+                Some(format!("the {} shader ({}) failed to compile: {e}", pass.name, pass.shader))
+            }
+            _ => None,
         }
-        _ => None,
     })
 }
 
@@ -329,7 +380,10 @@ pub fn add(render_app: &mut SubApp) {
         .add_systems(RenderStartup, init_pipelines)
         .add_systems(
             Render,
-            super::view::prepare_view_resources.after(SceneUploaded).in_set(RenderSystems::PrepareResources),
+            (
+                super::view::prepare_view_resources.after(SceneUploaded).in_set(RenderSystems::PrepareResources),
+                follow_traversal.in_set(RenderSystems::PrepareResources),
+            ),
         )
         .add_systems(Core3d, view_frame.after(main_transparent_pass_3d).in_set(Core3dSystems::MainPass))
         .add_systems(RenderGraph, world_frame.before(camera_driver).in_set(RenderGraphSystems::Render));

@@ -247,6 +247,13 @@ pub static SETTINGS: &[Setting] = &[
         field: &Range { range: SEED_RANGE, step: Step::Add(1), unit: "", get: |s| s.seed, set: |s, v| s.seed = v },
     },
     Setting {
+        key: "traversal",
+        section: Section::General,
+        about: "How the GPU's rays walk the grid: the plain DDA, or the occupancy masks that jump empty space (fewer \
+                memory loads, more arithmetic). Both find the same voxels.",
+        field: &Choice { get: |s| s.traversal, set: |s, v| s.traversal = v },
+    },
+    Setting {
         key: "denoise",
         section: Section::General,
         about: "Spatiotemporal denoiser (SVGF family) on the lit image; play turns it on (debug=variance|history \

@@ -1,14 +1,15 @@
-//! CPU ray traversal: a DDA (Amanatides & Woo) over the occupancy hierarchy of the brick grid that jumps empty
-//! cells of 128, 32, 8 and 2 voxels (`world::occupancy`) and reads voxels only inside occupied 2^3 cells.
-//! `shaders/lib/traversal.wgsl` mirrors `trace_counted` step for step, so the GPU and CPU agree per pixel; keep the
-//! two in sync.
+//! CPU ray traversal, two ways to the same hits (Amanatides & Woo DDAs): `trace`, over bricks then the voxels of
+//! pooled bricks, one load per step; and `trace_occupancy`, over the occupancy hierarchy of the brick grid
+//! (`world::occupancy`), jumping empty cells of 128, 32, 8 and 2 voxels and reading voxels only inside occupied 2^3
+//! cells. `shaders/lib/traversal.wgsl` mirrors both step for step (the `traversal` setting picks), so the GPU and
+//! CPU agree per pixel; keep them in sync.
 //!
 //! Conventions shared by both: `t` is distance along the unit direction; every boundary crossing is computed as
 //! `(plane - origin) / dir` from the ray's own origin (never accumulated), so both sides round the same way; the
 //! hit face is the face the ray entered through; a ray starting inside a solid voxel hits it at `t = 0`.
 
 use super::grid::{BRICK_SIZE, BRICK_VOXELS, BrickCell, BrickGrid, Voxel, local_index};
-use super::occupancy::{LEVEL_SHIFTS, TOP_LEVEL, child_bit, has_child};
+use super::occupancy::{TOP_LEVEL, child_bit, has_child};
 use bevy::math::{IVec3, Vec3};
 
 /// Secondary rays start this far off the surface they leave (the GPU passes use the same, as
@@ -174,20 +175,21 @@ fn enter_world(size: Vec3, ray: &Ray, max_distance: f32) -> Option<(f32, f32, us
     Some((t, t_end, axis))
 }
 
-/// Finds the first solid voxel along `ray` within `max_distance`.
+/// The first solid voxel along `ray` within `max_distance`, found through the occupancy hierarchy: the same hit
+/// as `trace` save where the ray grazes an edge within rounding.
 #[inline]
-pub fn trace(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
-    trace_counted(grid, ray, max_distance, &mut NoTally)
+pub fn trace_occupancy(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
+    trace_occupancy_counted(grid, ray, max_distance, &mut NoTally)
 }
 
-/// `trace`, telling `tally` its steps and loads.
+/// `trace_occupancy`, telling `tally` its steps and loads.
 ///
 /// One flat loop over the occupancy hierarchy (`world::occupancy`): at level `level` the ray is in the cell holding
 /// voxel `v`; an occupied cell is entered (the level below, `v` re-found from the ray at `t` and clamped into the
 /// cell), an empty one left through its nearest face, going up as many levels as that face closes. Every face is
 /// a voxel boundary computed as in the plain DDA, and ties go to the first axis, so the hits are the DDA's save
 /// where a ray grazes an edge within rounding of `origin + dir * t`.
-pub fn trace_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
+pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
     let size = grid.size().as_ivec3();
     let (mut t, t_end, mut axis) = enter_world(size.as_vec3(), ray, max_distance)?;
     let inv = inverse_dir(ray.dir);
@@ -203,6 +205,9 @@ pub fn trace_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut
     let max_steps = (TOP_LEVEL as i32 + 1) * (size.x + size.y + size.z) + 8;
     for _ in 0..max_steps {
         tally.step(level);
+        let shift = level_shift(level);
+        let edge = 1 << shift;
+        let lo = v & !(edge - 1);
         let occupied = match level {
             0 => {
                 tally.load();
@@ -219,11 +224,9 @@ pub fn trace_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut
             }
             _ => has_child(masks[level + 1], child_bit(v, level)),
         };
-        let shift = LEVEL_SHIFTS[level];
-        let lo = (v >> shift) << shift;
         if occupied {
             // Into the cell: the voxel the ray is in at t, within the cell.
-            let hi = (lo + IVec3::splat((1 << shift) - 1)).min(last);
+            let hi = (lo + IVec3::splat(edge - 1)).min(last);
             v = ray.at(t).floor().as_ivec3().clamp(lo, hi);
             match level {
                 3 => {
@@ -251,7 +254,6 @@ pub fn trace_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut
             continue;
         }
         // Out of the cell through the face the ray reaches first.
-        let edge = 1 << shift;
         let mut t_max = Vec3::ZERO;
         for a in 0..3 {
             t_max[a] = cross_t(ray, inv, a, (lo[a] + if positive[a] { edge } else { 0 }) as f32);
@@ -262,26 +264,40 @@ pub fn trace_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut
             return None;
         }
         axis = a;
-        let from = v[a];
+        let before = v[a];
         v[a] = if positive[a] { lo[a] + edge } else { lo[a] - 1 };
         if v[a] < 0 || v[a] > last[a] {
             return None;
         }
-        while level < TOP_LEVEL && (v[a] >> LEVEL_SHIFTS[level + 1]) != (from >> LEVEL_SHIFTS[level + 1]) {
-            level += 1;
-        }
+        level = level_after_move(level, before, v[a]);
     }
     None
 }
 
-/// The plain two-level DDA of the first version (bricks, then the voxels of pooled bricks), one load per step:
-/// kept as the baseline `bench --rays` measures against and a second oracle for the tests.
-pub fn trace_dda(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
-    trace_dda_counted(grid, ray, max_distance, &mut NoTally)
+/// log2 of the cell edge of `level` (`LEVEL_SHIFTS`, as arithmetic: 0, 1, 3, 5, 7).
+#[inline]
+fn level_shift(level: usize) -> i32 {
+    (2 * level as i32 - 1).max(0)
 }
 
-/// `trace_dda`, telling `tally` its steps (each one load).
-pub fn trace_dda_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
+/// The level after a move along one axis from coordinate `before` to `after` (both in the world) at `level`: up
+/// as many levels as the crossed face closes, i.e. to the first level whose cells hold the two coordinates'
+/// highest differing bit (bit h lies inside level l's cells while h < `level_shift(l + 1)` = 2 l + 1).
+#[inline]
+fn level_after_move(level: usize, before: i32, after: i32) -> usize {
+    let h = 31 - ((before ^ after) as u32).leading_zeros() as usize;
+    level.max(((h + 1) / 2).min(TOP_LEVEL))
+}
+
+/// Finds the first solid voxel along `ray` within `max_distance`: the two-level DDA (bricks, skipping empty and
+/// stopping at homogeneous ones, then the voxels of pooled bricks), one load per step.
+#[inline]
+pub fn trace(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
+    trace_counted(grid, ray, max_distance, &mut NoTally)
+}
+
+/// `trace`, telling `tally` its steps (each one load).
+pub fn trace_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
     let (mut t, t_end, mut axis) = enter_world(grid.size().as_vec3(), ray, max_distance)?;
     let inv = inverse_dir(ray.dir);
     let step = ray.dir.signum().as_ivec3();
@@ -405,4 +421,34 @@ pub fn trace_brute_force(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Opti
         }
     });
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world::occupancy::LEVEL_SHIFTS;
+
+    /// The arithmetic forms the loop uses are the table's shifts and the level-by-level climb.
+    #[test]
+    fn level_arithmetic_matches_the_table() {
+        for (level, &shift) in LEVEL_SHIFTS.iter().enumerate() {
+            assert_eq!(level_shift(level), shift);
+        }
+        for level in 0..=TOP_LEVEL {
+            for before in 0..600 {
+                for after in [before - 1, before + 1, before + 2, before + 8, before - 32] {
+                    if after < 0 || after == before {
+                        continue;
+                    }
+                    let mut climbed = level;
+                    while climbed < TOP_LEVEL
+                        && (after >> LEVEL_SHIFTS[climbed + 1]) != (before >> LEVEL_SHIFTS[climbed + 1])
+                    {
+                        climbed += 1;
+                    }
+                    assert_eq!(level_after_move(level, before, after), climbed, "{level} {before} -> {after}");
+                }
+            }
+        }
+    }
 }

@@ -10,12 +10,19 @@ use glowbrick::render::shaders::SOURCES;
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use std::mem::offset_of;
 
-/// Every pass shader composed with its imports, by path.
-fn composed_passes() -> Vec<(&'static str, naga::Module)> {
+/// Every pass shader composed with its imports, by path (with `flags` as boolean shader defs).
+fn composed_passes_with(flags: &[&str]) -> Vec<(&'static str, naga::Module)> {
     let mut composer = compose::composer();
     let passes: Vec<_> = SOURCES.iter().filter(|(_, s)| !s.contains("#define_import_path")).collect();
     assert!(passes.len() >= 8, "every pass shader is checked");
-    passes.into_iter().map(|&(path, source)| (path, compose::compose(&mut composer, path, source))).collect()
+    passes
+        .into_iter()
+        .map(|&(path, source)| (path, compose::compose_with(&mut composer, path, source, flags)))
+        .collect()
+}
+
+fn composed_passes() -> Vec<(&'static str, naga::Module)> {
+    composed_passes_with(&[])
 }
 
 #[test]
@@ -28,6 +35,24 @@ fn every_shader_composes_and_validates() {
                 .map(|(h, g)| format!("{h:?} {:?} {:?}", g.name, g.binding.as_ref().map(|b| (b.group, b.binding))))
                 .collect();
             panic!("{path}: {e:?}\nglobals:\n{}", globals.join("\n"));
+        }
+    }
+}
+
+/// The pipelines of `traversal=occupancy` (every pass with the `TRAVERSAL_OCCUPANCY` def) validate too.
+#[test]
+fn every_shader_validates_with_the_occupancy_traversal() {
+    for (path, module) in composed_passes_with(&["TRAVERSAL_OCCUPANCY"]) {
+        let source = SOURCES.iter().find(|(p, _)| *p == path).map_or("", |(_, s)| *s);
+        let traced =
+            module.functions.iter().any(|(_, f)| f.name.as_deref().is_some_and(|n| n.contains("trace_occupancy")));
+        let plain = module.functions.iter().any(|(_, f)| f.name.as_deref().is_some_and(|n| n.contains("trace_dda")));
+        assert!(!plain, "{path}: the plain DDA is compiled into the occupancy variant");
+        if let Err(e) = Validator::new(ValidationFlags::all(), Capabilities::all()).validate(&module) {
+            panic!("{path} with TRAVERSAL_OCCUPANCY: {e:?}");
+        }
+        if source.contains("trace") && path.contains("primary") {
+            assert!(traced, "{path}: the occupancy variant traces through trace_occupancy");
         }
     }
 }
@@ -204,13 +229,15 @@ fn layout_mismatch(module: &naga::Module, global: &naga::GlobalVariable, twin: &
 
 /// Every buffer binding in every pass has the layout of its Rust twin: its size (a uniform's, or a storage
 /// array's element stride) and, for a struct, every member's offset. A field added, moved or retyped on one side
-/// only fails here, and so does a new binding without a twin.
+/// only fails here, and so does a new binding without a twin. Both traversals' variants (the occupancy masks are
+/// bound by the occupancy one only).
 #[test]
 fn every_buffer_has_the_layout_of_its_rust_twin() {
     let twins = twins();
     let mut seen = vec![false; twins.len()];
     let mut errors = Vec::new();
-    for (path, module) in composed_passes() {
+    let variants = composed_passes().into_iter().chain(composed_passes_with(&["TRAVERSAL_OCCUPANCY"]));
+    for (path, module) in variants {
         for (_, global) in module.global_variables.iter() {
             if !matches!(global.space, naga::AddressSpace::Uniform | naga::AddressSpace::Storage { .. }) {
                 continue;

@@ -21,17 +21,26 @@ fn render(world: VoxelWorld, view: &CameraView, settings: RenderSettings, w: u32
     common::renderer(world, view, &options).render(options.frames).expect("render")
 }
 
+/// Both walks of the grid (the `traversal` setting), on rooms and on terrain wider than a region of the occupancy
+/// hierarchy (128 voxels).
 pub fn gpu_primary_rays_match_cpu_traversal() {
-    let hit_view = RenderSettings::default().with_pairs(&["debug=hit".to_string()]).unwrap();
     let room = load_scene("test-room").unwrap();
     let terrain = generated_world(9, UVec3::new(64, 40, 64)).unwrap();
+    let wide = generated_world(3, UVec3::new(300, 72, 260)).unwrap();
     let cases = [
         ("test-room inside", room.clone(), room.view(Some("inside")).unwrap().clone()),
         ("test-room top", room.clone(), room.view(Some("top")).unwrap().clone()),
         ("terrain overview", terrain.clone(), terrain.overview()),
+        ("wide terrain overview", wide.clone(), wide.overview()),
     ];
-    for (name, world, view) in cases {
-        let gpu = render(world.clone(), &view, hit_view.clone(), 96, 64);
+    for (name, world, view) in cases
+        .iter()
+        .flat_map(|c| [(c, "dda"), (c, "occupancy")])
+        .map(|((n, w, v), t)| (format!("{n} traversal={t}"), w.clone(), v.clone()))
+    {
+        let traversal = name.rsplit(' ').next().unwrap().to_string();
+        let hit_view = RenderSettings::default().with_pairs(&["debug=hit".to_string(), traversal]).unwrap();
+        let gpu = render(world.clone(), &view, hit_view, 96, 64);
         let c = compare_hits(&world, &view, &gpu);
         eprintln!("{name}: {} pixels, {} hits, {} mismatches", c.pixels, c.hits, c.mismatches);
         assert!(c.hits * 3 > c.pixels, "{name}: the view should mostly hit voxels ({} of {})", c.hits, c.pixels);

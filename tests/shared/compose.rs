@@ -60,12 +60,21 @@ pub fn composer() -> Composer {
 
 /// `source` (a pass, or a test's own shader importing the libraries) composed into one naga module.
 pub fn compose(composer: &mut Composer, path: &str, source: &str) -> naga::Module {
+    compose_with(composer, path, source, &[])
+}
+
+/// `compose` with boolean shader defs on top of the shared constants (a pipeline variant, e.g.
+/// `TRAVERSAL_OCCUPANCY`).
+#[allow(dead_code)]
+pub fn compose_with(composer: &mut Composer, path: &str, source: &str, flags: &[&str]) -> naga::Module {
+    let mut shader_defs = defs();
+    shader_defs.extend(flags.iter().map(|f| (f.to_string(), ShaderDefValue::Bool(true))));
     composer
         .make_naga_module(NagaModuleDescriptor {
             source,
             file_path: path,
             shader_type: ShaderType::Wgsl,
-            shader_defs: defs(),
+            shader_defs,
             additional_imports: &[],
         })
         .unwrap_or_else(|e| panic!("{path}: {}", e.emit_to_string(composer)))
