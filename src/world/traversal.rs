@@ -286,7 +286,7 @@ fn level_shift(level: usize) -> i32 {
 #[inline]
 fn level_after_move(level: usize, before: i32, after: i32) -> usize {
     let h = 31 - ((before ^ after) as u32).leading_zeros() as usize;
-    level.max(((h + 1) / 2).min(TOP_LEVEL))
+    level.max(h.div_ceil(2).min(TOP_LEVEL))
 }
 
 /// Finds the first solid voxel along `ray` within `max_distance`: the two-level DDA (bricks, skipping empty and

@@ -59,6 +59,7 @@ pub fn composer() -> Composer {
 }
 
 /// `source` (a pass, or a test's own shader importing the libraries) composed into one naga module.
+#[allow(dead_code)]
 pub fn compose(composer: &mut Composer, path: &str, source: &str) -> naga::Module {
     compose_with(composer, path, source, &[])
 }
