@@ -103,29 +103,6 @@ fn min_axis(v: vec3<f32>) -> u32 {
     return 2u;
 }
 
-// The occupancy hierarchy (src/world/occupancy.rs): log2 of the cell edge of each level, voxel (0), 2^3 cell (1),
-// brick (2), sector (3), region (4): 0, 1, 3, 5, 7.
-fn level_shift(level: u32) -> u32 {
-    return u32(max(2 * i32(level) - 1, 0));
-}
-
-// The level a ray is at after a move along one axis from coordinate `before` to `after` at `level`: up as many
-// levels as the crossed face closes, i.e. to the first level whose cells hold both coordinates' highest differing
-// bit (bit h is inside level l's cells while h < level_shift(l + 1) = 2 l + 1).
-fn level_after_move(level: u32, before: i32, after: i32) -> u32 {
-    let h = firstLeadingBit(u32(before ^ after));
-    return max(level, min((h + 1u) / 2u, 4u));
-}
-
-fn has_child(m: vec2<u32>, bit: u32) -> bool {
-    let word = select(m.y, m.x, bit < 32u);
-    return ((word >> (bit & 31u)) & 1u) != 0u;
-}
-
-fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
-    return u32(c.x + dims.x * (c.y + dims.y * c.z));
-}
-
 // The first solid voxel along the ray (unit `dir`) within max_distance, by the walk the `traversal` setting picks:
 // a shader def of its own pipelines (both walks in one shader cost lavapipe 10-40% of a frame, either one run);
 // both find the same voxel.
@@ -236,6 +213,29 @@ fn trace_dda(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
 #endif
 
 #ifdef TRAVERSAL_OCCUPANCY
+// The occupancy hierarchy (src/world/occupancy.rs): log2 of the cell edge of each level, voxel (0), 2^3 cell (1),
+// brick (2), sector (3), region (4): 0, 1, 3, 5, 7.
+fn level_shift(level: u32) -> u32 {
+    return u32(max(2 * i32(level) - 1, 0));
+}
+
+// The level a ray is at after a move along one axis from coordinate `before` to `after` at `level`: up as many
+// levels as the crossed face closes, i.e. to the first level whose cells hold both coordinates' highest differing
+// bit (bit h is inside level l's cells while h < level_shift(l + 1) = 2 l + 1).
+fn level_after_move(level: u32, before: i32, after: i32) -> u32 {
+    let h = firstLeadingBit(u32(before ^ after));
+    return max(level, min((h + 1u) / 2u, 4u));
+}
+
+fn has_child(m: vec2<u32>, bit: u32) -> bool {
+    let word = select(m.y, m.x, bit < 32u);
+    return ((word >> (bit & 31u)) & 1u) != 0u;
+}
+
+fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
+    return u32(c.x + dims.x * (c.y + dims.y * c.z));
+}
+
 // traversal=occupancy: one flat loop over the occupancy hierarchy, step for step as `trace_occupancy_counted` in
 // src/world/traversal.rs: at
 // `level` the ray is in the cell holding voxel v; an occupied cell is entered (v re-found from the ray at t and

@@ -152,7 +152,7 @@ fn run_set(world: &VoxelWorld, set: &RaySet, traverse: Traverse) -> (Vec<Option<
     (hits, counts)
 }
 
-/// Seconds of one untallied pass (the tally counts into a throwaway, optimised to nothing but the loop).
+/// Seconds of one pass over the rays with the traversal as the game and the reference call it (no tally).
 fn time_set(
     world: &VoxelWorld,
     set: &RaySet,

@@ -384,10 +384,16 @@ impl BrickGrid {
             return self.update_occupancy(index);
         };
         let old = self.occupancy.brick(index);
+        let voxels = self.pool_brick(slot);
         let bit = 1u64 << occupancy::child_bit(local, 1);
-        let mask = if occupancy::cell_solid(self.pool_brick(slot), local) { old | bit } else { old & !bit };
-        // A brick just expanded from a uniform one still carries that one's mask.
-        let mask = if old == SOLID_BRICK { occupancy::brick_cells(self.pool_brick(slot)) } else { mask };
+        let mask = if old == SOLID_BRICK {
+            // A brick just expanded from a homogeneous one still carries that one's mask.
+            occupancy::brick_cells(voxels)
+        } else if occupancy::cell_solid(voxels, local) {
+            old | bit
+        } else {
+            old & !bit
+        };
         let b = self.brick_coord(index as u32);
         self.occupancy.set_brick(index, b, mask);
     }
