@@ -6,6 +6,7 @@ pub mod args;
 pub mod bench;
 pub mod check_world;
 pub mod compare;
+pub mod generate;
 pub mod play;
 pub mod reference;
 pub mod render;
@@ -42,6 +43,8 @@ enum Command {
     Stress(stress::StressArgs),
     /// Validate a world file or scene recipe and print a summary (exit code 1 on error).
     CheckWorld(check_world::CheckWorldArgs),
+    /// Generate the game's world for a seed and size, print what it holds and how long it took; --out saves it.
+    Generate(generate::GenerateArgs),
 }
 
 /// Runs the parsed command; the error is one line for stderr.
@@ -54,6 +57,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Bench(args) => args.run(),
         Command::Stress(args) => args.run(),
         Command::CheckWorld(args) => args.run(),
+        Command::Generate(args) => args.run(),
     }
 }
 

@@ -9,6 +9,9 @@ use bevy::math::UVec3;
 use clap::Args;
 use std::path::{Path, PathBuf};
 
+/// The generated world's size when none is given: 1024 x 192 x 1024 voxels.
+pub const DEFAULT_SIZE: &str = "1024,192,1024";
+
 #[derive(Args)]
 pub struct PlayArgs {
     #[command(flatten)]
@@ -20,7 +23,7 @@ pub struct PlayArgs {
     #[arg(long, default_value_t = 1, conflicts_with_all = ["world", "scene"])]
     seed: u32,
     /// Size of the generated world in voxels, X,Y,Z.
-    #[arg(long, default_value = "192,64,192", value_parser = parse_size, conflicts_with_all = ["world", "scene"])]
+    #[arg(long, default_value = DEFAULT_SIZE, value_parser = parse_size, conflicts_with_all = ["world", "scene"])]
     size: UVec3,
     /// A MagicaVoxel model (.vox) that V drops in front of the player.
     #[arg(long)]

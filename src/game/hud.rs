@@ -1,6 +1,7 @@
-//! The HUD (Bevy UI): crosshair, hotbar swatches, the selected material, frame rate, light count and the render
-//! settings that apply (as `--set` pairs), a status
-//! line for saves and errors, a one-line hint, and a help panel toggled with F1.
+//! The HUD (Bevy UI). By default the screen stays clean: a crosshair, the hotbar, the selected block's name, the
+//! frame time in a corner and a status line for saves and errors. F3 shows the debug panel (frame rate, lights,
+//! the render settings that apply as `--set` pairs, movement mode, brush, target), F1 the help. Every panel wraps
+//! its text to the window, so nothing is cut off from 960x540 up.
 
 use super::interaction::{Brush, Hotbar, Target, TargetObject};
 use super::player::Player;
@@ -34,9 +35,13 @@ struct MaterialText;
 struct StatusText;
 #[derive(Component)]
 struct HelpPanel;
+#[derive(Component)]
+struct DebugPanel;
+#[derive(Component)]
+struct FrameTimeText;
 
-const HINT: &str = "WASD move | mouse look | LMB break | RMB place | MMB pick | wheel/1-9 block | B box brush | \
-                    F walk/fly | Ctrl+Z/Y undo/redo | L lighting | T time | G GI | N denoise | O lantern | F4 settings | F5 save | F9 load | F1 help";
+/// Shown on the status line when the game starts, so a new player finds the help.
+pub const START_HINT: &str = "F1 help  |  F3 debug";
 
 const HELP: &str = "glowbrick controls\n\n\
     click          capture the mouse (Esc releases it)\n\
@@ -50,7 +55,8 @@ const HELP: &str = "glowbrick controls\n\n\
     B              box brush: click two corners to fill (right) or clear (left)\n\
     Ctrl+Z, Ctrl+Y undo, redo\n\
     V              drop the --model .vox model in front of you\n\
-    F3             debug views (lit, albedo, normal, depth, denoiser variance, history)\n\
+    F3             debug panel: frame rate, lights, render settings, target\n\
+    F6             debug views (lit, albedo, normal, depth, denoiser variance, history)\n\
     L              lighting: full (sun, sky, lamps) / emitters only (ReSTIR) / NEE / sun debug look\n\
     T, Shift+T     time of day: an hour on / back (noon 12, dusk 18, night 0)\n\
     G              indirect light (the GI cache) on / off\n\
@@ -65,8 +71,8 @@ pub struct HudPlugin;
 impl Plugin for HudPlugin {
     fn build(&self, app: &mut App) {
         app.init_resource::<StatusLine>()
-            .add_systems(Startup, spawn_hud)
-            .add_systems(Update, (update_hotbar, update_texts, toggle_help));
+            .add_systems(Startup, (spawn_hud, |mut status: ResMut<StatusLine>| status.show(START_HINT.into())))
+            .add_systems(Update, (update_hotbar, update_texts, toggle_panels));
     }
 }
 
@@ -92,18 +98,28 @@ fn spawn_hud(mut commands: Commands) {
             BorderColor::all(Color::srgba(0.0, 0.0, 0.0, 0.8)),
         ));
     }
-    // Frame rate, lights, mode: top left.
+    // Debug panel (F3): frame rate, lights, settings, mode; top left, wrapped to half the window.
     commands.spawn((
         Node {
             position_type: PositionType::Absolute,
             left: Val::Px(6.0),
             top: Val::Px(6.0),
+            max_width: Val::Percent(55.0),
             padding: UiRect::all(Val::Px(4.0)),
+            display: Display::None,
             ..default()
         },
         BackgroundColor(Color::srgba(0.0, 0.0, 0.0, 0.45)),
-        text("", 16.0),
-        StatsText,
+        DebugPanel,
+        children![(text("", 14.0), StatsText)],
+    ));
+    // Frame time: a small corner at the top right.
+    commands.spawn((
+        Node { position_type: PositionType::Absolute, right: Val::Px(6.0), top: Val::Px(6.0), ..default() },
+        Text::new(""),
+        TextFont::from_font_size(13.0),
+        TextColor(Color::srgba(1.0, 1.0, 1.0, 0.8)),
+        FrameTimeText,
     ));
     // Status: top centre.
     commands.spawn((
@@ -116,7 +132,7 @@ fn spawn_hud(mut commands: Commands) {
         },
         children![(text("", 18.0), BackgroundColor(Color::srgba(0.0, 0.0, 0.0, 0.45)), StatusText)],
     ));
-    // Hotbar, material name and hint: bottom centre.
+    // Hotbar and material name: bottom centre.
     commands
         .spawn(Node {
             position_type: PositionType::Absolute,
@@ -144,21 +160,24 @@ fn spawn_hud(mut commands: Commands) {
                     ));
                 }
             });
-            bottom.spawn((text(HINT, 13.0), BackgroundColor(Color::srgba(0.0, 0.0, 0.0, 0.45))));
         });
-    // Help panel, hidden until F1.
+    // Help panel, hidden until F1: centred, wrapped to the window.
     commands.spawn((
         Node {
             position_type: PositionType::Absolute,
-            left: Val::Percent(25.0),
-            top: Val::Percent(15.0),
-            padding: UiRect::all(Val::Px(16.0)),
+            width: Val::Percent(100.0),
+            height: Val::Percent(100.0),
+            justify_content: JustifyContent::Center,
+            align_items: AlignItems::Center,
             display: Display::None,
             ..default()
         },
-        BackgroundColor(Color::srgba(0.0, 0.0, 0.0, 0.8)),
         HelpPanel,
-        children![text(HELP, 16.0)],
+        children![(
+            Node { max_width: Val::Percent(90.0), padding: UiRect::all(Val::Px(12.0)), ..default() },
+            BackgroundColor(Color::srgba(0.0, 0.0, 0.0, 0.8)),
+            children![text(HELP, 14.0)],
+        )],
     ));
 }
 
@@ -201,6 +220,7 @@ fn update_texts(
         Query<&mut Text, With<StatsText>>,
         Query<&mut Text, With<MaterialText>>,
         Query<&mut Text, With<StatusText>>,
+        Query<&mut Text, With<FrameTimeText>>,
     )>,
 ) {
     let dt = time.delta_secs();
@@ -236,6 +256,9 @@ fn update_texts(
             None => "(empty slot)".to_string(),
         };
     }
+    if let Ok(mut t) = texts.p3().single_mut() {
+        t.0 = format!("{:.1} ms", *smoothed_dt * 1000.0);
+    }
     status.remaining -= dt;
     if let Ok(mut t) = texts.p2().single_mut() {
         let shown = if status.remaining > 0.0 { status.text.as_str() } else { "" };
@@ -245,10 +268,19 @@ fn update_texts(
     }
 }
 
-fn toggle_help(keys: Res<ButtonInput<KeyCode>>, mut panel: Query<&mut Node, With<HelpPanel>>) {
-    if keys.just_pressed(KeyCode::F1)
-        && let Ok(mut node) = panel.single_mut()
-    {
+/// F1 shows or hides the help, F3 the debug panel.
+fn toggle_panels(
+    keys: Res<ButtonInput<KeyCode>>,
+    mut help: Query<&mut Node, (With<HelpPanel>, Without<DebugPanel>)>,
+    mut debug: Query<&mut Node, (With<DebugPanel>, Without<HelpPanel>)>,
+) {
+    let flip = |node: &mut Node| {
         node.display = if node.display == Display::None { Display::Flex } else { Display::None };
+    };
+    if keys.just_pressed(KeyCode::F1) {
+        help.iter_mut().for_each(|mut n| flip(&mut n));
+    }
+    if keys.just_pressed(KeyCode::F3) {
+        debug.iter_mut().for_each(|mut n| flip(&mut n));
     }
 }

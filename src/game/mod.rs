@@ -112,10 +112,10 @@ fn lighting_toggle_keys(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<Re
     }
 }
 
-/// F3 cycles the debug views (lit, albedo, normal, depth, the denoiser's variance and history).
+/// F6 cycles the debug views (lit, albedo, normal, depth, the denoiser's variance and history).
 fn debug_view_key(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<RenderSettings>) {
     use crate::settings::DebugView;
-    if keys.just_pressed(KeyCode::F3) {
+    if keys.just_pressed(KeyCode::F6) {
         settings.debug = match settings.debug {
             DebugView::None => DebugView::Albedo,
             DebugView::Albedo => DebugView::Normal,

@@ -43,8 +43,15 @@ fn spawn_at_start(
         commands.queue(move |app_world: &mut World| spawn_saved_or_report(app_world, &saved));
         return;
     }
-    let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
-    let centre = Vec3::from(view.origin) + Vec3::from(view.direction).normalize_or_zero() * 14.0;
+    // A generated world marks where its objects hang (over the village's fountain); otherwise they float in front
+    // of the start view.
+    let centre = match world.view(Some("lantern")) {
+        Some(marker) => marker.origin() - Vec3::Y * 3.0,
+        None => {
+            let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
+            view.origin() + view.direction().normalize_or_zero() * 14.0
+        }
+    };
     if let Err(e) = spawn_default_objects(&mut commands, &mut clock, &mut world, centre) {
         status.show(e);
     }

@@ -5,6 +5,7 @@ pub mod edit;
 pub mod events;
 pub mod font;
 pub mod format;
+pub mod generate;
 pub mod grid;
 pub mod import;
 pub mod objects;

@@ -106,6 +106,14 @@ impl Palette {
             Material::emissive("lamp-white", [0.9, 0.9, 0.9], [1.0, 1.0, 1.0], 12.0),
             Material::emissive("lamp-blue", [0.5, 0.6, 0.9], [0.35, 0.55, 1.0], 6.0),
             Material::emissive("lamp-red", [0.9, 0.4, 0.4], [1.0, 0.25, 0.2], 6.0),
+            // The generator's own (appended, so the ids above keep their meaning in older saves).
+            Material::solid("snow", [0.86, 0.88, 0.92]),
+            Material::solid("planks", [0.62, 0.46, 0.30]),
+            Material::solid("plaster", [0.80, 0.76, 0.68]),
+            Material::solid("roof", [0.48, 0.17, 0.12]),
+            Material::solid("cobble", [0.40, 0.39, 0.38]),
+            Material::emissive("crystal-cyan", [0.5, 0.9, 0.95], [0.3, 0.9, 1.0], 5.0),
+            Material::emissive("crystal-violet", [0.75, 0.5, 0.95], [0.7, 0.3, 1.0], 5.0),
         ])
     }
 }

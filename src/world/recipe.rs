@@ -14,7 +14,7 @@
 
 use super::font::glyph;
 use super::format::{LoadError, check_world_header, parse_ron, read_limited};
-use super::grid::{AIR, MAX_WORLD_EDGE, Voxel};
+use super::grid::{AIR, Voxel};
 use super::palette::{Material, Palette};
 use super::terrain::{TerrainParams, fill_terrain, hash_u32, surface_height};
 use super::{CameraView, VoxelWorld};
@@ -316,40 +316,7 @@ pub fn list_scenes() -> Vec<String> {
     names
 }
 
-/// The generated default world of `glowbrick play`: rolling hills with wooden posts and lamps.
+/// The generated default world of `glowbrick play` (see `world::generate`).
 pub fn generated_world(seed: u32, size: UVec3) -> Result<VoxelWorld, LoadError> {
-    let size = size.min(UVec3::splat(MAX_WORLD_EDGE));
-    let height = size.y as f32;
-    let recipe = SceneRecipe {
-        size: (size.x, size.y, size.z),
-        seed,
-        materials: Palette::default_blocks().materials,
-        ops: vec![
-            SceneOp::Terrain {
-                params: TerrainParams {
-                    base_height: height * 0.3,
-                    amplitude: height * 0.25,
-                    frequency: 0.012,
-                    octaves: 4,
-                    soil_depth: 3,
-                },
-                rock: "stone".into(),
-                soil: "dirt".into(),
-                surface: "grass".into(),
-            },
-            SceneOp::Scatter { material: "wood".into(), count: size.x * size.z / 900, size: (1, 5, 1) },
-            SceneOp::Scatter { material: "lamp-warm".into(), count: size.x * size.z / 1500, size: (1, 2, 1) },
-            SceneOp::Scatter { material: "lamp-blue".into(), count: size.x * size.z / 4000, size: (1, 1, 1) },
-        ],
-        views: Vec::new(),
-    };
-    let mut world = recipe.build("generated world")?;
-    let mut view = world.overview();
-    view.name = "start".into();
-    let centre = (size.as_vec3() * 0.5).as_ivec3();
-    let ground = surface_height(&world, centre.x, centre.z).max(0) as f32;
-    view.origin = [centre.x as f32 + 0.5, ground + 6.0, centre.z as f32 + 0.5];
-    view.direction = [0.6, -0.25, 0.75];
-    world.views.push(view);
-    Ok(world)
+    super::generate::generate_world(seed, size).map(|(world, _)| world)
 }

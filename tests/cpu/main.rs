@@ -6,6 +6,7 @@ mod cli;
 mod compose;
 mod daylight;
 mod game_building;
+mod generated_world;
 mod hostile_files;
 mod imports;
 mod layers;
