@@ -2,7 +2,7 @@
 // sample, lighting=full or emitters) that is all; otherwise this pass shades too: next-event estimation, the
 // disk and sky of lighting=full without emitters, or the sun-only debug look. Debug views show the pass's inputs.
 
-#import glowbrick::world::{materials, Material}
+#import glowbrick::world::{materials, Material, albedo_at}
 #import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, primary_ray_dir, lit_view,
     pixel_footprint, NOT_A_VOXEL}
 #import glowbrick::gi::cache::{gi_on, gi_touch_surface, gi_incoming, camera_level}
@@ -76,7 +76,9 @@ fn miss_colour(dir: vec3<f32>, full: bool, nee: bool) -> vec4<f32> {
 // A hit: a debug view of it, or its light (NEE or the sun-only look) with the highlight drawn over.
 fn hit_colour(pixel: vec2<u32>, size: vec2<u32>, point: vec3<f32>, hit: Hit, full: bool, nee: bool) -> vec4<f32> {
     let normal = face_normal(hit.face);
-    let material = materials[hit.material];
+    // The material with this voxel's own albedo (per-voxel variation), for every use below.
+    var material = materials[hit.material];
+    material.albedo = vec4(albedo_at(hit.material, hit.voxel, hit.object), 0.0);
     switch frame.debug_view {
         case DEBUG_ALBEDO: {
             return vec4(material.albedo.rgb, 1.0);

@@ -1,8 +1,8 @@
 // Denoiser pass 1 (render::denoise): demodulate this frame's noisy light, blend it into the history reprojected
 // from last frame, and estimate its luminance variance for the wavelet passes.
 
-#import glowbrick::world::{materials, object_motion}
-#import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, noisy, history, prev_history, wavelet, unpack_surface,
+#import glowbrick::world::{materials, object_motion, albedo_at}
+#import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, noisy, history, prev_history, wavelet, unpack_surface, surface_voxel,
     pixel_index, previous_pixel, luminance, Surface}
 #import glowbrick::constants::DENOISE_HISTORY
 #import glowbrick::denoise::common::{MAX_HISTORY, ALBEDO_FLOOR, same_plane}
@@ -11,7 +11,7 @@
 fn demodulated(index: u32, s: Surface) -> vec3<f32> {
     let m = materials[s.material];
     let lighting = max(noisy[index].rgb - m.radiance.rgb * frame.exposure, vec3(0.0));
-    return lighting / max(m.albedo.rgb, vec3(ALBEDO_FLOOR));
+    return lighting / max(albedo_at(s.material, surface_voxel(s), s.object), vec3(ALBEDO_FLOOR));
 }
 
 @compute @workgroup_size(8, 8, 1)

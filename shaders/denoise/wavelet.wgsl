@@ -4,7 +4,7 @@
 // variance, and by how much farther it lies in the world than its offset in pixels says (a plane seen at a
 // grazing angle). The last iteration remodulates, draws the highlight and writes the image.
 
-#import glowbrick::world::materials
+#import glowbrick::world::{materials, albedo_at}
 #import glowbrick::frame::{frame, view, gbuffer, history, wavelet, unpack_surface, pixel_index, present, draw_highlight,
     surface_voxel, luminance, pixel_footprint}
 #import glowbrick::constants::{DEBUG_VARIANCE, DEBUG_HISTORY}
@@ -107,7 +107,7 @@ fn step_8_and_write(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let m = materials[s.material];
-    var colour = max(m.albedo.rgb, vec3(ALBEDO_FLOOR)) * f.rgb + m.radiance.rgb * frame.exposure;
+    var colour = max(albedo_at(s.material, surface_voxel(s), s.object), vec3(ALBEDO_FLOOR)) * f.rgb + m.radiance.rgb * frame.exposure;
     if frame.debug_view == DEBUG_VARIANCE {
         colour = vec3(sqrt(f.a));
     } else if frame.debug_view == DEBUG_HISTORY {

@@ -3,7 +3,7 @@
 // shadow ray (refresh.wgsl) so a cache ray that hits the entry's face reads it instead of tracing its own.
 #define_import_path glowbrick::gi::direct
 
-#import glowbrick::world::{materials, voxel_at}
+#import glowbrick::world::{voxel_at, albedo_at}
 #import glowbrick::traversal::{trace_scene, face_normal, INF}
 #import glowbrick::lights::{scene, direct_sample, disk_sample}
 #import glowbrick::random::{Rng, pcg, rng_next, r2_point, rotation2}
@@ -64,7 +64,7 @@ fn cell_point(e: GiEntry, u: vec2<f32>) -> CellPoint {
 // One direct-light sample at point `u` of the entry's cell (cell_point).
 fn face_sample(e: GiEntry, u: vec2<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
     let at = cell_point(e, u);
-    let albedo = materials[voxel_at(at.voxel)].albedo.rgb;
+    let albedo = albedo_at(voxel_at(at.voxel), at.voxel, 0u);
     let estimate = direct_at(at.point, face_normal(e.face), albedo, rng);
     return select(vec3(0.0), estimate, finite3(estimate));
 }

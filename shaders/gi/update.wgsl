@@ -5,7 +5,7 @@
 // last frame (and emission where the shading passes do not already count it); blend. Rays that leave the world
 // bring the sky (lighting=full and the sun-only look).
 
-#import glowbrick::world::{materials, voxel_at, objects, object_index, object_count}
+#import glowbrick::world::{materials, voxel_at, objects, object_index, object_count, albedo_at}
 #import glowbrick::traversal::{Hit, trace, trace_objects, trace_scene, face_normal, INF, count_rays_only}
 #import glowbrick::lights::{scene, sky}
 #import glowbrick::random::{Rng, pcg, rng_next, r4_point, rotation4}
@@ -44,7 +44,8 @@ fn hit_radiance(point: vec3<f32>, face: u32, level: u32, seen: bool, fallback: v
         // Removed this frame, before the edit reached the cache.
         return vec3(0.0);
     }
-    let m = materials[id];
+    var m = materials[id];
+    m.albedo = vec4(albedo_at(id, voxel, 0u), 0.0);
     let bounces = (gi.flags & GI_BOUNCES) != 0u;
     // Entries the camera sees bring the entries their rays hit into the cache (with bounces on); others only look
     // up. The hit face's entry, at the level of detail of the hit's distance, holds its direct light (the face's

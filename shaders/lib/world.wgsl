@@ -19,7 +19,7 @@ struct WorldInfo {
 }
 
 struct Material {
-    // Linear albedo (rgb).
+    // Linear albedo (rgb) and per-voxel variation (w): read it through albedo_at.
     albedo: vec4<f32>,
     // Emitted radiance (rgb) = emission colour x strength.
     radiance: vec4<f32>,
@@ -116,4 +116,27 @@ fn voxel_at(p: vec3<i32>) -> u32 {
         return pooled_voxel(cell & ~POOLED_FLAG, p & vec3(BRICK_SIZE - 1));
     }
     return cell;
+}
+
+// The hash behind per-voxel variation: world::palette::voxel_hash, bit for bit.
+fn variation_pcg(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+fn voxel_hash(voxel: vec3<i32>) -> u32 {
+    let v = bitcast<vec3<u32>>(voxel);
+    return variation_pcg(v.x ^ variation_pcg(v.y ^ variation_pcg(v.z)));
+}
+
+// The albedo of a voxel of `material` (Material::albedo_at): scaled by 1 + variation * (2u - 1), u a hash of the
+// world voxel in [0, 1). Moving objects' voxels (object != 0) keep the flat colour.
+fn albedo_at(material: u32, voxel: vec3<i32>, object: u32) -> vec3<f32> {
+    let m = materials[material];
+    if m.albedo.w == 0.0 || object != 0u {
+        return m.albedo.rgb;
+    }
+    let u = f32(voxel_hash(voxel) >> 8u) / 16777216.0;
+    return min(m.albedo.rgb * (1.0 + m.albedo.w * (2.0 * u - 1.0)), vec3(1.0));
 }

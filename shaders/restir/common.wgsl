@@ -4,7 +4,7 @@
 // shade.wgsl.
 #define_import_path glowbrick::restir::common
 
-#import glowbrick::world::{materials, voxel_at}
+#import glowbrick::world::{materials, voxel_at, albedo_at}
 #import glowbrick::traversal::{trace_scene, face_normal}
 #import glowbrick::lights::{Light, PickedLight, lights, scene, alias_table, pick_light, light_contains, light_size,
     face_exposed, light_at_voxel}
@@ -13,7 +13,7 @@
 #import glowbrick::guards::finite
 #import glowbrick::constants::{RAY_OFFSET, PI, RESTIR_POINT, RESTIR_UNBIASED, RESTIR_ONE_RAY, RESTIR_LOCAL,
     COUNT_RESERVOIR_RESETS, NO_COLUMN, NEAR_FACE}
-#import glowbrick::frame::{frame, view, Surface, luminance}
+#import glowbrick::frame::{frame, view, Surface, luminance, surface_voxel}
 
 // 32 bytes. `face` is the light cube's face (0 +X, 1 -X, ... as the traversal numbers faces) or POINT_FACE,
 // `uv` the point on it (pack2x16unorm). `w_sum` is only meaningful while a pass streams candidates; `big_w` is the
@@ -92,7 +92,7 @@ struct Shading {
 }
 
 fn shading(s: Surface) -> Shading {
-    return Shading(s.point, face_normal(s.face), materials[s.material].albedo.rgb);
+    return Shading(s.point, face_normal(s.face), albedo_at(s.material, surface_voxel(s), s.object));
 }
 
 // Unshadowed reflected radiance from the sample, per unit of the sample's measure: area (albedo/pi Le cos cos/d^2)

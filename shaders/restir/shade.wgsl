@@ -72,7 +72,7 @@ fn shade_pixel(id: vec3<u32>) {
         }
     }
     if gi_on() {
-        radiance += materials[surface.material].albedo.rgb * gi_incoming(x.point, surface.face, surface.object, camera_level(pixel_footprint(x.point), surface.object));
+        radiance += x.albedo * gi_incoming(x.point, surface.face, surface.object, camera_level(pixel_footprint(x.point), surface.object));
     }
     let depth = distance(view.world_position, x.point);
     write_output(id.xy, vec4(highlight(radiance * frame.exposure, surface_voxel(surface), surface.face, x.point, depth), 1.0));

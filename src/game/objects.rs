@@ -43,8 +43,8 @@ fn spawn_at_start(
         commands.queue(move |app_world: &mut World| spawn_saved_or_report(app_world, &saved));
         return;
     }
-    // A generated world marks where its objects hang (over the village's fountain); otherwise they float in front
-    // of the start view.
+    // A generated world marks where its objects hang (over the village's fountain, the swinging block from the
+    // frame at `world::generate::SWING_PIVOT`); otherwise they float in front of the start view.
     let centre = match world.view(Some("lantern")) {
         Some(marker) => marker.origin() - Vec3::Y * 3.0,
         None => {

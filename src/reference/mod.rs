@@ -262,7 +262,8 @@ impl Scene<'_> {
         Some(SurfaceHit {
             position: ray.at(hit.distance),
             normal: hit.face.normal().as_vec3(),
-            albedo: material.albedo,
+            // Moving objects' voxels are in their own coordinates: flat colours, as on the GPU.
+            albedo: if on_object { material.albedo } else { material.albedo_at(hit.voxel) },
             emission: Vec3::from(material.radiance()),
             on_object,
         })

@@ -33,6 +33,7 @@ pub struct WorldInfo {
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GpuMaterial {
+    /// Linear albedo (rgb) and the material's per-voxel variation (w).
     pub albedo: [f32; 4],
     pub radiance: [f32; 4],
 }

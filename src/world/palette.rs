@@ -1,5 +1,6 @@
-//! Materials: what a voxel id means (albedo, emission colour, emission strength).
+//! Materials: what a voxel id means (albedo, per-voxel variation, emission colour, emission strength).
 
+use bevy::math::IVec3;
 use serde::{Deserialize, Serialize};
 
 /// One material of the world palette. Colours are linear RGB.
@@ -14,15 +15,50 @@ pub struct Material {
     /// Radiance scale; the material is an emitter when it is above zero.
     #[serde(default)]
     pub strength: f32,
+    /// Per-voxel detail: each world voxel's albedo is scaled by `1 + variation * (2u - 1)`, `u` a hash of its
+    /// position in `[0, 1)` (`albedo_at`; `albedo_at` in `shaders/lib/world.wgsl` is the same), so a field of
+    /// grass is not one flat colour. In `[0, 1]`; 0 (the default) is a flat colour. Moving objects stay flat.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub variation: f32,
+}
+
+fn is_zero(v: &f32) -> bool {
+    *v == 0.0
+}
+
+/// The hash of a voxel position behind per-voxel variation: the same bits on the CPU and in WGSL
+/// (`voxel_hash` in `shaders/lib/world.wgsl`).
+pub fn voxel_hash(voxel: IVec3) -> u32 {
+    let pcg = |v: u32| {
+        let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+        let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+        (word >> 22) ^ word
+    };
+    pcg(voxel.x as u32 ^ pcg(voxel.y as u32 ^ pcg(voxel.z as u32)))
 }
 
 impl Material {
     pub fn solid(name: &str, albedo: [f32; 3]) -> Self {
-        Material { name: name.to_string(), albedo, emission: [0.0; 3], strength: 0.0 }
+        Material { name: name.to_string(), albedo, emission: [0.0; 3], strength: 0.0, variation: 0.0 }
     }
 
     pub fn emissive(name: &str, albedo: [f32; 3], emission: [f32; 3], strength: f32) -> Self {
-        Material { name: name.to_string(), albedo, emission, strength }
+        Material { name: name.to_string(), albedo, emission, strength, variation: 0.0 }
+    }
+
+    /// The same material with per-voxel variation `variation`.
+    pub fn varied(self, variation: f32) -> Self {
+        Material { variation, ..self }
+    }
+
+    /// The albedo of this material's world voxel at `voxel`, with its per-voxel variation.
+    pub fn albedo_at(&self, voxel: IVec3) -> [f32; 3] {
+        if self.variation == 0.0 {
+            return self.albedo;
+        }
+        let u = (voxel_hash(voxel) >> 8) as f32 / 16_777_216.0;
+        let scale = 1.0 + self.variation * (2.0 * u - 1.0);
+        self.albedo.map(|c| (c * scale).min(1.0))
     }
 
     pub fn is_emissive(&self) -> bool {
@@ -42,6 +78,9 @@ impl Material {
         }
         if !self.emission.iter().all(in_unit) {
             return Some(format!("material '{}': emission {:?} must be within [0, 1]", self.name, self.emission));
+        }
+        if !self.variation.is_finite() || !(0.0..=1.0).contains(&self.variation) {
+            return Some(format!("material '{}': variation {} must be within [0, 1]", self.name, self.variation));
         }
         if !self.strength.is_finite() || !(0.0..=1.0e6).contains(&self.strength) {
             return Some(format!("material '{}': strength {} must be within [0, 1e6]", self.name, self.strength));
@@ -93,12 +132,12 @@ impl Palette {
     /// A small palette for generated worlds: terrain, building blocks and lights of several colours.
     pub fn default_blocks() -> Self {
         Palette::new(vec![
-            Material::solid("stone", [0.45, 0.45, 0.47]),
-            Material::solid("dirt", [0.42, 0.30, 0.20]),
-            Material::solid("grass", [0.30, 0.55, 0.22]),
-            Material::solid("sand", [0.76, 0.70, 0.50]),
-            Material::solid("wood", [0.55, 0.38, 0.22]),
-            Material::solid("leaves", [0.20, 0.45, 0.16]),
+            Material::solid("stone", [0.45, 0.45, 0.47]).varied(0.18),
+            Material::solid("dirt", [0.42, 0.30, 0.20]).varied(0.2),
+            Material::solid("grass", [0.30, 0.55, 0.22]).varied(0.22),
+            Material::solid("sand", [0.76, 0.70, 0.50]).varied(0.1),
+            Material::solid("wood", [0.55, 0.38, 0.22]).varied(0.15),
+            Material::solid("leaves", [0.20, 0.45, 0.16]).varied(0.3),
             Material::solid("white", [0.80, 0.80, 0.80]),
             Material::solid("red", [0.75, 0.10, 0.10]),
             Material::solid("green", [0.12, 0.60, 0.15]),
@@ -107,11 +146,11 @@ impl Palette {
             Material::emissive("lamp-blue", [0.5, 0.6, 0.9], [0.35, 0.55, 1.0], 6.0),
             Material::emissive("lamp-red", [0.9, 0.4, 0.4], [1.0, 0.25, 0.2], 6.0),
             // The generator's own (appended, so the ids above keep their meaning in older saves).
-            Material::solid("snow", [0.86, 0.88, 0.92]),
-            Material::solid("planks", [0.62, 0.46, 0.30]),
-            Material::solid("plaster", [0.80, 0.76, 0.68]),
-            Material::solid("roof", [0.48, 0.17, 0.12]),
-            Material::solid("cobble", [0.40, 0.39, 0.38]),
+            Material::solid("snow", [0.86, 0.88, 0.92]).varied(0.05),
+            Material::solid("planks", [0.62, 0.46, 0.30]).varied(0.15),
+            Material::solid("plaster", [0.80, 0.76, 0.68]).varied(0.06),
+            Material::solid("roof", [0.48, 0.17, 0.12]).varied(0.15),
+            Material::solid("cobble", [0.40, 0.39, 0.38]).varied(0.3),
             Material::emissive("crystal-cyan", [0.5, 0.9, 0.95], [0.3, 0.9, 1.0], 5.0),
             Material::emissive("crystal-violet", [0.75, 0.5, 0.95], [0.7, 0.3, 1.0], 5.0),
         ])

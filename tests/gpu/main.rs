@@ -26,6 +26,7 @@ mod common;
 mod compose;
 mod daylight;
 mod denoise;
+mod detail;
 mod extreme_scenes;
 mod gi;
 mod headless;
@@ -99,6 +100,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             with_gi_off_no_gi_pass_runs,
             with_the_warm_up_off_a_fresh_cache_brings_in_its_bounces_slower,
         ],
+        detail: [every_voxel_has_the_cpus_albedo_and_the_lit_frame_converges],
         headless: [a_broken_shader_fails_every_wait_at_once_with_its_pass_name],
         nee_converges: [
             gpu_nee_converges_to_the_cpu_reference_on_the_cornell_box,

@@ -47,7 +47,7 @@ pub fn gpu_materials(palette: &Palette) -> Vec<GpuMaterial> {
     out.extend(palette.materials.iter().map(|m| {
         let [r, g, b] = m.albedo;
         let [er, eg, eb] = m.radiance();
-        GpuMaterial { albedo: [r, g, b, 0.0], radiance: [er, eg, eb, 0.0] }
+        GpuMaterial { albedo: [r, g, b, m.variation], radiance: [er, eg, eb, 0.0] }
     }));
     out
 }

@@ -22,6 +22,7 @@ use land::Land;
 use rayon::prelude::*;
 
 pub use land::VillageSite;
+pub use village::SWING_PIVOT;
 
 /// The block ids the generator places, looked up once from the palette.
 pub struct Blocks {

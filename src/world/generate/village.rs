@@ -22,6 +22,10 @@ pub struct House {
     pub inward: IVec3,
 }
 
+/// Where the game hangs its swinging block, from the plaza's centre voxel (`game::objects` spawns it there: the
+/// lantern marker is 5 above the plaza, the pivot 6 across and 12 up); the village builds a frame to hang it from.
+pub const SWING_PIVOT: IVec3 = IVec3::new(6, 12, 0);
+
 /// Walls stand this many voxels above the floor.
 const WALL_HEIGHT: i32 = 4;
 
@@ -52,6 +56,7 @@ pub fn build_village(world: &mut VoxelWorld, site: &VillageSite, seed: u32, bloc
         lay_path(world, blocks, c, house.door - house.inward, g);
     }
     build_fountain(world, blocks, c);
+    build_swing_frame(world, blocks, c + SWING_PIVOT);
     for k in 0..5 {
         let angle = TAU * (k as f32 + 0.5) / 5.0;
         let r = site.radius * 0.3;
@@ -176,4 +181,18 @@ fn build_fountain(world: &mut VoxelWorld, blocks: &Blocks, c: IVec3) {
     fill(world, c + IVec3::new(-2, 1, -2), c + IVec3::new(3, 2, 3), blocks.cobble);
     fill(world, c + IVec3::new(-1, 0, -1), c + IVec3::new(2, 2, 2), AIR);
     fill(world, c + IVec3::new(-1, 0, -1), c + IVec3::new(2, 1, 2), blocks.lamp_blue);
+}
+
+/// Two wooden posts and a beam over the pivot of the game's swinging block, so it hangs from something.
+fn build_swing_frame(world: &mut VoxelWorld, blocks: &Blocks, pivot: IVec3) {
+    let beam_y = pivot.y + 2;
+    for z in [pivot.z - 4, pivot.z + 6] {
+        fill(world, IVec3::new(pivot.x, pivot.y - 12 + 1, z), IVec3::new(pivot.x + 2, beam_y, z + 1), blocks.wood);
+    }
+    fill(
+        world,
+        IVec3::new(pivot.x, beam_y, pivot.z - 4),
+        IVec3::new(pivot.x + 2, beam_y + 1, pivot.z + 7),
+        blocks.wood,
+    );
 }
