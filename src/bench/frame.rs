@@ -39,9 +39,10 @@ pub const CASES: [FrameCase; 6] = [
     FrameCase { label: "thesis-letters", scene: "thesis-letters", view: "letters1", settings: &[] },
 ];
 
-/// The generated world of the profile: `glowbrick play`'s default seed and size.
+/// The generated world of the profile: `glowbrick play`'s default seed and size (`cli::play::DEFAULT_SIZE`), seen
+/// from its start view on the village plaza.
 const GENERATED_SEED: u32 = 1;
-const GENERATED_SIZE: UVec3 = UVec3::new(192, 64, 192);
+const GENERATED_SIZE: UVec3 = UVec3::new(1024, 192, 1024);
 
 /// The two lightings profiled: the game's frame (`RenderSettings::game()`: sun, sky and emitters, GI cache,
 /// denoiser), and the same with emitters only (the thesis' protocol, no sun or sky).

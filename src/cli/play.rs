@@ -25,6 +25,9 @@ pub struct PlayArgs {
     /// Size of the generated world in voxels, X,Y,Z.
     #[arg(long, default_value = DEFAULT_SIZE, value_parser = parse_size, conflicts_with_all = ["world", "scene"])]
     size: UVec3,
+    /// Start at this named view of the world (a generated world has village, house, cave and overview).
+    #[arg(long)]
+    view: Option<String>,
     /// A MagicaVoxel model (.vox) that V drops in front of the player.
     #[arg(long)]
     model: Option<PathBuf>,
@@ -49,7 +52,16 @@ impl PlayArgs {
             PathBuf::from("saves").join(format!("{}.ron", name.as_deref().unwrap_or("world")))
         });
         let model = self.model.as_deref().map(load_model).transpose()?;
-        let world = source.load().map_err(|e| e.to_string())?;
+        let mut world = source.load().map_err(|e| e.to_string())?;
+        if let Some(name) = &self.view {
+            // The game starts at the first view: move the named one to the front.
+            let Some(at) = world.views.iter().position(|v| &v.name == name) else {
+                let names: Vec<&str> = world.views.iter().map(|v| v.name.as_str()).collect();
+                return Err(format!("no view '{name}' in this world (its views: {})", names.join(", ")));
+            };
+            let view = world.views.remove(at);
+            world.views.insert(0, view);
+        }
         let settings = self.settings.settings_over(base.with_world_time(&world))?;
         can_open_a_window()?;
         crate::game::run_game(world, settings, save, model);

@@ -351,6 +351,9 @@ pub struct RenderSettings {
     pub seed: u32,
     /// How the GPU's rays walk the grid (the CPU reference walks it with the DDA; the hits are the same).
     pub traversal: Traversal,
+    /// The game keeps at most one frame of GPU work in flight, so input shows within a frame or two
+    /// (`game::frame_pacing`); off lets the driver queue frames ahead. Only the game window reads it.
+    pub pacing: bool,
     pub restir: RestirSettings,
     pub gi: GiSettings,
 }
@@ -369,6 +372,7 @@ impl Default for RenderSettings {
             denoise: false,
             seed: 0,
             traversal: Traversal::Dda,
+            pacing: true,
             restir: RestirSettings::default(),
             gi: GiSettings::default(),
         }

@@ -254,6 +254,13 @@ pub static SETTINGS: &[Setting] = &[
         field: &Choice { get: |s| s.traversal, set: |s, v| s.traversal = v },
     },
     Setting {
+        key: "pacing",
+        section: Section::General,
+        about: "The game keeps at most one frame of GPU work in flight so input shows within a frame or two; off lets \
+                the driver queue frames ahead (more latency, on slow adapters many frames).",
+        field: &Choice { get: |s| s.pacing, set: |s, v| s.pacing = v },
+    },
+    Setting {
         key: "denoise",
         section: Section::General,
         about: "Spatiotemporal denoiser (SVGF family) on the lit image; play turns it on (debug=variance|history \

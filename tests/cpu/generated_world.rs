@@ -71,3 +71,36 @@ fn tiny_and_flat_worlds_generate_without_a_village() {
         assert!(world.grid.contains(world.views[0].origin().floor().as_ivec3()), "{size}: start outside the world");
     }
 }
+
+/// F5 / F9 of the default world: the save loads back voxel for voxel with its views and materials (per-voxel
+/// variation included), and a save cut short or with a damaged brick is one error, not a panic.
+#[test]
+fn the_default_world_saves_and_loads_back_and_a_damaged_save_is_one_error() {
+    use glowbrick::world::format::{load_world, parse_world, save_world};
+    let (world, _) = generate_world(1, UVec3::new(1024, 192, 1024)).unwrap();
+    let dir = std::env::temp_dir().join(format!("glowbrick-test-default-save-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("world.ron");
+    save_world(&world, &path).unwrap();
+    let bytes = std::fs::metadata(&path).unwrap().len();
+    assert!(bytes < 64_000_000, "a {bytes}-byte save of the default world");
+    let loaded = load_world(&path).unwrap();
+    // Pool slots are handed out in load order, so compare bricks, not top cells.
+    assert_eq!(loaded.grid.pooled_bricks(), world.grid.pooled_bricks());
+    for b in 0..world.grid.top_cells().len() as u32 {
+        let at = world.grid.brick_coord(b);
+        assert!(loaded.grid.brick_voxels(at) == world.grid.brick_voxels(at), "brick {at} differs");
+    }
+    assert_eq!(loaded.palette, world.palette);
+    assert_eq!(loaded.views, world.views);
+
+    let text = std::fs::read_to_string(&path).unwrap();
+    let cut = parse_world(&text[..text.len() / 2], "cut");
+    assert!(cut.as_ref().is_err_and(|e| !e.to_string().contains('\n')), "half a save: {:?}", cut.err());
+    // A brick's run lengths that no longer add up to its 512 voxels, three quarters into the file.
+    let runs = text[text.len() * 3 / 4..].find("Runs([(").unwrap() + text.len() * 3 / 4 + "Runs([(".len();
+    let damaged = format!("{}9{}", &text[..runs], &text[runs..]);
+    let error = parse_world(&damaged, "damaged").err().expect("a save with a damaged brick loads");
+    assert!(!error.to_string().contains('\n'), "{error}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
