@@ -204,7 +204,9 @@ fn update_hotbar(
 
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn update_texts(
-    time: Res<Time>,
+    // The real clock: the virtual one clamps each frame to 250 ms, so on a slow adapter the frame time read
+    // "250 ms" (4 fps) while frames took seconds.
+    time: Res<Time<Real>>,
     mut smoothed_dt: Local<f32>,
     hotbar: Res<Hotbar>,
     brush: Res<Brush>,

@@ -96,13 +96,19 @@ fn save_or_load(
                     world.time_of_day = Some(settings.time);
                 }
                 world.objects = Some(saved_objects(objects.iter().map(|(_, o)| o)));
+                let start = std::time::Instant::now();
                 match save_with_backup(&world, &path.0) {
-                    Ok(()) => status.show(format!("saved {}", path.0.display())),
+                    Ok(()) => status.show(format!(
+                        "saved {} ({:.1} MB in {:.2} s)",
+                        path.0.display(),
+                        std::fs::metadata(&path.0).map_or(0, |m| m.len()) as f64 / 1e6,
+                        start.elapsed().as_secs_f64()
+                    )),
                     Err(e) => status.show(format!("could not save {}: {e}", path.0.display())),
                 }
             }
-            SaveAction::Load => match load_path(&path.0) {
-                Ok(loaded) => {
+            SaveAction::Load => match (std::time::Instant::now(), load_path(&path.0)) {
+                (start, Ok(loaded)) => {
                     if let (Some(view), Ok((mut transform, mut player, _))) = (loaded.view(None), camera.single_mut()) {
                         *transform = crate::world::view_transform(view);
                         *player = Player { walking: player.walking, ..Player::looking(view) };
@@ -110,7 +116,7 @@ fn save_or_load(
                     if let (Some(settings), Some(hours)) = (settings.as_mut(), loaded.time_of_day) {
                         settings.time = hours;
                     }
-                    status.show(format!("loaded {}", path.0.display()));
+                    status.show(format!("loaded {} in {:.2} s", path.0.display(), start.elapsed().as_secs_f64()));
                     let saved = loaded.objects.clone();
                     commands.insert_resource(loaded);
                     if let Some(saved) = saved {
@@ -120,7 +126,7 @@ fn save_or_load(
                         });
                     }
                 }
-                Err(e) => status.show(format!("load failed, world unchanged: {e}")),
+                (_, Err(e)) => status.show(format!("load failed, world unchanged: {e}")),
             },
         }
     }
