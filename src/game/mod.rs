@@ -19,6 +19,7 @@ use crate::settings::RenderSettings;
 use crate::world::VoxelWorld;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
+use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use std::path::PathBuf;
 
 /// Game rules without input devices or UI: targeting, actions to edits, undo/redo, save/load.
@@ -53,7 +54,7 @@ pub fn run_game(
     if let Some(model) = model {
         app.insert_resource(model);
     }
-    app.add_plugins(DefaultPlugins.set(WindowPlugin {
+    let plugins = DefaultPlugins.set(WindowPlugin {
         primary_window: Some(Window {
             title: "glowbrick".into(),
             resolution: (window_fit::PREFERRED_SIZE.x as u32, window_fit::PREFERRED_SIZE.y as u32).into(),
@@ -61,36 +62,40 @@ pub fn run_game(
             ..default()
         }),
         ..default()
-    }))
-    .insert_resource(world)
-    .insert_resource(settings)
-    .insert_resource(save_load::SavePath(save_path))
-    .add_plugins((
-        crate::core_plugin::GlowbrickCorePlugin,
-        GameLogicPlugin,
-        player::PlayerPlugin,
-        interaction::InteractionInputPlugin,
-        hud::HudPlugin,
-        settings_panel::SettingsPanelPlugin,
-        objects::GameObjectsPlugin,
-        frame_pacing::FramePacingPlugin,
-    ))
-    .add_systems(Startup, move |mut commands: Commands| {
-        commands.spawn((voxel_camera_bundle(&view), Tonemapping::AcesFitted, player::Player::looking(&view)));
-    })
-    .add_systems(
-        Update,
-        (
-            undo::history_keys,
-            save_load::save_load_keys,
-            models::model_key,
-            clock_keys,
-            lighting_toggle_keys,
-            debug_view_key,
-            window_fit::fit_window_to_screen,
-        ),
-    )
-    .run()
+    });
+    // With pacing on, the frame that reads a key also renders it: pipelined rendering would render the frame before
+    // it first, one more frame of latency (docs/latency.md), for an overlap of CPU work the GPU-bound frame hides.
+    let plugins = if settings.pacing { plugins.disable::<PipelinedRenderingPlugin>() } else { plugins };
+    app.add_plugins(plugins)
+        .insert_resource(world)
+        .insert_resource(settings)
+        .insert_resource(save_load::SavePath(save_path))
+        .add_plugins((
+            crate::core_plugin::GlowbrickCorePlugin,
+            GameLogicPlugin,
+            player::PlayerPlugin,
+            interaction::InteractionInputPlugin,
+            hud::HudPlugin,
+            settings_panel::SettingsPanelPlugin,
+            objects::GameObjectsPlugin,
+            frame_pacing::FramePacingPlugin,
+        ))
+        .add_systems(Startup, move |mut commands: Commands| {
+            commands.spawn((voxel_camera_bundle(&view), Tonemapping::AcesFitted, player::Player::looking(&view)));
+        })
+        .add_systems(
+            Update,
+            (
+                undo::history_keys,
+                save_load::save_load_keys,
+                models::model_key,
+                clock_keys,
+                lighting_toggle_keys,
+                debug_view_key,
+                window_fit::fit_window_to_screen,
+            ),
+        )
+        .run()
 }
 
 /// T moves the clock an hour on (Shift+T back).

@@ -351,8 +351,9 @@ pub struct RenderSettings {
     pub seed: u32,
     /// How the GPU's rays walk the grid (the CPU reference walks it with the DDA; the hits are the same).
     pub traversal: Traversal,
-    /// The game keeps at most one frame of GPU work in flight, so input shows within a frame or two
-    /// (`game::frame_pacing`); off lets the driver queue frames ahead. Only the game window reads it.
+    /// The game renders each frame in the update that reads its input (no pipelined rendering, decided at start)
+    /// and keeps at most one frame of GPU work in flight, so input shows within a frame or two
+    /// (`game::frame_pacing`); off lets Bevy pipeline and the driver queue frames ahead. Only the game reads it.
     pub pacing: bool,
     pub restir: RestirSettings,
     pub gi: GiSettings,

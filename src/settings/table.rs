@@ -256,8 +256,9 @@ pub static SETTINGS: &[Setting] = &[
     Setting {
         key: "pacing",
         section: Section::General,
-        about: "The game keeps at most one frame of GPU work in flight so input shows within a frame or two; off lets \
-                the driver queue frames ahead (more latency, on slow adapters many frames).",
+        about: "The game renders a frame in the update that reads its input (no pipelined rendering; read at start) and \
+                keeps at most one frame of GPU work in flight, so input shows within a frame or two; off: Bevy's \
+                pipelined rendering and the driver's own queue (a frame or more of extra latency).",
         field: &Choice { get: |s| s.pacing, set: |s, v| s.pacing = v },
     },
     Setting {

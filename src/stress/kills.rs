@@ -19,9 +19,10 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// Two worlds that differ, big enough that one save takes tens of milliseconds.
+/// Two worlds that differ, big enough that one save takes tens of milliseconds (a cycle of two saves and a backup
+/// copy about 50-100 ms: most kills land inside a write).
 pub fn two_worlds() -> Result<(VoxelWorld, VoxelWorld), String> {
-    let a = generated_world(21, UVec3::new(160, 48, 160)).map_err(|e| e.to_string())?;
+    let a = generated_world(21, UVec3::new(320, 96, 320)).map_err(|e| e.to_string())?;
     let mut b = a.clone();
     b.apply(Edit::FillBox { min: IVec3::new(10, 30, 10), max: IVec3::new(150, 40, 150), material: 7 })
         .map_err(|e| e.to_string())?;
