@@ -76,6 +76,7 @@ fn tiny_and_flat_worlds_generate_without_a_village() {
 /// variation included), and a save cut short or with a damaged brick is one error, not a panic.
 #[test]
 fn the_default_world_saves_and_loads_back_and_a_damaged_save_is_one_error() {
+    let _alone = crate::EXCLUSIVE.lock().unwrap_or_else(|e| e.into_inner());
     use glowbrick::world::format::{load_world, parse_world, save_world};
     let (world, _) = generate_world(1, UVec3::new(1024, 192, 1024)).unwrap();
     let dir = std::env::temp_dir().join(format!("glowbrick-test-default-save-{}", std::process::id()));

@@ -23,6 +23,10 @@ mod world_edits;
 mod world_files;
 mod world_upload;
 
+/// Held by the tests whose measurement a busy neighbour would skew (the save-kill test spreads its kills over a
+/// save cycle it timed once) and by the heaviest ones (the default world's save), so the two never overlap.
+pub static EXCLUSIVE: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// The counting allocator of the `glowbrick` binary, so the fuzz tests can bound what an input allocates.
 #[global_allocator]
 static ALLOCATOR: glowbrick::alloc_watch::WatchingAllocator = glowbrick::alloc_watch::WatchingAllocator;

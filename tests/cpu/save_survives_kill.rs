@@ -17,6 +17,7 @@ fn saver_child() {
 
 #[test]
 fn killed_saves_leave_a_complete_save() {
+    let _alone = crate::EXCLUSIVE.lock().unwrap_or_else(|e| e.into_inner());
     let dir = std::env::temp_dir().join(format!("glowbrick-kill-{}", std::process::id()));
     let saver = |path: &std::path::Path| {
         let mut command = Command::new(std::env::current_exe().unwrap());
