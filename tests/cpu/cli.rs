@@ -386,3 +386,20 @@ fn play_without_a_gpu_adapter_says_which_driver_to_install() {
     assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
     assert!(stderr.contains("no GPU adapter") && stderr.contains("mesa-vulkan-drivers"), "{stderr}");
 }
+
+/// `play --view` of a view the world lacks names the views it has, in one line, before any window opens; `generate`
+/// reports what it made.
+#[test]
+fn play_at_a_missing_view_lists_the_views_and_generate_reports_its_world() {
+    let out = glowbrick(&["play", "--size", "128,48,128", "--view", "nowhere"]);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("no view 'nowhere'") && stderr.contains("village, house"), "{stderr}");
+
+    let out = glowbrick(&["generate", "--size", "128,48,128", "--seed", "3"]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(stdout.contains("generated 128x48x128 (seed 3)") && stdout.contains("houses"), "{stdout}");
+    assert!(stdout.contains("views: village, house, lantern, overview"), "{stdout}");
+}
