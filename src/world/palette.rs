@@ -29,11 +29,7 @@ fn is_zero(v: &f32) -> bool {
 /// The hash of a voxel position behind per-voxel variation: the same bits on the CPU and in WGSL
 /// (`voxel_hash` in `shaders/lib/world.wgsl`).
 pub fn voxel_hash(voxel: IVec3) -> u32 {
-    let pcg = |v: u32| {
-        let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
-        let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
-        (word >> 22) ^ word
-    };
+    let pcg = super::terrain::hash_u32;
     pcg(voxel.x as u32 ^ pcg(voxel.y as u32 ^ pcg(voxel.z as u32)))
 }
 
