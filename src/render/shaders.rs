@@ -1,6 +1,9 @@
 //! The WGSL, embedded at compile time so the binary runs from any directory. `shaders/lib/` holds the libraries
 //! every pass imports (`glowbrick::world`, `::traversal`, `::random`, `::guards`, `::lights`, `::frame`,
 //! `::constants`, `::counters`); `shaders/restir/`, `shaders/gi/` and `shaders/denoise/` one technique each.
+//!
+//! `GLOWBRICK_SHADERS=DIR` reads every file from `DIR` (laid out as `shaders/`) instead, when the process starts:
+//! a shader change is tried, or two variants timed against each other, with one binary and no rebuild.
 
 use bevy::prelude::*;
 use bevy::shader::Shader;
@@ -36,12 +39,20 @@ pub const SOURCES: [(&str, &str); 22] = [
 pub struct GlowbrickShaders(pub Vec<(&'static str, Handle<Shader>)>);
 
 impl GlowbrickShaders {
-    /// Adds every shader to the asset store.
+    /// Adds every shader to the asset store: the embedded sources, or those of `$GLOWBRICK_SHADERS`.
     pub fn load(shaders: &mut Assets<Shader>) -> Self {
+        let sources = match std::env::var_os("GLOWBRICK_SHADERS") {
+            Some(dir) => read_sources(std::path::Path::new(&dir)).unwrap_or_else(|error| {
+                // Read before any window or device exists: one line and out, like any other bad input.
+                eprintln!("error: GLOWBRICK_SHADERS: {error}");
+                std::process::exit(2);
+            }),
+            None => SOURCES.iter().map(|&(path, source)| (path, source.to_string())).collect(),
+        };
         GlowbrickShaders(
-            SOURCES
-                .iter()
-                .map(|&(path, source)| (path, shaders.add(Shader::from_wgsl(source, format!("glowbrick/{path}")))))
+            sources
+                .into_iter()
+                .map(|(path, source)| (path, shaders.add(Shader::from_wgsl(source, format!("glowbrick/{path}")))))
                 .collect(),
         )
     }
@@ -49,5 +60,33 @@ impl GlowbrickShaders {
     /// The handle of the shader at `path` (one of `SOURCES`; a typo is a programming error caught by every test).
     pub fn get(&self, path: &str) -> Handle<Shader> {
         self.0.iter().find(|(p, _)| *p == path).map(|(_, h)| h.clone()).unwrap_or_else(|| panic!("no shader {path}"))
+    }
+}
+
+/// Every file of `SOURCES` read from `dir`; the first missing or unreadable one is the error.
+pub fn read_sources(dir: &std::path::Path) -> Result<Vec<(&'static str, String)>, String> {
+    SOURCES
+        .iter()
+        .map(|&(path, _)| {
+            let file = dir.join(path);
+            std::fs::read_to_string(&file).map(|source| (path, source)).map_err(|e| format!("{}: {e}", file.display()))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_override_folder_reads_every_shader_and_names_a_missing_one() {
+        let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+        let read = read_sources(&shipped).unwrap();
+        assert_eq!(read.len(), SOURCES.len());
+        for ((path, source), (embedded_path, embedded)) in read.iter().zip(SOURCES) {
+            assert_eq!((*path, source.as_str()), (embedded_path, embedded));
+        }
+        let error = read_sources(&shipped.join("restir")).unwrap_err();
+        assert!(error.contains("lib/constants.wgsl"), "{error}");
     }
 }

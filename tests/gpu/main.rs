@@ -89,6 +89,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             an_edit_retraces_only_the_entries_its_bricks_can_reach_and_the_light_follows,
             the_gi_cache_converges_to_the_path_traced_reference_in_the_cornell_box,
             the_gi_cache_converges_to_the_path_traced_reference_in_the_window_room,
+            the_gi_cache_converges_with_per_voxel_detail,
             two_cameras_update_the_cache_once_per_frame,
             freeing_entries_keeps_the_rest_of_their_probe_chains_reachable,
             the_cache_restarts_its_blends_only_when_the_light_changes,
