@@ -4,6 +4,7 @@
 #define_import_path glowbrick::lights
 
 #import glowbrick::traversal::{trace_scene, INF}
+#import glowbrick::world::world_info
 #import glowbrick::random::{Rng, rng_next, rng_next_u32}
 #import glowbrick::constants::{RAY_OFFSET, PI, LIGHT_FACES_SHIFT, LIGHT_SIZE_MASK, BRICK_SIZE, NO_COLUMN, LIGHT_HASH_X,
     LIGHT_HASH_Y, LIGHT_HASH_Z, LIGHT_HASH_MIX_1, LIGHT_HASH_MIX_2}
@@ -46,6 +47,8 @@ struct SceneLighting {
 // Light cube -> alias column, open addressing at load <= 1/2 (src/lights/index.rs builds it; an entry is only the
 // column, the key is checked against the light itself).
 @group(2) @binding(3) var<storage, read> light_index: array<u32>;
+// One bit per brick of the world (top-grid order, 32 a word): the brick holds a light (src/lights/bricks.rs).
+@group(2) @binding(4) var<storage, read> light_bricks: array<u32>;
 
 // Sky radiance in direction `dir`, not counting the disk (lights::daylight::Daylight::sky).
 fn sky(dir: vec3<f32>) -> vec3<f32> {
@@ -182,6 +185,32 @@ fn light_at_voxel(p: vec3<i32>) -> u32 {
         return column;
     }
     return find_light(p & vec3(-BRICK_SIZE), BRICK_SIZE);
+}
+
+// Whether brick b holds a light: one whose cube lies in it, so no voxel outside such bricks belongs to a light.
+fn brick_has_light(b: vec3<i32>) -> bool {
+    let dims = world_info.bricks;
+    if any(b < vec3(0)) || any(b >= dims) {
+        return false;
+    }
+    let i = u32(b.x) + u32(dims.x) * (u32(b.y) + u32(dims.y) * u32(b.z));
+    return ((light_bricks[i >> 5u] >> (i & 31u)) & 1u) == 1u;
+}
+
+// Whether any brick overlapping the voxel box [lo, hi] holds a light.
+fn light_in_box(lo: vec3<i32>, hi: vec3<i32>) -> bool {
+    let b0 = lo >> vec3(3u);
+    let b1 = hi >> vec3(3u);
+    for (var z = b0.z; z <= b1.z; z++) {
+        for (var y = b0.y; y <= b1.y; y++) {
+            for (var x = b0.x; x <= b1.x; x++) {
+                if brick_has_light(vec3(x, y, z)) {
+                    return true;
+                }
+            }
+        }
+    }
+    return false;
 }
 
 fn light_size(light: Light) -> i32 {

@@ -10,18 +10,20 @@
 //! - Candidates are drawn from an alias table over emitted power (`alias`), rebuilt when the pool changed.
 
 pub mod alias;
+pub mod bricks;
 pub mod daylight;
 pub mod index;
 pub mod plugin;
 pub mod summary;
 
 pub use alias::{AliasEntry, AliasTable};
+pub use bricks::LightBricks;
 pub use index::LightIndex;
 
 use crate::colour::luminance;
 use crate::world::grid::{BRICK_SIZE, BrickCell, Voxel};
 use crate::world::{AIR, VoxelWorld};
-use bevy::math::IVec3;
+use bevy::math::{IVec3, UVec3};
 use bevy::prelude::Resource;
 use std::collections::{BTreeSet, HashMap};
 
@@ -76,6 +78,10 @@ pub struct LightPool {
     alias: AliasTable,
     /// Light cube -> alias column, rebuilt with the alias table.
     index: LightIndex,
+    /// The bricks holding a light, rebuilt with the alias table.
+    bricks: LightBricks,
+    /// The world's size in bricks (what `bricks` spans).
+    brick_dims: UVec3,
     alias_stale: bool,
     /// Voxel lights per brick, so edits can skip bricks that have none and can have none.
     voxel_lights_per_brick: HashMap<IVec3, u32>,
@@ -151,7 +157,7 @@ pub fn brick_light_at(world: &VoxelWorld, b: IVec3) -> Option<Light> {
 impl LightPool {
     /// Scans the whole world (for loading; edits use `update_region`).
     pub fn from_world(world: &VoxelWorld) -> Self {
-        let mut pool = LightPool::default();
+        let mut pool = LightPool { brick_dims: world.grid.brick_dims(), ..Default::default() };
         let grid = &world.grid;
         for (index, &raw) in grid.top_cells().iter().enumerate() {
             if let BrickCell::Homogeneous(_) = BrickCell::decode(raw)
@@ -175,6 +181,7 @@ impl LightPool {
     /// brick-light status flipped (its 512 voxels stop or start being voxel lights). Cost follows the box, not
     /// the world.
     pub fn update_region(&mut self, world: &VoxelWorld, min: IVec3, max: IVec3) {
+        self.brick_dims = world.grid.brick_dims();
         let size = world.grid.size().as_ivec3();
         let lo = (min.min(max) - IVec3::ONE).max(IVec3::ZERO);
         let hi = (min.max(max) + IVec3::ONE).min(size - IVec3::ONE);
@@ -338,6 +345,14 @@ impl LightPool {
         &self.index
     }
 
+    /// The bricks holding a light (`bricks`), rebuilt first if the pool changed since they were built.
+    pub fn light_bricks(&mut self) -> &LightBricks {
+        if self.alias_stale {
+            self.rebuild_alias();
+        }
+        &self.bricks
+    }
+
     /// The cube (corner, edge) of the light in `slot`, if the slot is live.
     pub fn cube(&self, slot: u32) -> Option<(IVec3, i32)> {
         self.slots.get(slot as usize)?.light.as_ref().map(|l| (l.min, l.size))
@@ -348,11 +363,13 @@ impl LightPool {
         self.alias_stale
     }
 
-    /// Rebuilds the alias table and the light index, in time linear in the number of lights.
+    /// Rebuilds the alias table, the light index and the light bricks, in time linear in the number of lights
+    /// (and the world's bricks / 32 for the last).
     pub fn rebuild_alias(&mut self) {
         let lights: Vec<(u32, f32)> = self.lights().map(|(slot, l)| (slot, l.power)).collect();
         self.alias = AliasTable::build(&lights);
         self.index = LightIndex::build(&self.alias, |slot| self.cube(slot));
+        self.bricks = LightBricks::build(self.brick_dims, self.lights().map(|(_, l)| l.min));
         self.alias_stale = false;
     }
 }

@@ -62,9 +62,16 @@ proptest! {
         for e in edits {
             edit(&mut world, &mut pool, e);
         }
-        let rescan = LightPool::from_world(&world);
+        let mut rescan = LightPool::from_world(&world);
         prop_assert_eq!(as_set(&pool), as_set(&rescan));
         prop_assert_eq!(pool.counts(), rescan.counts());
+        // The light bricks (what lets ReSTIR skip its local-light scan) are those of a rescan, and mark every
+        // light's brick.
+        prop_assert_eq!(pool.light_bricks(), rescan.light_bricks());
+        let bricks = pool.light_bricks().clone();
+        for (_, light) in pool.lights() {
+            prop_assert!(bricks.contains(light.min >> 3_i32));
+        }
         // The light index (what ReSTIR's local candidates look up) finds every light at its own slot after the
         // edits, and nothing where there is no light.
         let index = pool.light_index().clone();

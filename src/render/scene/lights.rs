@@ -1,5 +1,5 @@
 //! The scene's lighting on the GPU (group 2 of every voxel pass, `shaders/lib/lights.wgsl`): the light pool's
-//! changed slots, its alias table and light index when they changed, and this frame's `SceneLighting` (sun, sky, mode, light
+//! changed slots, its alias table, light index and light bricks when they changed, and this frame's `SceneLighting` (sun, sky, mode, light
 //! count). Staged in the main world (PostUpdate), written to GPU buffers in the render world (PrepareResources).
 
 use super::staging::{Fit, Staging, upload};
@@ -93,6 +93,8 @@ pub struct LightUpload {
     pub alias: Option<Arc<Vec<AliasEntry>>>,
     /// The light index (light cube -> alias column), with the alias table.
     pub index: Option<Arc<Vec<u32>>>,
+    /// The bricks holding a light (`lights::LightBricks`), with the alias table.
+    pub bricks: Option<Arc<Vec<u32>>>,
     pub light_count: u32,
 }
 
@@ -139,6 +141,7 @@ pub fn stage_light_upload(
         let entries = pool.alias().entries.clone();
         upload.alias = Some(Arc::new(entries));
         upload.index = Some(Arc::new(pool.light_index().entries.clone()));
+        upload.bricks = Some(Arc::new(pool.light_bricks().gpu_words()));
     }
 }
 
@@ -148,9 +151,10 @@ pub struct GpuLights {
     pub lights: Buffer,
     pub alias: Buffer,
     pub index: Buffer,
+    pub bricks: Buffer,
     pub light_count: u32,
     pub has_lights: bool,
-    /// Group 2 of the voxel passes: slots, alias table, scene lighting, light index.
+    /// Group 2 of the voxel passes: slots, alias table, scene lighting, light index, light bricks.
     pub bind_group: BindGroup,
     /// Whether the lights changed this frame (accumulation restarts).
     pub changed: bool,
@@ -171,6 +175,7 @@ impl Default for LightsLayout {
                     storage_buffer_read_only_sized(false, None),
                     uniform_buffer_sized(false, NonZeroU64::new(size_of::<SceneLighting>() as u64)),
                     storage_buffer_read_only_sized(false, None),
+                    storage_buffer_read_only_sized(false, None),
                 ),
             ),
         ))
@@ -186,7 +191,7 @@ struct LightsBinding<'a> {
 }
 
 impl LightsBinding<'_> {
-    fn bind(&self, lights: &Buffer, alias: &Buffer, index: &Buffer) -> BindGroup {
+    fn bind(&self, lights: &Buffer, alias: &Buffer, index: &Buffer, bricks: &Buffer) -> BindGroup {
         self.device.create_bind_group(
             "glowbrick_lights",
             &self.cache.get_bind_group_layout(&self.layout.0),
@@ -195,6 +200,7 @@ impl LightsBinding<'_> {
                 alias.as_entire_binding(),
                 self.scene.as_entire_binding(),
                 index.as_entire_binding(),
+                bricks.as_entire_binding(),
             )),
         )
     }
@@ -206,6 +212,7 @@ pub struct PendingLightUploads {
     lights: Staging<GpuLight>,
     alias: Staging<AliasEntry>,
     index: Staging<u32>,
+    bricks: Staging<u32>,
     /// The latest upload's light count (`None`: nothing extracted since the last write).
     light_count: Option<u32>,
     /// Whether any of the queued uploads changed a light.
@@ -228,6 +235,9 @@ impl PendingLightUploads {
         }
         if let Some(entries) = &upload.index {
             self.index.whole(padded_index(entries));
+        }
+        if let Some(words) = &upload.bricks {
+            self.bricks.whole(words.clone());
         }
     }
 }
@@ -252,12 +262,14 @@ fn padded_index(entries: &Arc<Vec<u32>>) -> Arc<Vec<u32>> {
 const LIGHTS_LABEL: &str = "glowbrick_lights";
 const ALIAS_LABEL: &str = "glowbrick_light_alias";
 const INDEX_LABEL: &str = "glowbrick_light_index";
+const BRICKS_LABEL: &str = "glowbrick_light_bricks";
 /// The slot buffer is sized by the main world (`arrayLength` bounds reservoir slots) and the shader masks the
 /// index with `arrayLength - 1`, so both are exactly their contents; the alias table may be larger than the
 /// lights it holds.
 const LIGHTS_FIT: Fit = Fit::Exact;
 const ALIAS_FIT: Fit = Fit::AtLeast;
 const INDEX_FIT: Fit = Fit::Exact;
+const BRICKS_FIT: Fit = Fit::AtLeast;
 
 /// Applies the queued light uploads and writes this frame's scene lighting.
 #[allow(clippy::too_many_arguments)]
@@ -303,16 +315,21 @@ fn create_gpu_lights(
     if !batch.index.has_whole() {
         batch.index.whole(padded_index(&Arc::default()));
     }
+    if !batch.bricks.has_whole() {
+        batch.bricks.whole(Arc::new(vec![0]));
+    }
     let device = binding.device;
     let lights = upload(&mut batch.lights, None, LIGHTS_FIT, LIGHTS_LABEL, device, queue)?;
     let alias = upload(&mut batch.alias, None, ALIAS_FIT, ALIAS_LABEL, device, queue)?;
     let index = upload(&mut batch.index, None, INDEX_FIT, INDEX_LABEL, device, queue)?;
+    let bricks = upload(&mut batch.bricks, None, BRICKS_FIT, BRICKS_LABEL, device, queue)?;
     let light_count = batch.light_count.unwrap_or(0);
     Some(GpuLights {
-        bind_group: binding.bind(&lights, &alias, &index),
+        bind_group: binding.bind(&lights, &alias, &index, &bricks),
         lights,
         alias,
         index,
+        bricks,
         light_count,
         has_lights: light_count > 0,
         changed: true,
@@ -345,7 +362,11 @@ fn apply_light_uploads(
         gpu.index = buffer;
         rebind = true;
     }
+    if let Some(buffer) = upload(&mut batch.bricks, Some(&gpu.bricks), BRICKS_FIT, BRICKS_LABEL, device, queue) {
+        gpu.bricks = buffer;
+        rebind = true;
+    }
     if rebind {
-        gpu.bind_group = binding.bind(&gpu.lights, &gpu.alias, &gpu.index);
+        gpu.bind_group = binding.bind(&gpu.lights, &gpu.alias, &gpu.index, &gpu.bricks);
     }
 }
