@@ -45,10 +45,10 @@ struct SceneLighting {
 @group(2) @binding(1) var<storage, read> alias_table: array<AliasEntry>;
 @group(2) @binding(2) var<uniform> scene: SceneLighting;
 // Light cube -> alias column, open addressing at load <= 1/2 (src/lights/index.rs builds it; an entry is only the
-// column, the key is checked against the light itself).
+// column, the key is checked against the light itself), then one bit per brick of the world (top-grid order, 32
+// a word): the brick holds a light (src/lights/bricks.rs). Word 0 is the index's capacity, its entries follow
+// from word 1, the bricks' words after them (render::scene::lights::gpu_light_index).
 @group(2) @binding(3) var<storage, read> light_index: array<u32>;
-// One bit per brick of the world (top-grid order, 32 a word): the brick holds a light (src/lights/bricks.rs).
-@group(2) @binding(4) var<storage, read> light_bricks: array<u32>;
 
 // Sky radiance in direction `dir`, not counting the disk (lights::daylight::Daylight::sky).
 fn sky(dir: vec3<f32>) -> vec3<f32> {
@@ -162,10 +162,10 @@ fn light_hash(min: vec3<i32>, size: i32) -> u32 {
 
 // The alias column of the light whose cube is (min, size), or NO_COLUMN.
 fn find_light(min: vec3<i32>, size: i32) -> u32 {
-    let mask = arrayLength(&light_index) - 1u;
+    let mask = light_index[0] - 1u;
     var i = light_hash(min, size) & mask;
     for (var probe = 0u; probe <= mask; probe++) {
-        let column = light_index[i];
+        let column = light_index[1u + i];
         if column == NO_COLUMN {
             break;
         }
@@ -194,7 +194,7 @@ fn brick_has_light(b: vec3<i32>) -> bool {
         return false;
     }
     let i = u32(b.x) + u32(dims.x) * (u32(b.y) + u32(dims.y) * u32(b.z));
-    return ((light_bricks[i >> 5u] >> (i & 31u)) & 1u) == 1u;
+    return ((light_index[1u + light_index[0] + (i >> 5u)] >> (i & 31u)) & 1u) == 1u;
 }
 
 // Whether any brick overlapping the voxel box [lo, hi] holds a light.

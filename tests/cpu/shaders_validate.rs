@@ -149,7 +149,6 @@ fn twins() -> Vec<Twin> {
             SceneLighting { sun, sun_radiance, sky_zenith, sky_horizon, mode, power_pick, light_count, shadows }
         ),
         sized("light_index", None, word, 1),
-        sized("light_bricks", None, word, 1),
         // Group 3: the GI cache.
         twin!(
             "gi",

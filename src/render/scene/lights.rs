@@ -1,10 +1,10 @@
 //! The scene's lighting on the GPU (group 2 of every voxel pass, `shaders/lib/lights.wgsl`): the light pool's
-//! changed slots, its alias table, light index and light bricks when they changed, and this frame's `SceneLighting` (sun, sky, mode, light
+//! changed slots, its alias table and light index (with the light bricks) when they changed, and this frame's `SceneLighting` (sun, sky, mode, light
 //! count). Staged in the main world (PostUpdate), written to GPU buffers in the render world (PrepareResources).
 
 use super::staging::{Fit, Staging, upload};
 use crate::lights::daylight::Daylight;
-use crate::lights::{AliasEntry, Light, LightPool};
+use crate::lights::{AliasEntry, Light, LightBricks, LightPool};
 use crate::render::gpu_types::{GpuLight, LIGHT_FACES_SHIFT, SceneLighting};
 use crate::settings::{LightPick, RenderSettings};
 use bevy::prelude::*;
@@ -91,10 +91,8 @@ pub struct LightUpload {
     pub slots: Vec<(u32, GpuLight)>,
     /// The alias table, when it changed.
     pub alias: Option<Arc<Vec<AliasEntry>>>,
-    /// The light index (light cube -> alias column), with the alias table.
+    /// The light index (light cube -> alias column) and the light bricks, with the alias table (`gpu_light_index`).
     pub index: Option<Arc<Vec<u32>>>,
-    /// The bricks holding a light (`lights::LightBricks`), with the alias table.
-    pub bricks: Option<Arc<Vec<u32>>>,
     pub light_count: u32,
 }
 
@@ -140,9 +138,20 @@ pub fn stage_light_upload(
     if pool.alias_is_stale() || upload.full.is_some() {
         let entries = pool.alias().entries.clone();
         upload.alias = Some(Arc::new(entries));
-        upload.index = Some(Arc::new(pool.light_index().entries.clone()));
-        upload.bricks = Some(Arc::new(pool.light_bricks().gpu_words()));
+        let index = pool.light_index().entries.clone();
+        upload.index = Some(Arc::new(gpu_light_index(&index, pool.light_bricks())));
     }
+}
+
+/// Binding 3 of group 2 as `shaders/lib/lights.wgsl` reads it: the light index's capacity, its entries, then the
+/// light bricks' words. One buffer rather than a binding of their own: a fifth binding in this group made
+/// lavapipe's memory grow by megabytes every frame while the GI cache ran (2026-11-28).
+pub fn gpu_light_index(entries: &[u32], bricks: &LightBricks) -> Vec<u32> {
+    let mut words = Vec::with_capacity(1 + entries.len());
+    words.push(entries.len() as u32);
+    words.extend_from_slice(entries);
+    words.extend(bricks.gpu_words());
+    words
 }
 
 /// Render-world light buffers. Passes read `light_count` / `has_lights` to skip themselves.
@@ -151,10 +160,9 @@ pub struct GpuLights {
     pub lights: Buffer,
     pub alias: Buffer,
     pub index: Buffer,
-    pub bricks: Buffer,
     pub light_count: u32,
     pub has_lights: bool,
-    /// Group 2 of the voxel passes: slots, alias table, scene lighting, light index, light bricks.
+    /// Group 2 of the voxel passes: slots, alias table, scene lighting, light index.
     pub bind_group: BindGroup,
     /// Whether the lights changed this frame (accumulation restarts).
     pub changed: bool,
@@ -175,7 +183,6 @@ impl Default for LightsLayout {
                     storage_buffer_read_only_sized(false, None),
                     uniform_buffer_sized(false, NonZeroU64::new(size_of::<SceneLighting>() as u64)),
                     storage_buffer_read_only_sized(false, None),
-                    storage_buffer_read_only_sized(false, None),
                 ),
             ),
         ))
@@ -191,7 +198,7 @@ struct LightsBinding<'a> {
 }
 
 impl LightsBinding<'_> {
-    fn bind(&self, lights: &Buffer, alias: &Buffer, index: &Buffer, bricks: &Buffer) -> BindGroup {
+    fn bind(&self, lights: &Buffer, alias: &Buffer, index: &Buffer) -> BindGroup {
         self.device.create_bind_group(
             "glowbrick_lights",
             &self.cache.get_bind_group_layout(&self.layout.0),
@@ -200,7 +207,6 @@ impl LightsBinding<'_> {
                 alias.as_entire_binding(),
                 self.scene.as_entire_binding(),
                 index.as_entire_binding(),
-                bricks.as_entire_binding(),
             )),
         )
     }
@@ -212,7 +218,6 @@ pub struct PendingLightUploads {
     lights: Staging<GpuLight>,
     alias: Staging<AliasEntry>,
     index: Staging<u32>,
-    bricks: Staging<u32>,
     /// The latest upload's light count (`None`: nothing extracted since the last write).
     light_count: Option<u32>,
     /// Whether any of the queued uploads changed a light.
@@ -236,9 +241,6 @@ impl PendingLightUploads {
         if let Some(entries) = &upload.index {
             self.index.whole(padded_index(entries));
         }
-        if let Some(words) = &upload.bricks {
-            self.bricks.whole(words.clone());
-        }
     }
 }
 
@@ -254,22 +256,19 @@ fn padded_alias(entries: &Arc<Vec<AliasEntry>>) -> Arc<Vec<AliasEntry>> {
     if entries.is_empty() { Arc::new(vec![AliasEntry::default()]) } else { entries.clone() }
 }
 
-/// The light index, one empty entry when there is none yet.
-fn padded_index(entries: &Arc<Vec<u32>>) -> Arc<Vec<u32>> {
-    if entries.is_empty() { Arc::new(vec![crate::lights::index::NO_COLUMN]) } else { entries.clone() }
+/// The light index, one empty entry and no light brick when there is none yet.
+fn padded_index(words: &Arc<Vec<u32>>) -> Arc<Vec<u32>> {
+    if words.is_empty() { Arc::new(vec![1, crate::lights::index::NO_COLUMN, 0]) } else { words.clone() }
 }
 
 const LIGHTS_LABEL: &str = "glowbrick_lights";
 const ALIAS_LABEL: &str = "glowbrick_light_alias";
 const INDEX_LABEL: &str = "glowbrick_light_index";
-const BRICKS_LABEL: &str = "glowbrick_light_bricks";
-/// The slot buffer is sized by the main world (`arrayLength` bounds reservoir slots) and the shader masks the
-/// index with `arrayLength - 1`, so both are exactly their contents; the alias table may be larger than the
-/// lights it holds.
+/// The slot buffer is sized by the main world (`arrayLength` bounds reservoir slots), so it is exactly its
+/// contents; the alias table and the light index may be larger than what they hold (the index says its capacity).
 const LIGHTS_FIT: Fit = Fit::Exact;
 const ALIAS_FIT: Fit = Fit::AtLeast;
-const INDEX_FIT: Fit = Fit::Exact;
-const BRICKS_FIT: Fit = Fit::AtLeast;
+const INDEX_FIT: Fit = Fit::AtLeast;
 
 /// Applies the queued light uploads and writes this frame's scene lighting.
 #[allow(clippy::too_many_arguments)]
@@ -315,21 +314,16 @@ fn create_gpu_lights(
     if !batch.index.has_whole() {
         batch.index.whole(padded_index(&Arc::default()));
     }
-    if !batch.bricks.has_whole() {
-        batch.bricks.whole(Arc::new(vec![0]));
-    }
     let device = binding.device;
     let lights = upload(&mut batch.lights, None, LIGHTS_FIT, LIGHTS_LABEL, device, queue)?;
     let alias = upload(&mut batch.alias, None, ALIAS_FIT, ALIAS_LABEL, device, queue)?;
     let index = upload(&mut batch.index, None, INDEX_FIT, INDEX_LABEL, device, queue)?;
-    let bricks = upload(&mut batch.bricks, None, BRICKS_FIT, BRICKS_LABEL, device, queue)?;
     let light_count = batch.light_count.unwrap_or(0);
     Some(GpuLights {
-        bind_group: binding.bind(&lights, &alias, &index, &bricks),
+        bind_group: binding.bind(&lights, &alias, &index),
         lights,
         alias,
         index,
-        bricks,
         light_count,
         has_lights: light_count > 0,
         changed: true,
@@ -362,11 +356,22 @@ fn apply_light_uploads(
         gpu.index = buffer;
         rebind = true;
     }
-    if let Some(buffer) = upload(&mut batch.bricks, Some(&gpu.bricks), BRICKS_FIT, BRICKS_LABEL, device, queue) {
-        gpu.bricks = buffer;
-        rebind = true;
-    }
     if rebind {
-        gpu.bind_group = binding.bind(&gpu.lights, &gpu.alias, &gpu.index, &gpu.bricks);
+        gpu.bind_group = binding.bind(&gpu.lights, &gpu.alias, &gpu.index);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lights::index::NO_COLUMN;
+    use bevy::math::{IVec3, UVec3};
+
+    #[test]
+    fn the_gpu_light_index_is_its_capacity_its_entries_then_the_light_bricks() {
+        let bricks = LightBricks::build(UVec3::new(40, 1, 1), [IVec3::new(8 * 33, 0, 0)].into_iter());
+        let words = gpu_light_index(&[7, 3, NO_COLUMN, 1], &bricks);
+        assert_eq!(words, vec![4, 7, 3, NO_COLUMN, 1, 0, 1 << 1]);
+        assert_eq!(*padded_index(&Arc::default()), vec![1, NO_COLUMN, 0]);
     }
 }
