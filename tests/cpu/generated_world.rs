@@ -101,7 +101,7 @@ fn the_default_world_saves_and_loads_back_and_a_damaged_save_is_one_error() {
     // A brick's run lengths that no longer add up to its 512 voxels, three quarters into the file.
     let runs = text[text.len() * 3 / 4..].find("Runs([(").unwrap() + text.len() * 3 / 4 + "Runs([(".len();
     let damaged = format!("{}9{}", &text[..runs], &text[runs..]);
-    let error = parse_world(&damaged, "damaged").err().expect("a save with a damaged brick loads");
+    let error = parse_world(&damaged, "damaged").expect_err("a save with a damaged brick is refused");
     assert!(!error.to_string().contains('\n'), "{error}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -61,7 +61,7 @@ fn grow_tree(world: &mut VoxelWorld, base: IVec3, trunk: i32, crown: i32, hash: 
                 // A squashed ball, its rim thinned by the hash so crowns are not perfect spheres.
                 let r2 = dx * dx + dz * dz + 2 * dy * dy;
                 let leaf_hash = hash_u32(hash ^ ((dx + 8) | (dy + 8) << 4 | (dz + 8) << 8) as u32);
-                if r2 > crown * crown + 1 || (r2 >= crown * crown && leaf_hash % 3 == 0) {
+                if r2 > crown * crown + 1 || (r2 >= crown * crown && leaf_hash.is_multiple_of(3)) {
                     continue;
                 }
                 let p = top + d + IVec3::Y;
