@@ -107,27 +107,32 @@ fn save_or_load(
                     Err(e) => status.show(format!("could not save {}: {e}", path.0.display())),
                 }
             }
-            SaveAction::Load => match (std::time::Instant::now(), load_path(&path.0)) {
-                (start, Ok(loaded)) => {
-                    if let (Some(view), Ok((mut transform, mut player, _))) = (loaded.view(None), camera.single_mut()) {
-                        *transform = crate::world::view_transform(view);
-                        *player = Player { walking: player.walking, ..Player::looking(view) };
+            SaveAction::Load => {
+                let start = std::time::Instant::now();
+                match load_path(&path.0) {
+                    Ok(loaded) => {
+                        if let (Some(view), Ok((mut transform, mut player, _))) =
+                            (loaded.view(None), camera.single_mut())
+                        {
+                            *transform = crate::world::view_transform(view);
+                            *player = Player { walking: player.walking, ..Player::looking(view) };
+                        }
+                        if let (Some(settings), Some(hours)) = (settings.as_mut(), loaded.time_of_day) {
+                            settings.time = hours;
+                        }
+                        status.show(format!("loaded {} in {:.2} s", path.0.display(), start.elapsed().as_secs_f64()));
+                        let saved = loaded.objects.clone();
+                        commands.insert_resource(loaded);
+                        if let Some(saved) = saved {
+                            objects.iter().for_each(|(entity, _)| commands.entity(entity).despawn());
+                            commands.queue(move |app_world: &mut World| {
+                                super::objects::spawn_saved_or_report(app_world, &saved)
+                            });
+                        }
                     }
-                    if let (Some(settings), Some(hours)) = (settings.as_mut(), loaded.time_of_day) {
-                        settings.time = hours;
-                    }
-                    status.show(format!("loaded {} in {:.2} s", path.0.display(), start.elapsed().as_secs_f64()));
-                    let saved = loaded.objects.clone();
-                    commands.insert_resource(loaded);
-                    if let Some(saved) = saved {
-                        objects.iter().for_each(|(entity, _)| commands.entity(entity).despawn());
-                        commands.queue(move |app_world: &mut World| {
-                            super::objects::spawn_saved_or_report(app_world, &saved)
-                        });
-                    }
+                    Err(e) => status.show(format!("load failed, world unchanged: {e}")),
                 }
-                (_, Err(e)) => status.show(format!("load failed, world unchanged: {e}")),
-            },
+            }
         }
     }
 }

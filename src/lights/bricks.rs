@@ -38,9 +38,9 @@ impl LightBricks {
         self.index(b).is_some_and(|i| self.words[i / 32] >> (i % 32) & 1 == 1)
     }
 
-    /// The words as the GPU holds them (at least one: storage buffers cannot be empty).
-    pub fn gpu_words(&self) -> Vec<u32> {
-        if self.words.is_empty() { vec![0] } else { self.words.clone() }
+    /// The words as the GPU holds them.
+    pub fn words(&self) -> &[u32] {
+        &self.words
     }
 }
 
@@ -60,7 +60,7 @@ mod tests {
         assert_eq!(marked, vec![IVec3::new(0, 0, 0), IVec3::new(2, 1, 3), IVec3::new(4, 2, 3)]);
         assert!(!bricks.contains(IVec3::new(-1, 0, 0)) && !bricks.contains(IVec3::new(5, 0, 0)));
         // 60 bricks: two words; bricks 52 and 59 at bits 20 and 27 of the second.
-        assert_eq!(bricks.gpu_words(), vec![1, 1 << 20 | 1 << 27]);
-        assert_eq!(LightBricks::default().gpu_words(), vec![0]);
+        assert_eq!(bricks.words(), [1, 1 << 20 | 1 << 27]);
+        assert!(LightBricks::default().words().is_empty());
     }
 }

@@ -147,10 +147,10 @@ pub fn stage_light_upload(
 /// light bricks' words. One buffer rather than a binding of their own: a fifth binding in this group made
 /// lavapipe's memory grow by megabytes every frame while the GI cache ran (2026-11-28).
 pub fn gpu_light_index(entries: &[u32], bricks: &LightBricks) -> Vec<u32> {
-    let mut words = Vec::with_capacity(1 + entries.len());
+    let mut words = Vec::with_capacity(1 + entries.len() + bricks.words().len());
     words.push(entries.len() as u32);
     words.extend_from_slice(entries);
-    words.extend(bricks.gpu_words());
+    words.extend_from_slice(bricks.words());
     words
 }
 
