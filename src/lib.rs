@@ -15,6 +15,7 @@ pub mod game;
 pub mod headless;
 pub mod image_io;
 pub mod lights;
+pub mod net;
 pub mod progress;
 pub mod reference;
 pub mod render;

@@ -21,6 +21,7 @@ pub mod frame;
 pub mod gi;
 pub mod gi_scale;
 pub mod motion;
+pub mod net;
 pub mod plot;
 pub mod rays;
 pub mod reaction;

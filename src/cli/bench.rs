@@ -8,6 +8,7 @@ use crate::bench::daylight::{DaylightConfig, run_daylight_bench};
 use crate::bench::denoise::{DenoiseConfig, DenoiseSection, check_scenes, run_denoise_bench};
 use crate::bench::frame::{CASES, FrameCase, FrameConfig, run_frame_bench};
 use crate::bench::gi::{GiConfig, run_gi_bench};
+use crate::bench::net::{NetBenchConfig, run_net_bench};
 use crate::bench::rays::{CASES as RAYS_CASES, RaysCase, RaysConfig, run_rays_bench};
 use crate::bench::reference_cache::check_lattice;
 use crate::bench::sweep::{ALL_SCENES, QUICK_SCENES, SweepConfig, run_bench};
@@ -19,15 +20,15 @@ use std::path::{Path, PathBuf};
 
 /// The flags `--spp` is refused with: the sweep's own
 /// (its reference's samples are fixed) and the frame profile (no reference).
-const SPP_REFUSED: [&str; 5] = ["quick", "settings", "camera", "frame", "rays"];
-const MODES: [&str; 6] = ["thesis", "gi", "daylight", "denoise", "frame", "rays"];
+const SPP_REFUSED: [&str; 6] = ["quick", "settings", "camera", "frame", "rays", "net"];
+const MODES: [&str; 7] = ["thesis", "gi", "daylight", "denoise", "frame", "rays", "net"];
 
 #[derive(Args)]
 #[command(group(ArgGroup::new("mode").args(MODES)))]
 pub struct BenchArgs {
     /// Comma-separated scene names (default: all thesis-like scenes, or a small set with --quick). With
     /// --denoise: only these of its one-frame scenes (window-room, cornell, letters, apartments).
-    #[arg(long, value_delimiter = ',', conflicts_with_all = ["thesis", "gi", "daylight", "motion", "reaction", "cost"])]
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["thesis", "gi", "daylight", "motion", "reaction", "cost", "net"])]
     scenes: Vec<String>,
     /// A small, fast run (96x64, few frames, 256-spp references) for CI. With --frame: the test suite's run
     /// (48x32, four scenes, counters held to the frame's ray budget; fails over it).
@@ -60,6 +61,11 @@ pub struct BenchArgs {
     /// label; --quick: 64x36 camera rays); writes rays.md and rays.csv. No GPU.
     #[arg(long)]
     rays: bool,
+    /// The server bench instead: one server and 16, then 64 headless clients on loopback editing at a steady rate
+    /// (--quick: 4 clients, 2 s); the time to join, the server's tick, edits per second, bytes per edit, the time
+    /// from an edit to another client; writes net.md and net.csv. No GPU.
+    #[arg(long)]
+    net: bool,
     /// With --denoise: only its section on ghosting under motion (a camera path and a sliding block, every
     /// frame against its own reference); writes denoise-motion.md.
     #[arg(long, requires = "denoise")]
@@ -151,6 +157,8 @@ enum BenchMode {
     Frame { quick: bool, sizes: Vec<(u32, u32)>, scenes: Vec<String>, set: Vec<String> },
     /// The CPU traversal: rays.md, rays.csv.
     Rays { quick: bool, scenes: Vec<String> },
+    /// The server: net.md, net.csv.
+    Net { quick: bool },
 }
 
 impl BenchArgs {
@@ -204,6 +212,10 @@ impl BenchArgs {
                 config.extra = set;
                 on_gpu(|| run_frame_bench(&config, quick, &out))
             }
+            BenchMode::Net { quick } => {
+                let config = if quick { NetBenchConfig::quick() } else { NetBenchConfig::full() };
+                run_net_bench(&config, &out).map(|text| println!("{text}"))
+            }
             BenchMode::Rays { quick, scenes } => {
                 let config = if quick { RaysConfig::quick() } else { RaysConfig::full() };
                 let cases = pick_rays_cases(&scenes)?;
@@ -255,6 +267,8 @@ impl BenchArgs {
             BenchMode::Frame { quick: self.quick, sizes: self.sizes, scenes: self.scenes, set: self.set }
         } else if self.rays {
             BenchMode::Rays { quick: self.quick, scenes: self.scenes }
+        } else if self.net {
+            BenchMode::Net { quick: self.quick }
         } else {
             BenchMode::Settings { scenes: self.scenes, quick: self.quick, only: self.settings, camera: self.camera }
         }

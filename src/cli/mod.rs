@@ -10,6 +10,7 @@ pub mod generate;
 pub mod play;
 pub mod reference;
 pub mod render;
+pub mod serve;
 pub mod stress;
 
 use clap::{Parser, Subcommand};
@@ -43,6 +44,8 @@ enum Command {
     Stress(stress::StressArgs),
     /// Validate a world file or scene recipe and print a summary (exit code 1 on error).
     CheckWorld(check_world::CheckWorldArgs),
+    /// Host a world for others to build in together: a server with no window (players join with `play --connect`).
+    Serve(serve::ServeArgs),
     /// Generate the game's world for a seed and size, print what it holds and how long it took; --out saves it.
     Generate(generate::GenerateArgs),
 }
@@ -58,6 +61,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Stress(args) => args.run(),
         Command::CheckWorld(args) => args.run(),
         Command::Generate(args) => args.run(),
+        Command::Serve(args) => args.run(),
     }
 }
 

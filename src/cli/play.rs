@@ -31,6 +31,15 @@ pub struct PlayArgs {
     /// A MagicaVoxel model (.vox) that V drops in front of the player.
     #[arg(long)]
     model: Option<PathBuf>,
+    /// Join a server (`glowbrick serve`) at HOST:PORT instead of opening a world here.
+    #[arg(long, value_name = "HOST:PORT", conflicts_with_all = ["world", "scene", "new", "model"])]
+    connect: Option<String>,
+    /// Your name on the server.
+    #[arg(long, requires = "connect")]
+    name: Option<String>,
+    /// The server's secret, when it has one.
+    #[arg(long, requires = "connect")]
+    secret: Option<String>,
     /// Where F5 saves and F9 loads (default: saves/<name of --world>.ron, or saves/world.ron).
     #[arg(long)]
     save: Option<PathBuf>,
@@ -49,8 +58,22 @@ impl PlayArgs {
         let source = self.world.source().unwrap_or(WorldSource::Generated { seed: self.seed, size: self.size });
         let save = self.save.unwrap_or_else(|| {
             let name = self.world.world.as_ref().and_then(|p| p.file_stem()).map(|s| s.to_string_lossy().into_owned());
-            PathBuf::from("saves").join(format!("{}.ron", name.as_deref().unwrap_or("world")))
+            PathBuf::from("saves").join(format!(
+                "{}.ron",
+                name.as_deref().unwrap_or(if self.connect.is_some() { "joined" } else { "world" })
+            ))
         });
+        if let Some(address) = &self.connect {
+            let join = crate::net::client::Join {
+                server: resolve(address)?,
+                secret: self.secret.clone(),
+                name: self.name.clone().unwrap_or_else(default_name),
+            };
+            let settings = self.settings.settings_over(base)?;
+            can_open_a_window()?;
+            crate::game::run_game(crate::net::client::waiting_world(), settings, save, None, Some(join));
+            return Ok(());
+        }
         let model = self.model.as_deref().map(load_model).transpose()?;
         let mut world = source.load().map_err(|e| e.to_string())?;
         if let Some(name) = &self.view {
@@ -64,7 +87,7 @@ impl PlayArgs {
         }
         let settings = self.settings.settings_over(base.with_world_time(&world))?;
         can_open_a_window()?;
-        crate::game::run_game(world, settings, save, model);
+        crate::game::run_game(world, settings, save, model, None);
         Ok(())
     }
 }
@@ -83,6 +106,26 @@ fn can_open_a_window() -> Result<(), String> {
              gives software Vulkan)"
         )
     })
+}
+
+/// HOST:PORT (a name or an address; the port defaults to the server's) as one socket address.
+fn resolve(address: &str) -> Result<std::net::SocketAddr, String> {
+    use std::net::ToSocketAddrs;
+    let with_port = if address.rsplit_once(':').is_some_and(|(_, p)| p.parse::<u16>().is_ok()) {
+        address.to_string()
+    } else {
+        format!("{address}:{}", crate::net::transport::DEFAULT_PORT)
+    };
+    with_port
+        .to_socket_addrs()
+        .map_err(|e| format!("cannot find server '{address}': {e}"))?
+        .next()
+        .ok_or_else(|| format!("cannot find server '{address}': no address"))
+}
+
+/// The player's name when `--name` is not given: the user's login name, or "player".
+fn default_name() -> String {
+    std::env::var("USER").ok().and_then(|n| crate::net::server::clean_name(&n)).unwrap_or_else(|| "player".into())
 }
 
 /// The `--model` file as a model V can place.

@@ -11,6 +11,7 @@ pub mod objects;
 pub mod player;
 pub mod save_load;
 pub mod settings_panel;
+pub mod together;
 pub mod undo;
 pub mod window_fit;
 
@@ -42,12 +43,15 @@ pub fn step_clock(hours: f32, step: f32) -> f32 {
 }
 
 /// Opens the game window on `world` and runs until the window closes. F5 and F9 use `save_path`; V drops
-/// `model`, when given.
+/// `model`, when given. With `join`, the game plays on a server instead: `world` shows until the server's
+/// arrives, edits go to the server, and F9, V and the local clock are the server's business (F5 still saves a
+/// copy of the shared world).
 pub fn run_game(
     world: VoxelWorld,
     settings: RenderSettings,
     save_path: PathBuf,
     model: Option<models::ModelToPlace>,
+    join: Option<crate::net::client::Join>,
 ) -> AppExit {
     let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
     let mut app = App::new();
@@ -85,17 +89,32 @@ pub fn run_game(
         })
         .add_systems(
             Update,
-            (
-                undo::history_keys,
-                save_load::save_load_keys,
-                models::model_key,
-                clock_keys,
-                lighting_toggle_keys,
-                debug_view_key,
-                window_fit::fit_window_to_screen,
-            ),
-        )
-        .run()
+            (undo::history_keys, lighting_toggle_keys, debug_view_key, window_fit::fit_window_to_screen),
+        );
+    match join {
+        Some(join) => {
+            let name = join.name.clone();
+            app.insert_resource(join)
+                .insert_resource(crate::net::client::NetClient::named(&name))
+                .add_plugins((
+                    crate::net::NetworkingPlugin,
+                    crate::net::client::NetClientPlugin,
+                    together::TogetherPlugin,
+                ))
+                .add_systems(Update, save_key_only);
+        }
+        None => {
+            app.add_systems(Update, (save_load::save_load_keys, models::model_key, clock_keys));
+        }
+    }
+    app.run()
+}
+
+/// F5 saves a copy of the shared world (on a server, F9 would load a world the others do not have).
+fn save_key_only(keys: Res<ButtonInput<KeyCode>>, mut actions: MessageWriter<save_load::SaveAction>) {
+    if keys.just_pressed(KeyCode::F5) {
+        actions.write(save_load::SaveAction::Save);
+    }
 }
 
 /// T moves the clock an hour on (Shift+T back).

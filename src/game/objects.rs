@@ -100,6 +100,8 @@ pub struct GameObjectsPlugin;
 
 impl Plugin for GameObjectsPlugin {
     fn build(&self, app: &mut App) {
-        app.add_systems(Startup, spawn_at_start).add_systems(Update, spawn_key);
+        // On a server, objects are the server's: a lantern spawned here would be in no one else's world.
+        let local = not(resource_exists::<crate::world::events::EditsFromServer>);
+        app.add_systems(Startup, spawn_at_start).add_systems(Update, spawn_key.run_if(local));
     }
 }

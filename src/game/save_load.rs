@@ -7,11 +7,11 @@ use super::hud::StatusLine;
 use super::player::Player;
 use crate::dynamic::DynamicObject;
 use crate::dynamic::saved::saved_objects;
-use crate::world::format::{save_world, write_atomically};
+pub use crate::world::format::{backup_path, save_with_backup};
 use crate::world::source::load_path;
 use crate::world::{CameraView, VoxelWorld};
 use bevy::prelude::*;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Where F5 saves and F9 loads.
 #[derive(Resource, Clone, Debug)]
@@ -40,23 +40,6 @@ pub fn save_load_keys(keys: Res<ButtonInput<KeyCode>>, mut actions: MessageWrite
     if keys.just_pressed(KeyCode::F9) {
         actions.write(SaveAction::Load);
     }
-}
-
-/// `<path>.bak`.
-pub fn backup_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".bak");
-    path.with_file_name(name)
-}
-
-/// Saves with one backup: the previous save is copied to `.bak` (itself atomically) before the new one
-/// replaces it, so at every moment a complete save exists on disk.
-pub fn save_with_backup(world: &VoxelWorld, path: &Path) -> std::io::Result<()> {
-    if path.is_file() {
-        let previous = std::fs::read(path)?;
-        write_atomically(&backup_path(path), &previous)?;
-    }
-    save_world(world, path)
 }
 
 /// The player's camera as a view named "player".

@@ -43,6 +43,11 @@ pub struct EditRefused {
     pub error: EditError,
 }
 
+/// Present on a networked client: the server applies edits, so local requests are sent to it (`net::client`)
+/// instead of being applied here.
+#[derive(Resource, Clone, Copy, Debug, Default)]
+pub struct EditsFromServer;
+
 /// Systems that apply edits, in `Update`.
 #[derive(SystemSet, Clone, Debug, PartialEq, Eq, Hash)]
 pub struct ApplyEdits;
@@ -51,10 +56,12 @@ pub struct WorldEditPlugin;
 
 impl Plugin for WorldEditPlugin {
     fn build(&self, app: &mut App) {
-        app.add_message::<EditRequest>()
-            .add_message::<EditApplied>()
-            .add_message::<EditRefused>()
-            .add_systems(Update, apply_edit_requests.in_set(ApplyEdits).run_if(resource_exists::<VoxelWorld>));
+        app.add_message::<EditRequest>().add_message::<EditApplied>().add_message::<EditRefused>().add_systems(
+            Update,
+            apply_edit_requests
+                .in_set(ApplyEdits)
+                .run_if(resource_exists::<VoxelWorld>.and_then(not(resource_exists::<EditsFromServer>))),
+        );
     }
 }
 

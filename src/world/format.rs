@@ -295,6 +295,23 @@ pub fn world_to_string(world: &VoxelWorld) -> String {
         .unwrap_or_else(|e| format!("// serialisation failed: {e}\n"))
 }
 
+/// `<path>.bak`.
+pub fn backup_path(path: &Path) -> std::path::PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".bak");
+    path.with_file_name(name)
+}
+
+/// Saves with one backup: the previous save is copied to `.bak` (itself atomically) before the new one
+/// replaces it, so at every moment a complete save exists on disk (the game's F5 and the server).
+pub fn save_with_backup(world: &VoxelWorld, path: &Path) -> std::io::Result<()> {
+    if path.is_file() {
+        let previous = std::fs::read(path)?;
+        write_atomically(&backup_path(path), &previous)?;
+    }
+    save_world(world, path)
+}
+
 /// Saves a world atomically: writes `<path>.tmp`, syncs it, then renames it over `path`.
 pub fn save_world(world: &VoxelWorld, path: &Path) -> std::io::Result<()> {
     let text = world_to_string(world);

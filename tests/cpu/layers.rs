@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 /// Each top-level module of `src/` and its layer, bottom (0) to top.
-const LAYERS: [(&str, u32); 18] = [
+const LAYERS: [(&str, u32); 19] = [
     ("alloc_watch", 0),
     ("colour", 0),
     ("progress", 0),
@@ -16,6 +16,7 @@ const LAYERS: [(&str, u32); 18] = [
     ("settings", 3),
     ("render", 3),
     ("core_plugin", 3),
+    ("net", 3),
     ("game", 4),
     ("headless", 4),
     ("bench", 5),

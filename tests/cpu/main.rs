@@ -11,6 +11,7 @@ mod hostile_files;
 mod imports;
 mod layers;
 mod light_pool;
+mod net;
 mod reference_converges;
 mod save_survives_kill;
 mod saved_objects;

@@ -1,0 +1,171 @@
+//! `glowbrick serve`: a dedicated server with no window and no GPU. It owns the world, applies the players' edits
+//! in one order, and saves the world (RON, atomic, with a `.bak`) every `--save-every` seconds, on `save` typed
+//! at its console and when it stops (`quit`, or `--seconds` running out). Killed outright, it loses at most the
+//! edits since its last save.
+
+use super::args::{WorldArgs, parse_size};
+use super::play::DEFAULT_SIZE;
+use crate::net::server::{ServerRules, ServerStats, WorldClock, world_now};
+use crate::net::{server_app, transport};
+use crate::world::VoxelWorld;
+use crate::world::format::save_with_backup;
+use crate::world::source::WorldSource;
+use bevy::app::App;
+use bevy::math::UVec3;
+use bevy_replicon_renet::RenetServer;
+use clap::Args;
+use std::net::{IpAddr, SocketAddr};
+use std::path::PathBuf;
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+#[derive(Args)]
+pub struct ServeArgs {
+    #[command(flatten)]
+    world: WorldArgs,
+    /// Generate a new world (with --seed and --size) instead of opening one.
+    #[arg(long, conflicts_with_all = ["world", "scene"])]
+    new: bool,
+    /// Seed of the generated world.
+    #[arg(long, default_value_t = 1, conflicts_with_all = ["world", "scene"])]
+    seed: u32,
+    /// Size of the generated world in voxels, X,Y,Z.
+    #[arg(long, default_value = DEFAULT_SIZE, value_parser = parse_size, conflicts_with_all = ["world", "scene"])]
+    size: UVec3,
+    /// UDP port to listen on.
+    #[arg(long, default_value_t = transport::DEFAULT_PORT)]
+    port: u16,
+    /// Address to listen on (default: every interface).
+    #[arg(long, default_value = "0.0.0.0")]
+    bind: IpAddr,
+    /// Only clients that know this secret may join (they pass the same --secret); without it the server is open.
+    #[arg(long)]
+    secret: Option<String>,
+    /// Where the world is saved (default: saves/<name of --world>.ron, or saves/server.ron).
+    #[arg(long)]
+    save: Option<PathBuf>,
+    /// Seconds between saves.
+    #[arg(long, default_value_t = 60, value_parser = clap::value_parser!(u64).range(1..=86_400))]
+    save_every: u64,
+    /// Most players at once.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    max_players: u64,
+    /// Edits one player may make per second (on average; bursts of four seconds' worth pass).
+    #[arg(long, default_value_t = 30.0)]
+    edits_per_second: f32,
+    /// Stop (and save) after this many seconds (scripts and tests; default: run until `quit`).
+    #[arg(long)]
+    seconds: Option<f64>,
+}
+
+/// Server ticks per second.
+const TICK_HZ: f64 = 60.0;
+
+impl ServeArgs {
+    pub fn run(self) -> Result<(), String> {
+        if !(self.edits_per_second.is_finite() && (0.1..=10_000.0).contains(&self.edits_per_second)) {
+            return Err(format!("--edits-per-second {} must be within 0.1..10000", self.edits_per_second));
+        }
+        if let Some(s) = self.seconds
+            && !(s.is_finite() && s > 0.0)
+        {
+            return Err(format!("--seconds {s} must be a positive number"));
+        }
+        let source = self.world.source().unwrap_or(WorldSource::Generated { seed: self.seed, size: self.size });
+        let save = self.save.clone().unwrap_or_else(|| {
+            let name = self.world.world.as_ref().and_then(|p| p.file_stem()).map(|s| s.to_string_lossy().into_owned());
+            PathBuf::from("saves").join(format!("{}.ron", name.as_deref().unwrap_or("server")))
+        });
+        if let Some(folder) = save.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(folder).map_err(|e| format!("cannot create {}: {e}", folder.display()))?;
+        }
+        let world = source.load().map_err(|e| e.to_string())?;
+        let summary = format!("{}x{}x{} voxels", world.grid.size().x, world.grid.size().y, world.grid.size().z);
+        let rules = ServerRules {
+            edits_per_second: self.edits_per_second,
+            edit_burst: self.edits_per_second * 4.0,
+            save_path: Some(save.clone()),
+            save_every: Duration::from_secs(self.save_every),
+            ..Default::default()
+        };
+        let mut app = server_app(world, rules);
+        let bind = SocketAddr::new(self.bind, self.port);
+        let local = transport::listen(&mut app, bind, self.secret.as_deref(), self.max_players as usize)?;
+        println!("serving a world of {summary} on {local} (up to {} players)", self.max_players);
+        match &self.secret {
+            Some(_) => {
+                println!("players need the secret to join: glowbrick play --connect HOST:{} --secret ...", local.port())
+            }
+            None => {
+                println!("the server is open: anyone who reaches port {} can join (--secret to close it)", local.port())
+            }
+        }
+        println!(
+            "saving to {} every {} s; type `save` to save now, `quit` to save and stop",
+            save.display(),
+            self.save_every
+        );
+        let console = console_lines();
+        let started = Instant::now();
+        let tick = Duration::from_secs_f64(1.0 / TICK_HZ);
+        let mut last_report = Instant::now();
+        loop {
+            let frame = Instant::now();
+            app.update();
+            let mut quit = self.seconds.is_some_and(|s| started.elapsed().as_secs_f64() >= s);
+            while let Ok(line) = console.try_recv() {
+                match line.trim() {
+                    "save" => {
+                        app.world_mut().write_message(crate::net::server::SaveNow);
+                    }
+                    "quit" | "stop" | "exit" => quit = true,
+                    "" => {}
+                    other => println!("unknown command '{other}' (save, quit)"),
+                }
+            }
+            if quit {
+                break;
+            }
+            if last_report.elapsed() >= Duration::from_secs(60) {
+                last_report = Instant::now();
+                println!("{}", report(&mut app));
+            }
+            std::thread::sleep(tick.saturating_sub(frame.elapsed()));
+        }
+        // Say goodbye to the clients, then save.
+        app.world_mut().resource_mut::<RenetServer>().disconnect_all();
+        app.update();
+        println!("{}", report(&mut app));
+        let world = world_now(app.world().resource::<VoxelWorld>(), app.world().resource::<WorldClock>());
+        save_with_backup(&world, &save).map_err(|e| format!("could not save {}: {e}", save.display()))?;
+        println!("saved {}", save.display());
+        Ok(())
+    }
+}
+
+fn report(app: &mut App) -> String {
+    let players = app.world_mut().query::<&crate::net::server::Peer>().iter(app.world()).count();
+    let stats = app.world().resource::<ServerStats>();
+    format!(
+        "{players} players; {} edits applied, {} refused; {} joins ({:.1} MB of world sent); {} saves",
+        stats.seq,
+        stats.refused,
+        stats.joins,
+        stats.world_bytes_sent as f64 / 1e6,
+        stats.saves
+    )
+}
+
+/// Lines typed at the server's console (none when stdin is closed: the server then runs until `--seconds`).
+fn console_lines() -> mpsc::Receiver<String> {
+    let (send, receive) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::stdin().lines() {
+            let Ok(line) = line else { break };
+            if send.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    receive
+}

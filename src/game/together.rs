@@ -1,0 +1,217 @@
+//! The game's side of building together (`play --connect`): the connection's panel (joining progress, who is
+//! playing), the camera's move into the server's world when it arrives, the clock keys asking the server, and the
+//! other players drawn where they are (a small moving block each, named on the panel).
+
+use super::hud::StatusLine;
+use super::player::Player;
+use crate::dynamic::{DynamicObject, Motion, ObjectClock, model_for_world, spawn_object};
+use crate::net::client::Join;
+use crate::net::client::NetClient;
+use crate::net::protocol::{ClockAsk, Pose};
+use crate::world::VoxelWorld;
+use bevy::prelude::*;
+use bevy_replicon::prelude::{ClientState, RepliconChannels};
+use std::sync::Arc;
+
+/// Marks the figure drawn for another player.
+#[derive(Component)]
+struct Figure(u64);
+
+#[derive(Component)]
+struct PlayersText;
+
+pub struct TogetherPlugin;
+
+impl Plugin for TogetherPlugin {
+    fn build(&self, app: &mut App) {
+        app.add_systems(Startup, (spawn_panel, connect_on_startup)).add_systems(
+            Update,
+            (send_pose, show_refusals, enter_arrived_world, clock_keys, draw_figures, update_panel, say_when_lost),
+        );
+    }
+}
+
+fn spawn_panel(mut commands: Commands) {
+    commands.spawn((
+        Node { position_type: PositionType::Absolute, right: Val::Px(6.0), top: Val::Px(24.0), ..default() },
+        Text::new(""),
+        TextFont { font_size: FontSize::Px(14.0), ..default() },
+        TextColor(Color::srgba(1.0, 1.0, 1.0, 0.85)),
+        PlayersText,
+    ));
+}
+
+/// When the server's world arrives, the camera moves to its first view.
+fn enter_arrived_world(
+    client: Res<NetClient>,
+    world: Res<VoxelWorld>,
+    mut seen: Local<Option<u64>>,
+    mut camera: Query<(&mut Transform, &mut Player)>,
+    mut status: ResMut<StatusLine>,
+) {
+    // The waiting world is the first one seen; the next is the server's.
+    if *seen == Some(world.instance) {
+        return;
+    }
+    *seen = Some(world.instance);
+    if !client.loaded {
+        return;
+    }
+    let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
+    if let Ok((mut transform, mut player)) = camera.single_mut() {
+        *transform = crate::world::view_transform(&view);
+        *player = Player { walking: player.walking, ..Player::looking(&view) };
+    }
+    let size = world.grid.size();
+    status.show(format!("joined: a world of {}x{}x{} voxels", size.x, size.y, size.z));
+}
+
+/// T / Shift+T ask the server to move the clock (everyone sees the same time of day).
+fn clock_keys(
+    keys: Res<ButtonInput<KeyCode>>,
+    settings: Res<crate::settings::RenderSettings>,
+    mut asks: MessageWriter<ClockAsk>,
+) {
+    if keys.just_pressed(KeyCode::KeyT) {
+        let back = keys.pressed(KeyCode::ShiftLeft) || keys.pressed(KeyCode::ShiftRight);
+        asks.write(ClockAsk { hours: super::step_clock(settings.time, if back { -1.0 } else { 1.0 }) });
+    }
+}
+
+/// Keeps one figure per other player, at its camera (the figure's centre a little below the eye).
+#[allow(clippy::too_many_arguments)]
+fn draw_figures(
+    mut commands: Commands,
+    client: Res<NetClient>,
+    world: Option<ResMut<VoxelWorld>>,
+    mut clock: ResMut<ObjectClock>,
+    mut figures: Query<(Entity, &Figure, &mut DynamicObject)>,
+    objects: Query<(), With<DynamicObject>>,
+    mut model: Local<Option<(u64, Arc<crate::dynamic::model::VoxelModel>)>>,
+) {
+    let Some(mut world) = world else { return };
+    if !client.loaded {
+        return;
+    }
+    let others: Vec<_> = client.players.iter().filter(|p| Some(p.id) != client.me && p.pose.is_some()).collect();
+    for (entity, figure, mut object) in &mut figures {
+        match others.iter().find(|p| p.id == figure.0).and_then(|p| p.pose) {
+            Some(pose) => object.anchor = Vec3::from(pose.position) - Vec3::new(1.5, 2.5, 1.5),
+            None => commands.entity(entity).despawn(),
+        }
+    }
+    for player in others {
+        if figures.iter().any(|(_, f, _)| f.0 == player.id) {
+            continue;
+        }
+        if model.as_ref().is_none_or(|(instance, _)| *instance != world.instance) {
+            match model_for_world("block", &mut world) {
+                Ok(m) => *model = Some((world.instance, Arc::new(m))),
+                Err(e) => {
+                    warn!("no figure for other players: {e}");
+                    return;
+                }
+            }
+        }
+        let Some((_, figure_model)) = model.as_ref() else { return };
+        let at = Vec3::from(player.pose.map_or([0.0; 3], |p| p.position)) - Vec3::new(1.5, 2.5, 1.5);
+        if let Ok(entity) =
+            spawn_object(&mut commands, &mut clock, objects.iter().count(), figure_model.clone(), Motion::Still, at)
+        {
+            commands.entity(entity).insert(Figure(player.id));
+        }
+    }
+}
+
+fn update_panel(
+    client: Res<NetClient>,
+    camera: Query<&Transform, With<Player>>,
+    state: Res<State<ClientState>>,
+    mut text: Query<&mut Text, With<PlayersText>>,
+) {
+    let Ok(mut text) = text.single_mut() else { return };
+    let here = camera.single().map(|t| t.translation).unwrap_or_default();
+    let shown = if !client.loaded {
+        match state.get() {
+            ClientState::Connected => format!("receiving the world: {:.0}%", client.progress() * 100.0),
+            _ => "connecting...".to_string(),
+        }
+    } else {
+        let mut lines = vec![format!("{} playing", client.players.len())];
+        for p in &client.players {
+            let name = &p.name;
+            lines.push(match (Some(p.id) == client.me, p.pose) {
+                (true, _) => format!("{name} (you)"),
+                (false, Some(pose)) => format!("{name}  {:.0} m", Vec3::from(pose.position).distance(here)),
+                (false, None) => name.clone(),
+            });
+        }
+        lines.join("\n")
+    };
+    if text.0 != shown {
+        text.0 = shown;
+    }
+}
+
+/// Says so when the server goes away (edits then go nowhere; the world stays as it was).
+fn say_when_lost(
+    state: Res<State<ClientState>>,
+    client: Res<NetClient>,
+    mut status: ResMut<StatusLine>,
+    mut was: Local<bool>,
+) {
+    let connected = *state.get() == ClientState::Connected;
+    if *was && !connected {
+        let why =
+            client.error.clone().unwrap_or_else(|| "the server closed the connection or stopped answering".into());
+        status.show(format!("disconnected: {why}"));
+    }
+    *was = connected;
+}
+
+/// Opens the connection of the game's `Join` (a startup system: the channels are known once the plugins are built).
+fn connect_on_startup(
+    mut commands: Commands,
+    join: Res<Join>,
+    channels: Res<RepliconChannels>,
+    mut status: ResMut<StatusLine>,
+) {
+    let id = crate::net::transport::fresh_client_id();
+    match crate::net::transport::client_transport(&channels, join.server, join.secret.as_deref(), id) {
+        Ok((client, transport)) => {
+            commands.insert_resource(client);
+            commands.insert_resource(transport);
+            status.show(format!("joining {} as {}...", join.server, join.name));
+        }
+        Err(e) => status.show(e),
+    }
+}
+
+/// The player's camera, ten times a second.
+fn send_pose(
+    time: Res<Time>,
+    mut since: Local<f32>,
+    client: Res<NetClient>,
+    camera: Query<&Transform, With<Player>>,
+    mut poses: MessageWriter<Pose>,
+) {
+    *since += time.delta_secs();
+    if *since < 0.1 || !client.loaded {
+        return;
+    }
+    *since = 0.0;
+    if let Ok(transform) = camera.single() {
+        let forward = transform.forward();
+        poses.write(Pose { position: transform.translation.into(), yaw: forward.x.atan2(forward.z) });
+    }
+}
+
+/// The server's last refusal on the status line.
+fn show_refusals(client: Res<NetClient>, mut shown: Local<u64>, mut status: ResMut<StatusLine>) {
+    if client.refusals != *shown {
+        *shown = client.refusals;
+        if let Some(reason) = &client.last_refusal {
+            status.show(format!("the server refused: {reason}"));
+        }
+    }
+}

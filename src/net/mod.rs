@@ -1,0 +1,60 @@
+//! Building together: a dedicated server (`glowbrick serve`) that owns the world and clients (`glowbrick play
+//! --connect`) that send their edits to it and apply everyone's edits in the server's one order.
+//!
+//! Built on bevy_replicon's messages over renet's UDP transport (netcode's connect tokens when the server has a
+//! secret). Only messages travel, no replicated components: the world is far too large to replicate entity by
+//! entity, and edits are small, so the protocol is the world file once and then numbered edits
+//! (`protocol`). Every client applies the same edits in the same order to the same world, so its brick grid and
+//! light pool end up identical to the server's (`state_hash` checks it).
+
+pub mod client;
+pub mod protocol;
+pub mod server;
+pub mod snapshot;
+pub mod state_hash;
+pub mod transport;
+
+use crate::lights::plugin::LightsPlugin;
+use crate::world::VoxelWorld;
+use crate::world::events::WorldEditPlugin;
+use bevy::prelude::*;
+use bevy::state::app::StatesPlugin;
+use bevy_replicon::prelude::*;
+use bevy_replicon_renet::RepliconRenetPlugins;
+
+/// Replicon over renet and the protocol's messages: what both ends of a connection add.
+pub struct NetworkingPlugin;
+
+impl Plugin for NetworkingPlugin {
+    fn build(&self, app: &mut App) {
+        app.add_plugins((RepliconPlugins.set(ServerPlugin::new(PostUpdate)), RepliconRenetPlugins));
+        protocol::register_messages(app);
+    }
+}
+
+/// A server without window or GPU: the world, its edit path and light pool, and the server's rules. Call
+/// `transport::listen` on it, then `update` it (`glowbrick serve` does, 60 times a second).
+pub fn server_app(world: VoxelWorld, rules: server::ServerRules) -> App {
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, StatesPlugin, NetworkingPlugin))
+        .insert_resource(world)
+        .insert_resource(rules)
+        .add_plugins((WorldEditPlugin, LightsPlugin, server::NetServerPlugin));
+    app.finish();
+    app.cleanup();
+    app
+}
+
+/// A client without window or GPU (tests, the bench): it receives the world and keeps its grid and light pool in
+/// step with the server's; `extra` adds plugins of the layers above (the game's undo). Call `transport::dial` on
+/// it.
+pub fn headless_client_app<M>(name: &str, extra: impl bevy::app::Plugins<M>) -> App {
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, StatesPlugin, NetworkingPlugin))
+        .insert_resource(client::NetClient::named(name))
+        .add_plugins((WorldEditPlugin, LightsPlugin, client::NetClientPlugin))
+        .add_plugins(extra);
+    app.finish();
+    app.cleanup();
+    app
+}

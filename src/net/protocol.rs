@@ -1,0 +1,159 @@
+//! What client and server say to each other. Every message is plain data (postcard on the wire); nothing a client
+//! sends names a file, a setting of the server or another player.
+
+use crate::world::{Edit, Voxel};
+use bevy::math::IVec3;
+use bevy::prelude::*;
+use bevy_replicon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// An edit as it travels: `world::Edit` with plain arrays.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum NetEdit {
+    Place { at: [i32; 3], material: Voxel },
+    Break { at: [i32; 3] },
+    FillBox { min: [i32; 3], max: [i32; 3], material: Voxel },
+    Restore { min: [i32; 3], max: [i32; 3], voxels: Vec<Voxel> },
+}
+
+impl From<&Edit> for NetEdit {
+    fn from(edit: &Edit) -> Self {
+        match edit {
+            Edit::Place { at, material } => NetEdit::Place { at: at.to_array(), material: *material },
+            Edit::Break { at } => NetEdit::Break { at: at.to_array() },
+            Edit::FillBox { min, max, material } => {
+                NetEdit::FillBox { min: min.to_array(), max: max.to_array(), material: *material }
+            }
+            Edit::Restore { min, max, voxels } => {
+                NetEdit::Restore { min: min.to_array(), max: max.to_array(), voxels: voxels.to_vec() }
+            }
+        }
+    }
+}
+
+impl From<&NetEdit> for Edit {
+    fn from(edit: &NetEdit) -> Self {
+        let v = IVec3::from_array;
+        match edit {
+            NetEdit::Place { at, material } => Edit::Place { at: v(*at), material: *material },
+            NetEdit::Break { at } => Edit::Break { at: v(*at) },
+            NetEdit::FillBox { min, max, material } => {
+                Edit::FillBox { min: v(*min), max: v(*max), material: *material }
+            }
+            NetEdit::Restore { min, max, voxels } => {
+                Edit::Restore { min: v(*min), max: v(*max), voxels: Arc::from(voxels.as_slice()) }
+            }
+        }
+    }
+}
+
+// --- client to server ---
+
+/// The first thing a client says: who it is.
+#[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Hello {
+    pub name: String,
+}
+
+/// Asks the server to apply an edit. `undoable` edits come back marked so the sender's undo records them.
+#[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EditAsk {
+    pub edit: NetEdit,
+    pub undoable: bool,
+}
+
+/// Asks the server to set the time of day (hours, 0-24).
+#[derive(Message, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClockAsk {
+    pub hours: f32,
+}
+
+/// Where the sender's camera is (voxels) and which way it looks (yaw, radians).
+#[derive(Message, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Pose {
+    pub position: [f32; 3],
+    pub yaw: f32,
+}
+
+// --- server to client ---
+
+/// One piece of the world as it was after edit `seq` (a deflated RON world file, cut in pieces). `player` is the
+/// receiver's id, so it can tell its own edits among the broadcasts.
+#[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WorldPiece {
+    pub seq: u64,
+    pub player: u64,
+    pub index: u32,
+    pub count: u32,
+    pub bytes: Vec<u8>,
+}
+
+/// An edit the server applied, number `seq` (1, 2, 3, ... with no gaps), asked for by player `by`.
+#[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EditDone {
+    pub seq: u64,
+    pub by: u64,
+    pub undoable: bool,
+    pub edit: NetEdit,
+}
+
+/// Why the server refused the receiver's request.
+#[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Refused {
+    pub reason: String,
+}
+
+/// The time of day, after a player changed it.
+#[derive(Message, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClockNow {
+    pub hours: f32,
+}
+
+/// One player as the others see it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlayerInfo {
+    pub id: u64,
+    pub name: String,
+    pub pose: Option<Pose>,
+}
+
+/// Everyone playing, a few times a second.
+#[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Players {
+    pub players: Vec<PlayerInfo>,
+}
+
+/// Registers every message on both sides, in one order (replicon checks that client and server agree).
+pub fn register_messages(app: &mut App) {
+    app.add_client_message::<Hello>(Channel::Ordered)
+        .add_client_message::<EditAsk>(Channel::Ordered)
+        .add_client_message::<ClockAsk>(Channel::Ordered)
+        .add_client_message::<Pose>(Channel::Unreliable)
+        .add_server_message::<WorldPiece>(Channel::Ordered)
+        .add_server_message::<EditDone>(Channel::Ordered)
+        .add_server_message::<Refused>(Channel::Ordered)
+        .add_server_message::<ClockNow>(Channel::Ordered)
+        .add_server_message::<Players>(Channel::Ordered);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn edits_survive_the_trip() {
+        let edits = [
+            Edit::Place { at: IVec3::new(1, -2, 3), material: 7 },
+            Edit::Break { at: IVec3::new(4, 5, 6) },
+            Edit::FillBox { min: IVec3::ZERO, max: IVec3::splat(9), material: 2 },
+            Edit::Restore { min: IVec3::ONE, max: IVec3::new(2, 1, 1), voxels: Arc::from([3u16, 0].as_slice()) },
+        ];
+        for edit in edits {
+            let mut buffer = [0u8; 256];
+            let bytes = bevy_replicon::postcard::to_slice(&NetEdit::from(&edit), &mut buffer).unwrap();
+            let back: NetEdit = bevy_replicon::postcard::from_bytes(bytes).unwrap();
+            assert_eq!(Edit::from(&back), edit);
+        }
+    }
+}

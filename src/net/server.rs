@@ -1,0 +1,355 @@
+//! The server's side: it owns the world, takes edits from clients as requests, checks them, applies them in one
+//! order and sends each applied edit to every client with its number. A joining client gets the world as it is
+//! (after edit number `seq`) in pieces, then every edit after it. The server keeps the time of day and the moving
+//! objects' phases, and saves the world as the game does.
+
+use super::protocol::*;
+use super::snapshot;
+use crate::world::events::{ApplyEdits, EditApplied};
+use crate::world::format::save_with_backup;
+use crate::world::{Edit, VoxelWorld};
+use bevy::prelude::*;
+use bevy_replicon::prelude::*;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+/// What the server allows a client.
+#[derive(Resource, Clone, Debug)]
+pub struct ServerRules {
+    /// The largest box (voxels) one edit may touch: a 64-voxel cube, the player's reach.
+    pub max_box_voxels: u64,
+    /// Edits a client may make per second on average, and in one burst.
+    pub edits_per_second: f32,
+    pub edit_burst: f32,
+    /// World pieces sent to one joining client per tick (each up to `snapshot::PIECE_BYTES`).
+    pub pieces_per_tick: usize,
+    /// Where and how often the world is saved (also on request and on exit); `None` keeps it in memory only.
+    pub save_path: Option<PathBuf>,
+    pub save_every: Duration,
+}
+
+impl Default for ServerRules {
+    fn default() -> Self {
+        ServerRules {
+            max_box_voxels: 64 * 64 * 64,
+            edits_per_second: 30.0,
+            edit_burst: 120.0,
+            pieces_per_tick: 4,
+            save_path: None,
+            save_every: Duration::from_secs(60),
+        }
+    }
+}
+
+/// What the server has done, for its log, the tests and the bench.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct ServerStats {
+    /// Number of the last applied edit.
+    pub seq: u64,
+    pub refused: u64,
+    pub joins: u64,
+    pub world_bytes_sent: u64,
+    pub saves: u64,
+    pub last_save_error: Option<String>,
+}
+
+/// A connected, authorized client.
+#[derive(Component, Clone, Debug)]
+pub struct Peer {
+    pub name: String,
+    pub pose: Option<Pose>,
+    /// Edits it may still make now (refilled at `edits_per_second` up to `edit_burst`).
+    tokens: f32,
+    /// Seconds until it may be told of another refusal (a flood gets one reply a second, not one per message).
+    quiet: f32,
+}
+
+/// The world on its way to a client.
+#[derive(Component)]
+struct Sending {
+    seq: u64,
+    pieces: Arc<Vec<Vec<u8>>>,
+    next: usize,
+}
+
+/// A client waiting for the world.
+#[derive(Component)]
+struct WantsWorld;
+
+/// The last world encoded, reused while no edit came in between (many clients joining at once).
+#[derive(Resource, Default)]
+struct EncodedWorld(Option<(u64, Arc<Vec<Vec<u8>>>)>);
+
+/// Asks the server to save now (the console's `save`, and exit).
+#[derive(Message, Clone, Copy, Debug)]
+pub struct SaveNow;
+
+/// The time of day, in hours.
+#[derive(Resource, Clone, Copy, Debug)]
+pub struct WorldClock(pub f32);
+
+pub struct NetServerPlugin;
+
+impl Plugin for NetServerPlugin {
+    fn build(&self, app: &mut App) {
+        let hours = app.world().get_resource::<VoxelWorld>().and_then(|w| w.time_of_day).unwrap_or(12.0);
+        app.init_resource::<ServerRules>()
+            .init_resource::<ServerStats>()
+            .init_resource::<EncodedWorld>()
+            .insert_resource(WorldClock(hours))
+            .add_message::<SaveNow>()
+            .add_observer(welcome)
+            .add_systems(
+                Update,
+                (
+                    (refill_tokens, take_hellos, take_poses, take_clock_asks),
+                    apply_edit_asks.in_set(ApplyEdits),
+                    (start_sending_world, send_world_pieces, send_players, advance_objects, save_on_schedule).chain(),
+                )
+                    .chain(),
+            );
+    }
+}
+
+pub fn player_id(client: ClientId) -> u64 {
+    client.entity().map_or(0, Entity::to_bits)
+}
+
+fn welcome(
+    add: On<Add, AuthorizedClient>,
+    mut commands: Commands,
+    rules: Res<ServerRules>,
+    mut stats: ResMut<ServerStats>,
+) {
+    stats.joins += 1;
+    let name = format!("player {}", stats.joins);
+    info!("{name} joined");
+    commands.entity(add.entity).insert((Peer { name, pose: None, tokens: rules.edit_burst, quiet: 0.0 }, WantsWorld));
+}
+
+fn refill_tokens(time: Res<Time>, rules: Res<ServerRules>, mut peers: Query<&mut Peer>) {
+    let dt = time.delta_secs();
+    for mut peer in &mut peers {
+        peer.tokens = (peer.tokens + dt * rules.edits_per_second).min(rules.edit_burst);
+        peer.quiet = (peer.quiet - dt).max(0.0);
+    }
+}
+
+/// Most characters of a player's name.
+pub const MAX_NAME_CHARS: usize = 24;
+
+/// A name as others see it: printable, trimmed, at most `MAX_NAME_CHARS`; `None` when nothing is left.
+pub fn clean_name(name: &str) -> Option<String> {
+    let clean: String = name.chars().filter(|c| !c.is_control()).take(MAX_NAME_CHARS).collect();
+    let clean = clean.trim().to_string();
+    (!clean.is_empty()).then_some(clean)
+}
+
+fn take_hellos(mut hellos: MessageReader<FromClient<Hello>>, mut peers: Query<&mut Peer>) {
+    for hello in hellos.read() {
+        let (Some(entity), Some(name)) = (hello.client_id.entity(), clean_name(&hello.name)) else { continue };
+        if let Ok(mut peer) = peers.get_mut(entity)
+            && peer.name != name
+        {
+            info!("{} is called {name}", peer.name);
+            peer.name = name;
+        }
+    }
+}
+
+fn take_poses(mut poses: MessageReader<FromClient<Pose>>, mut peers: Query<&mut Peer>) {
+    for pose in poses.read() {
+        let finite = pose.position.iter().all(|c| c.is_finite() && c.abs() < 1e7) && pose.yaw.is_finite();
+        if let (true, Some(entity)) = (finite, pose.client_id.entity())
+            && let Ok(mut peer) = peers.get_mut(entity)
+        {
+            peer.pose = Some(pose.message);
+        }
+    }
+}
+
+fn take_clock_asks(
+    mut asks: MessageReader<FromClient<ClockAsk>>,
+    mut clock: ResMut<WorldClock>,
+    mut peers: Query<&mut Peer>,
+    mut now: MessageWriter<ToClients<ClockNow>>,
+) {
+    for ask in asks.read() {
+        let Some(mut peer) = ask.client_id.entity().and_then(|e| peers.get_mut(e).ok()) else { continue };
+        if !(0.0..=24.0).contains(&ask.hours) || peer.tokens < 1.0 {
+            continue;
+        }
+        peer.tokens -= 1.0;
+        clock.0 = ask.hours % 24.0;
+        now.write(ToClients { targets: SendTargets::CLIENTS_ONLY, message: ClockNow { hours: clock.0 } });
+    }
+}
+
+/// Why the server will not apply `edit` for a client (before the world's own checks).
+pub fn edit_problem(edit: &Edit, rules: &ServerRules) -> Option<String> {
+    let (min, max) = edit.bounds();
+    let extent = (max.as_i64vec3() - min.as_i64vec3() + 1).max(bevy::math::I64Vec3::ZERO);
+    let volume = (extent.x as u64).saturating_mul(extent.y as u64).saturating_mul(extent.z as u64);
+    (volume > rules.max_box_voxels)
+        .then(|| format!("a box of {volume} voxels is larger than the server allows ({})", rules.max_box_voxels))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn apply_edit_asks(
+    mut asks: MessageReader<FromClient<EditAsk>>,
+    mut world: ResMut<VoxelWorld>,
+    rules: Res<ServerRules>,
+    mut stats: ResMut<ServerStats>,
+    mut peers: Query<&mut Peer>,
+    mut applied: MessageWriter<EditApplied>,
+    mut done: MessageWriter<ToClients<EditDone>>,
+    mut refused: MessageWriter<ToClients<Refused>>,
+) {
+    for ask in asks.read() {
+        let Some(mut peer) = ask.client_id.entity().and_then(|e| peers.get_mut(e).ok()) else { continue };
+        let edit = Edit::from(&ask.edit);
+        let problem = if peer.tokens < 1.0 {
+            Some(format!("too many edits: the server takes {} a second", rules.edits_per_second))
+        } else {
+            peer.tokens -= 1.0;
+            edit_problem(&edit, &rules)
+        };
+        let result = match problem {
+            Some(problem) => Err(problem),
+            None => world.apply(edit.clone()).map_err(|e| e.to_string()),
+        };
+        match result {
+            Ok(0) => {}
+            Ok(changed) => {
+                stats.seq += 1;
+                let (min, max) = edit.bounds();
+                applied.write(EditApplied { edit, min, max, changed, before: None });
+                let message = EditDone {
+                    seq: stats.seq,
+                    by: player_id(ask.client_id),
+                    undoable: ask.undoable,
+                    edit: ask.edit.clone(),
+                };
+                done.write(ToClients { targets: SendTargets::CLIENTS_ONLY, message });
+            }
+            Err(reason) => {
+                stats.refused += 1;
+                if peer.quiet <= 0.0 {
+                    peer.quiet = 1.0;
+                    refused
+                        .write(ToClients { targets: SendTargets::Single(ask.client_id), message: Refused { reason } });
+                }
+            }
+        }
+    }
+}
+
+/// The world with the clock and the objects as they are now (what a joining client gets and a save holds).
+pub fn world_now(world: &VoxelWorld, clock: &WorldClock) -> VoxelWorld {
+    let mut now = world.clone();
+    now.time_of_day = Some(clock.0);
+    now
+}
+
+fn start_sending_world(
+    mut commands: Commands,
+    waiting: Query<Entity, With<WantsWorld>>,
+    world: Res<VoxelWorld>,
+    clock: Res<WorldClock>,
+    stats: Res<ServerStats>,
+    mut encoded: ResMut<EncodedWorld>,
+) {
+    for client in &waiting {
+        let pieces = match &encoded.0 {
+            Some((seq, pieces)) if *seq == stats.seq => pieces.clone(),
+            _ => {
+                let pieces = Arc::new(snapshot::encode(&world_now(&world, &clock)));
+                encoded.0 = Some((stats.seq, pieces.clone()));
+                pieces
+            }
+        };
+        commands.entity(client).remove::<WantsWorld>().insert(Sending { seq: stats.seq, pieces, next: 0 });
+    }
+}
+
+fn send_world_pieces(
+    mut commands: Commands,
+    mut sending: Query<(Entity, &mut Sending)>,
+    rules: Res<ServerRules>,
+    mut stats: ResMut<ServerStats>,
+    mut out: MessageWriter<ToClients<WorldPiece>>,
+) {
+    for (client, mut send) in &mut sending {
+        let count = send.pieces.len() as u32;
+        for _ in 0..rules.pieces_per_tick {
+            let Some(bytes) = send.pieces.get(send.next).cloned() else { break };
+            stats.world_bytes_sent += bytes.len() as u64;
+            let message = WorldPiece { seq: send.seq, player: client.to_bits(), index: send.next as u32, count, bytes };
+            out.write(ToClients { targets: SendTargets::Single(client.into()), message });
+            send.next += 1;
+        }
+        if send.next >= send.pieces.len() {
+            commands.entity(client).remove::<Sending>();
+        }
+    }
+}
+
+/// How often everyone hears where everyone is.
+const PLAYERS_EVERY: f32 = 0.2;
+
+fn send_players(
+    time: Res<Time>,
+    mut since: Local<f32>,
+    peers: Query<(Entity, &Peer)>,
+    mut out: MessageWriter<ToClients<Players>>,
+) {
+    *since += time.delta_secs();
+    if *since < PLAYERS_EVERY {
+        return;
+    }
+    *since = 0.0;
+    let mut players: Vec<PlayerInfo> = peers
+        .iter()
+        .map(|(entity, peer)| PlayerInfo { id: entity.to_bits(), name: peer.name.clone(), pose: peer.pose })
+        .collect();
+    players.sort_by_key(|p| p.id);
+    out.write(ToClients { targets: SendTargets::CLIENTS_ONLY, message: Players { players } });
+}
+
+/// The objects' phases move on with the server's clock, so a joining client sees them where the others do.
+fn advance_objects(time: Res<Time>, mut world: ResMut<VoxelWorld>) {
+    let dt = time.delta_secs();
+    if let Some(objects) = world.bypass_change_detection().objects.as_mut() {
+        objects.iter_mut().for_each(|o| o.age += dt);
+    }
+}
+
+fn save_on_schedule(
+    time: Res<Time>,
+    mut since: Local<f32>,
+    mut asks: MessageReader<SaveNow>,
+    rules: Res<ServerRules>,
+    world: Res<VoxelWorld>,
+    clock: Res<WorldClock>,
+    mut stats: ResMut<ServerStats>,
+) {
+    *since += time.delta_secs();
+    let asked = asks.read().count() > 0;
+    let Some(path) = &rules.save_path else { return };
+    if !asked && *since < rules.save_every.as_secs_f32() {
+        return;
+    }
+    *since = 0.0;
+    match save_with_backup(&world_now(&world, &clock), path) {
+        Ok(()) => {
+            stats.saves += 1;
+            stats.last_save_error = None;
+            info!("saved {} (after edit {})", path.display(), stats.seq);
+        }
+        Err(e) => {
+            error!("could not save {}: {e}", path.display());
+            stats.last_save_error = Some(e.to_string());
+        }
+    }
+}
