@@ -233,7 +233,7 @@ fn report(rows: &[NetRow], config: &NetBenchConfig, place: usize, fill: usize) -
     for r in rows {
         let _ = writeln!(
             md,
-            "| {} | {:.1} | {:.0} | {:.0} | {:.2} / {:.2} | {:.0} | {:.0} | {:.0} / {:.0} | {} |",
+            "| {} | {:.2} | {:.0} | {:.0} | {:.2} / {:.2} | {:.0} | {:.0} | {:.0} / {:.0} | {} |",
             r.clients,
             r.join_seconds,
             r.world_bytes as f64 / 1e3,

@@ -315,3 +315,91 @@ fn a_secret_keeps_strangers_out() {
     assert!(!loaded(&wrong) && !loaded(&open), "only the client with the secret got the world");
     assert_eq!(server.world().resource::<bevy_replicon_renet::RenetServer>().connected_clients(), 1);
 }
+
+/// A free UDP port on loopback (taken, then released for the server to take).
+fn free_port() -> u16 {
+    std::net::UdpSocket::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+fn serve(args: &[&str], port: u16) -> std::process::Child {
+    std::process::Command::new(env!("CARGO_BIN_EXE_glowbrick"))
+        .args(["serve", "--bind", "127.0.0.1", "--port", &port.to_string()])
+        .args(args)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("start glowbrick serve")
+}
+
+/// Joins the server at `port` and waits for the world, retrying while the server process starts.
+fn join_process(port: u16, id: u64) -> App {
+    let addr: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
+    let mut client = join(addr, "builder", id);
+    pump(&mut [&mut client], Duration::from_secs(60), |apps| loaded(apps[0]));
+    client
+}
+
+#[test]
+fn the_server_saves_what_players_built_and_a_kill_loses_only_the_last_seconds() {
+    use std::io::Write;
+    let dir = std::env::temp_dir().join(format!("glowbrick-serve-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let save = dir.join("shared.ron");
+    let save_arg = save.to_str().unwrap();
+    let (lamp, block) = (IVec3::new(6, 4, 6), IVec3::new(8, 4, 6));
+
+    // Saves every second; killed (SIGKILL) two seconds after the edit: the save holds it.
+    let port = free_port();
+    let mut server = serve(&["--scene", "test-room", "--save", save_arg, "--save-every", "1"], port);
+    let mut client = join_process(port, 41);
+    let material = 2;
+    client.world_mut().write_message(EditRequest::player(Edit::Place { at: lamp, material }));
+    pump(&mut [&mut client], Duration::from_secs(30), |apps| seq(apps[0]) >= 1);
+    let until = Instant::now() + Duration::from_millis(2500);
+    pump(&mut [&mut client], Duration::from_secs(30), |_| Instant::now() > until);
+    server.kill().unwrap();
+    server.wait().unwrap();
+    let saved = glowbrick::world::format::load_world(&save).expect("the save loads");
+    assert_eq!(saved.grid.get(lamp), material, "the edit made 2.5 s before the kill is in the save");
+    drop(client);
+
+    // Started again from the save: a new client gets the world as it was, builds, and `quit` saves and stops.
+    let port = free_port();
+    let mut server = serve(&["--world", save_arg, "--save", save_arg, "--save-every", "3600"], port);
+    let mut client = join_process(port, 42);
+    assert_eq!(client.world().resource::<VoxelWorld>().grid.get(lamp), material);
+    client.world_mut().write_message(EditRequest::player(Edit::Place { at: block, material: 1 }));
+    pump(&mut [&mut client], Duration::from_secs(30), |apps| seq(apps[0]) >= 1);
+    server.stdin.as_mut().unwrap().write_all(b"quit\n").unwrap();
+    let out = server.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("the server is open"), "an open server says so: {stdout}");
+    let saved = glowbrick::world::format::load_world(&save).expect("the save loads");
+    assert_eq!((saved.grid.get(lamp), saved.grid.get(block)), (material, 1));
+    let backup = glowbrick::world::format::backup_path(&save);
+    assert_eq!(
+        glowbrick::world::format::load_world(&backup).unwrap().grid.get(block),
+        0,
+        "the .bak is the save before"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_server_and_join_arguments_fail_in_one_line() {
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_glowbrick")).args(args).output().expect("run glowbrick")
+    };
+    let out = run(&["serve", "--scene", "test-room", "--edits-per-second", "0", "--port", "0"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("--edits-per-second 0 must be within") && stderr.lines().count() == 1, "{stderr}");
+    let out = run(&["serve", "--scene", "no-such-scene", "--port", "0"]);
+    assert_eq!(out.status.code(), Some(1));
+    let out = run(&["play", "--connect", "127.0.0.1:1", "--scene", "cornell"]);
+    assert_eq!(out.status.code(), Some(2), "clap refuses a world with --connect");
+    let out = run(&["play", "--name", "ada"]);
+    assert_eq!(out.status.code(), Some(2), "--name needs --connect");
+}
