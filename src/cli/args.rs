@@ -28,6 +28,39 @@ impl WorldArgs {
     }
 }
 
+/// The generated world's size when none is given: 1024 x 192 x 1024 voxels.
+pub const DEFAULT_SIZE: &str = "1024,192,1024";
+
+/// The world the game or a server opens: a world file or scene, or else the generator's (`--new`, which is also
+/// the default).
+#[derive(Args)]
+pub struct GameWorldArgs {
+    #[command(flatten)]
+    pub world: WorldArgs,
+    /// Generate a new world (with --seed and --size) instead of opening one.
+    #[arg(long, conflicts_with_all = ["world", "scene"])]
+    pub new: bool,
+    /// Seed of the generated world.
+    #[arg(long, default_value_t = 1, conflicts_with_all = ["world", "scene"])]
+    pub seed: u32,
+    /// Size of the generated world in voxels, X,Y,Z.
+    #[arg(long, default_value = DEFAULT_SIZE, value_parser = parse_size, conflicts_with_all = ["world", "scene"])]
+    pub size: UVec3,
+}
+
+impl GameWorldArgs {
+    /// Without --world or --scene the generator's world, --new or not (clap refuses --new with either).
+    pub fn source(&self) -> WorldSource {
+        self.world.source().unwrap_or(WorldSource::Generated { seed: self.seed, size: self.size })
+    }
+
+    /// The save path when none is given: `saves/<name of --world>.ron`, or `saves/<fallback>.ron`.
+    pub fn default_save(&self, fallback: &str) -> PathBuf {
+        let name = self.world.world.as_ref().and_then(|p| p.file_stem()).map(|s| s.to_string_lossy().into_owned());
+        PathBuf::from("saves").join(format!("{}.ron", name.as_deref().unwrap_or(fallback)))
+    }
+}
+
 /// A world, a camera view of it and an image size: what `render` and `reference` both take.
 #[derive(Args)]
 pub struct ShotArgs {

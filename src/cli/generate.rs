@@ -15,7 +15,7 @@ pub struct GenerateArgs {
     #[arg(long, default_value_t = 1)]
     seed: u32,
     /// Size in voxels, X,Y,Z (each edge at most 2048).
-    #[arg(long, default_value = super::play::DEFAULT_SIZE, value_parser = parse_size)]
+    #[arg(long, default_value = super::args::DEFAULT_SIZE, value_parser = parse_size)]
     size: UVec3,
     /// Save the world here (RON, as F5 does) and report the file's size and the time taken.
     #[arg(long)]

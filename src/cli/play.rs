@@ -1,38 +1,25 @@
 //! `glowbrick play`: open a window on a world (the default command).
 
-use super::args::{SettingArgs, WorldArgs, parse_size};
+use super::args::{GameWorldArgs, SettingArgs};
 use crate::game::models::ModelToPlace;
 use crate::settings::RenderSettings;
 use crate::world::import::vox::parse_vox;
-use crate::world::source::WorldSource;
-use bevy::math::UVec3;
 use clap::Args;
 use std::path::{Path, PathBuf};
-
-/// The generated world's size when none is given: 1024 x 192 x 1024 voxels.
-pub const DEFAULT_SIZE: &str = "1024,192,1024";
 
 #[derive(Args)]
 pub struct PlayArgs {
     #[command(flatten)]
-    world: WorldArgs,
-    /// Generate a new world (with --seed and --size) instead of opening one.
-    #[arg(long, conflicts_with_all = ["world", "scene"])]
-    new: bool,
-    /// Seed of the generated world.
-    #[arg(long, default_value_t = 1, conflicts_with_all = ["world", "scene"])]
-    seed: u32,
-    /// Size of the generated world in voxels, X,Y,Z.
-    #[arg(long, default_value = DEFAULT_SIZE, value_parser = parse_size, conflicts_with_all = ["world", "scene"])]
-    size: UVec3,
-    /// Start at this named view of the world (a generated world has village, house, cave and overview).
+    world: GameWorldArgs,
+    /// Start at this named view of the world (a generated world has village, house, cave and overview; with
+    /// --connect, a view of the server's world).
     #[arg(long)]
     view: Option<String>,
     /// A MagicaVoxel model (.vox) that V drops in front of the player.
     #[arg(long)]
     model: Option<PathBuf>,
     /// Join a server (`glowbrick serve`) at HOST:PORT instead of opening a world here.
-    #[arg(long, value_name = "HOST:PORT", conflicts_with_all = ["world", "scene", "new", "model"])]
+    #[arg(long, value_name = "HOST:PORT", conflicts_with_all = ["world", "scene", "new", "seed", "size", "model"])]
     connect: Option<String>,
     /// Your name on the server.
     #[arg(long, requires = "connect")]
@@ -54,20 +41,15 @@ impl PlayArgs {
         let base = RenderSettings::game();
         // Refused before the world loads; the world's saved time of day goes under the pairs.
         self.settings.settings_over(base.clone())?;
-        // Without --world or --scene the game generates a world, --new or not (clap refuses --new with either).
-        let source = self.world.source().unwrap_or(WorldSource::Generated { seed: self.seed, size: self.size });
-        let save = self.save.unwrap_or_else(|| {
-            let name = self.world.world.as_ref().and_then(|p| p.file_stem()).map(|s| s.to_string_lossy().into_owned());
-            PathBuf::from("saves").join(format!(
-                "{}.ron",
-                name.as_deref().unwrap_or(if self.connect.is_some() { "joined" } else { "world" })
-            ))
-        });
+        let source = self.world.source();
+        let fallback = if self.connect.is_some() { "joined" } else { "world" };
+        let save = self.save.clone().unwrap_or_else(|| self.world.default_save(fallback));
         if let Some(address) = &self.connect {
             let join = crate::net::client::Join {
                 server: resolve(address)?,
                 secret: self.secret.clone(),
                 name: self.name.clone().unwrap_or_else(default_name),
+                view: self.view.clone(),
             };
             let settings = self.settings.settings_over(base)?;
             can_open_a_window()?;

@@ -3,15 +3,12 @@
 //! at its console and when it stops (`quit`, or `--seconds` running out). Killed outright, it loses at most the
 //! edits since its last save.
 
-use super::args::{WorldArgs, parse_size};
-use super::play::DEFAULT_SIZE;
+use super::args::GameWorldArgs;
 use crate::net::server::{ServerRules, ServerStats, WorldClock, world_now};
 use crate::net::{server_app, transport};
 use crate::world::VoxelWorld;
 use crate::world::format::save_with_backup;
-use crate::world::source::WorldSource;
 use bevy::app::App;
-use bevy::math::UVec3;
 use bevy_replicon_renet::RenetServer;
 use clap::Args;
 use std::net::{IpAddr, SocketAddr};
@@ -22,16 +19,7 @@ use std::time::{Duration, Instant};
 #[derive(Args)]
 pub struct ServeArgs {
     #[command(flatten)]
-    world: WorldArgs,
-    /// Generate a new world (with --seed and --size) instead of opening one.
-    #[arg(long, conflicts_with_all = ["world", "scene"])]
-    new: bool,
-    /// Seed of the generated world.
-    #[arg(long, default_value_t = 1, conflicts_with_all = ["world", "scene"])]
-    seed: u32,
-    /// Size of the generated world in voxels, X,Y,Z.
-    #[arg(long, default_value = DEFAULT_SIZE, value_parser = parse_size, conflicts_with_all = ["world", "scene"])]
-    size: UVec3,
+    world: GameWorldArgs,
     /// UDP port to listen on.
     #[arg(long, default_value_t = transport::DEFAULT_PORT)]
     port: u16,
@@ -53,6 +41,9 @@ pub struct ServeArgs {
     /// Edits one player may make per second (on average; bursts of four seconds' worth pass).
     #[arg(long, default_value_t = 30.0)]
     edits_per_second: f32,
+    /// The time of day to start at, in hours (default: the world's saved time, or noon).
+    #[arg(long)]
+    time: Option<f32>,
     /// Stop (and save) after this many seconds (scripts and tests; default: run until `quit`).
     #[arg(long)]
     seconds: Option<f64>,
@@ -71,15 +62,20 @@ impl ServeArgs {
         {
             return Err(format!("--seconds {s} must be a positive number"));
         }
-        let source = self.world.source().unwrap_or(WorldSource::Generated { seed: self.seed, size: self.size });
-        let save = self.save.clone().unwrap_or_else(|| {
-            let name = self.world.world.as_ref().and_then(|p| p.file_stem()).map(|s| s.to_string_lossy().into_owned());
-            PathBuf::from("saves").join(format!("{}.ron", name.as_deref().unwrap_or("server")))
-        });
+        if let Some(t) = self.time
+            && !(t.is_finite() && (0.0..=24.0).contains(&t))
+        {
+            return Err(format!("--time {t} must be within 0..24 hours"));
+        }
+        let source = self.world.source();
+        let save = self.save.clone().unwrap_or_else(|| self.world.default_save("server"));
         if let Some(folder) = save.parent().filter(|p| !p.as_os_str().is_empty()) {
             std::fs::create_dir_all(folder).map_err(|e| format!("cannot create {}: {e}", folder.display()))?;
         }
-        let world = source.load().map_err(|e| e.to_string())?;
+        let mut world = source.load().map_err(|e| e.to_string())?;
+        if let Some(hours) = self.time {
+            world.time_of_day = Some(hours % 24.0);
+        }
         let summary = format!("{}x{}x{} voxels", world.grid.size().x, world.grid.size().y, world.grid.size().z);
         let rules = ServerRules {
             edits_per_second: self.edits_per_second,

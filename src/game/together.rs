@@ -4,7 +4,7 @@
 
 use super::hud::StatusLine;
 use super::player::Player;
-use crate::dynamic::{DynamicObject, Motion, ObjectClock, model_for_world, spawn_object};
+use crate::dynamic::{DynamicObject, Motion, ObjectClock, spawn_object};
 use crate::net::client::Join;
 use crate::net::client::NetClient;
 use crate::net::protocol::{ClockAsk, Pose};
@@ -44,9 +44,11 @@ fn spawn_panel(mut commands: Commands) {
 /// When the server's world arrives, the camera moves to its first view.
 fn enter_arrived_world(
     client: Res<NetClient>,
+    join: Res<Join>,
     world: Res<VoxelWorld>,
     mut seen: Local<Option<u64>>,
     mut camera: Query<(&mut Transform, &mut Player)>,
+    mut settings: ResMut<crate::settings::RenderSettings>,
     mut status: ResMut<StatusLine>,
 ) {
     // The waiting world is the first one seen; the next is the server's.
@@ -57,10 +59,17 @@ fn enter_arrived_world(
     if !client.loaded {
         return;
     }
-    let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
+    let named = join.view.as_deref().and_then(|name| world.view(Some(name)));
+    if let (Some(name), None) = (&join.view, named) {
+        status.show(format!("the server's world has no view '{name}'"));
+    }
+    let view = named.or(world.view(None)).cloned().unwrap_or_else(|| world.overview());
     if let Ok((mut transform, mut player)) = camera.single_mut() {
         *transform = crate::world::view_transform(&view);
         *player = Player { walking: player.walking, ..Player::looking(&view) };
+    }
+    if let Some(hours) = world.time_of_day {
+        settings.time = hours;
     }
     let size = world.grid.size();
     status.show(format!("joined: a world of {}x{}x{} voxels", size.x, size.y, size.z));
@@ -78,25 +87,51 @@ fn clock_keys(
     }
 }
 
-/// Keeps one figure per other player, at its camera (the figure's centre a little below the eye).
+/// Where a figure's minimum corner is from its player's eye: a column of two voxels with its head at the eye.
+const FIGURE_EYE: Vec3 = Vec3::new(0.5, super::player::EYE_HEIGHT, 0.5);
+
+/// A player's figure: two voxels, a body and a head, of the world's first two building materials (only the
+/// server's own materials: one the server lacks would have another id in another client's palette).
+fn figure_model(world: &VoxelWorld) -> Result<crate::dynamic::model::VoxelModel, String> {
+    let palette = &world.palette;
+    let mut solid = (1..palette.id_count() as u16).filter(|&m| !palette.is_emissive(m)).filter_map(|m| palette.get(m));
+    let body = solid.next().ok_or("the world has no building material")?;
+    let head = solid.next().unwrap_or(body);
+    let text = format!(
+        "(name: \"figure\", legend: {{\"b\": {:?}, \"h\": {:?}}}, layers: [[\"b\"], [\"h\"]])",
+        body.name, head.name
+    );
+    crate::dynamic::model::VoxelModel::from_ron(&text, "a player's figure", palette)
+}
+
+/// Players nearer than this (voxels) are not drawn: two players who join at the same view would each see the
+/// inside of the other's figure.
+const NEAREST_FIGURE: f32 = 2.5;
+
+/// Keeps one figure per other player, at its camera.
 #[allow(clippy::too_many_arguments)]
 fn draw_figures(
     mut commands: Commands,
     client: Res<NetClient>,
-    world: Option<ResMut<VoxelWorld>>,
+    world: Option<Res<VoxelWorld>>,
     mut clock: ResMut<ObjectClock>,
     mut figures: Query<(Entity, &Figure, &mut DynamicObject)>,
     objects: Query<(), With<DynamicObject>>,
+    camera: Query<&Transform, With<Player>>,
     mut model: Local<Option<(u64, Arc<crate::dynamic::model::VoxelModel>)>>,
 ) {
-    let Some(mut world) = world else { return };
+    let Some(world) = world else { return };
     if !client.loaded {
         return;
     }
-    let others: Vec<_> = client.players.iter().filter(|p| Some(p.id) != client.me && p.pose.is_some()).collect();
+    let here = camera.single().map(|t| t.translation).unwrap_or(Vec3::splat(f32::MAX));
+    let apart = |p: &&crate::net::protocol::PlayerInfo| {
+        p.pose.is_some_and(|pose| Vec3::from(pose.position).distance(here) >= NEAREST_FIGURE)
+    };
+    let others: Vec<_> = client.players.iter().filter(|p| Some(p.id) != client.me).filter(apart).collect();
     for (entity, figure, mut object) in &mut figures {
         match others.iter().find(|p| p.id == figure.0).and_then(|p| p.pose) {
-            Some(pose) => object.anchor = Vec3::from(pose.position) - Vec3::new(1.5, 2.5, 1.5),
+            Some(pose) => object.anchor = Vec3::from(pose.position) - FIGURE_EYE,
             None => commands.entity(entity).despawn(),
         }
     }
@@ -105,7 +140,7 @@ fn draw_figures(
             continue;
         }
         if model.as_ref().is_none_or(|(instance, _)| *instance != world.instance) {
-            match model_for_world("block", &mut world) {
+            match figure_model(&world) {
                 Ok(m) => *model = Some((world.instance, Arc::new(m))),
                 Err(e) => {
                     warn!("no figure for other players: {e}");
@@ -114,7 +149,7 @@ fn draw_figures(
             }
         }
         let Some((_, figure_model)) = model.as_ref() else { return };
-        let at = Vec3::from(player.pose.map_or([0.0; 3], |p| p.position)) - Vec3::new(1.5, 2.5, 1.5);
+        let at = Vec3::from(player.pose.map_or([0.0; 3], |p| p.position)) - FIGURE_EYE;
         if let Ok(entity) =
             spawn_object(&mut commands, &mut clock, objects.iter().count(), figure_model.clone(), Motion::Still, at)
         {
@@ -213,5 +248,21 @@ fn show_refusals(client: Res<NetClient>, mut shown: Local<u64>, mut status: ResM
         if let Some(reason) = &client.last_refusal {
             status.show(format!("the server refused: {reason}"));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_figure_is_two_voxels_of_the_worlds_own_building_materials() {
+        let world = crate::world::recipe::generated_world(1, UVec3::new(64, 48, 64)).unwrap();
+        let ids = world.palette.id_count();
+        let figure = figure_model(&world).unwrap();
+        assert_eq!(figure.size, UVec3::new(1, 2, 1));
+        assert_eq!(world.palette.id_count(), ids, "no material added");
+        let stone = crate::world::VoxelWorld::new(UVec3::splat(8), crate::world::Palette::new(vec![]));
+        assert!(figure_model(&stone).is_err(), "a palette without building materials has no figure");
     }
 }

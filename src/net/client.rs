@@ -211,6 +211,8 @@ pub struct Join {
     pub server: std::net::SocketAddr,
     pub secret: Option<String>,
     pub name: String,
+    /// The view of the server's world to start at (default: its first).
+    pub view: Option<String>,
 }
 
 /// The world a joining game shows until the server's has arrived: a small stone floor under the sky.

@@ -158,6 +158,10 @@ fn ten_thousand_edits_from_two_clients_leave_every_world_identical() {
         }
     }
     let stats = server.world().resource::<ServerStats>().clone();
+    println!(
+        "10,000 edits: {} applied, {} refused (outside the room), server and three clients identical",
+        stats.seq, stats.refused
+    );
     assert!(stats.seq > 5_000, "most of the 10,000 edits changed something (applied {})", stats.seq);
     assert!(stats.refused > 100, "edits outside the room were refused ({})", stats.refused);
     let expected = state(&mut server);
@@ -289,6 +293,12 @@ fn hostile_messages_change_nothing_and_valid_clients_play_on() {
     assert_ne!(state(&mut server).0, before.0, "the good edit changed the world");
     assert_eq!(server.world().resource::<VoxelWorld>().grid.get(probe), 2);
     let grown = resident_bytes().saturating_sub(memory_before);
+    println!(
+        "hostile: {sent} messages ({typed} well-formed), {} refused, garbage survives on channels {survivable:?} of \
+         {channels}, resident memory grew {:.1} MB",
+        stats.refused,
+        grown as f64 / 1e6
+    );
     assert!(grown < 256 << 20, "memory grew {} MB under the flood", grown >> 20);
     let names: Vec<String> = good.world().resource::<NetClient>().players.iter().map(|p| p.name.clone()).collect();
     assert!(names.iter().all(|n| n.chars().count() <= glowbrick::net::server::MAX_NAME_CHARS), "{names:?}");
