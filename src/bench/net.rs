@@ -136,7 +136,7 @@ fn run_one(world: &VoxelWorld, n: usize, config: &NetBenchConfig) -> Result<NetR
             while owed[i] >= 1.0 {
                 owed[i] -= 1.0;
                 let at = column(i, sent[i] / 2);
-                let material = if sent[i] % 2 == 0 { 1 } else { 0 };
+                let material = if sent[i].is_multiple_of(2) { 1 } else { 0 };
                 let edit = if material == 0 { Edit::Break { at } } else { Edit::Place { at, material } };
                 if i == 0 && material != 0 {
                     probes.push((at, material, Instant::now()));

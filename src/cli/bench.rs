@@ -170,11 +170,11 @@ impl BenchArgs {
         if self.lattice != 1 && !(self.thesis || self.denoise) {
             return Err("--lattice needs --thesis or --denoise".into());
         }
-        if !self.set.is_empty() && !(self.thesis || self.denoise || self.frame) {
+        if !(self.set.is_empty() || self.thesis || self.denoise || self.frame) {
             return Err("--set needs --thesis, --denoise or --frame".into());
         }
         // clap's `requires` names one flag; --sizes has three homes.
-        if !self.sizes.is_empty() && !(self.game_sizes || (self.denoise && self.cost) || self.frame) {
+        if !(self.sizes.is_empty() || self.game_sizes || self.frame || (self.denoise && self.cost)) {
             return Err("--sizes needs --gi --game-sizes, --denoise --cost or --frame".into());
         }
         match self.mode() {

@@ -106,10 +106,10 @@ pub fn the_light_hash_matches_the_cpu_light_index() {
         let mut coordinate = || {
             let word = rng.next_u32() as i32;
             // Half of them world-sized, half across all of i32.
-            if cubes.len() % 2 == 0 { word % 5000 } else { word }
+            if cubes.len().is_multiple_of(2) { word % 5000 } else { word }
         };
         let min = [coordinate(), coordinate(), coordinate()];
-        let size = if rng.next_u32() % 2 == 0 { 1 } else { BRICK_SIZE };
+        let size = if rng.next_u32().is_multiple_of(2) { 1 } else { BRICK_SIZE };
         cubes.push([min[0], min[1], min[2], size]);
     }
     let input: Vec<u8> = cubes.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
@@ -161,7 +161,7 @@ impl FaceCase {
         let axis = self.face / 2;
         let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
         let mut corner = self.lo;
-        if self.face % 2 == 0 {
+        if self.face.is_multiple_of(2) {
             corner[axis] += self.size;
         }
         let (mut edge_a, mut edge_b) = (Vec3::ZERO, Vec3::ZERO);
@@ -198,7 +198,7 @@ pub fn the_spherical_rectangle_sampler_matches_the_cpu_reference() {
         let face = (rng.next_u32() % 6) as usize;
         let axis = face / 2;
         let mut centre = lo + Vec3::splat(0.5 * size);
-        centre[axis] = if face % 2 == 0 { lo[axis] + size } else { lo[axis] };
+        centre[axis] = if face.is_multiple_of(2) { lo[axis] + size } else { lo[axis] };
         let direction = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
         if direction.length() < 0.1 {
             continue;
