@@ -9,6 +9,7 @@ use crate::world::events::{ApplyEdits, EditApplied};
 use crate::world::format::save_with_backup;
 use crate::world::{Edit, VoxelWorld};
 use bevy::prelude::*;
+use bevy::tasks::{AsyncComputeTaskPool, Task};
 use bevy_replicon::prelude::*;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -73,13 +74,21 @@ struct Sending {
     next: usize,
 }
 
-/// A client waiting for the world.
+/// A client waiting for the world. It hears every edit after number `since` (it was authorized then), so any
+/// world as of `since` or later will do: it applies the edits after the world's own number.
 #[derive(Component)]
-struct WantsWorld;
+struct WantsWorld {
+    since: u64,
+}
 
-/// The last world encoded, reused while no edit came in between (many clients joining at once).
+/// The last world encoded (as of edit `seq`), reused while it is recent enough for every client waiting.
 #[derive(Resource, Default)]
 struct EncodedWorld(Option<(u64, Arc<Vec<Vec<u8>>>)>);
+
+/// A world being encoded off the server's tick (the default world's 32 MB of RON take about a second), as of
+/// edit number `seq`.
+#[derive(Resource, Default)]
+struct Encoding(Option<(u64, Task<Vec<Vec<u8>>>)>);
 
 /// Asks the server to save now (the console's `save`, and exit).
 #[derive(Message, Clone, Copy, Debug)]
@@ -97,6 +106,7 @@ impl Plugin for NetServerPlugin {
         app.init_resource::<ServerRules>()
             .init_resource::<ServerStats>()
             .init_resource::<EncodedWorld>()
+            .init_resource::<Encoding>()
             .insert_resource(WorldClock(hours))
             .add_message::<SaveNow>()
             .add_observer(welcome)
@@ -125,7 +135,9 @@ fn welcome(
     stats.joins += 1;
     let name = format!("player {}", stats.joins);
     info!("{name} joined");
-    commands.entity(add.entity).insert((Peer { name, pose: None, tokens: rules.edit_burst, quiet: 0.0 }, WantsWorld));
+    commands
+        .entity(add.entity)
+        .insert((Peer { name, pose: None, tokens: rules.edit_burst, quiet: 0.0 }, WantsWorld { since: stats.seq }));
 }
 
 fn refill_tokens(time: Res<Time>, rules: Res<ServerRules>, mut peers: Query<&mut Peer>) {
@@ -252,24 +264,37 @@ pub fn world_now(world: &VoxelWorld, clock: &WorldClock) -> VoxelWorld {
     now
 }
 
+/// Hands waiting clients the last encoded world when it is recent enough for them; otherwise encodes the world
+/// as it is now on the async compute pool while the server ticks on.
 fn start_sending_world(
     mut commands: Commands,
-    waiting: Query<Entity, With<WantsWorld>>,
+    waiting: Query<(Entity, &WantsWorld)>,
     world: Res<VoxelWorld>,
     clock: Res<WorldClock>,
     stats: Res<ServerStats>,
     mut encoded: ResMut<EncodedWorld>,
+    mut encoding: ResMut<Encoding>,
 ) {
-    for client in &waiting {
-        let pieces = match &encoded.0 {
-            Some((seq, pieces)) if *seq == stats.seq => pieces.clone(),
-            _ => {
-                let pieces = Arc::new(snapshot::encode(&world_now(&world, &clock)));
-                encoded.0 = Some((stats.seq, pieces.clone()));
-                pieces
+    if let Some((seq, task)) = &mut encoding.0
+        && let Some(pieces) = bevy::tasks::futures::check_ready(task)
+    {
+        encoded.0 = Some((*seq, Arc::new(pieces)));
+        encoding.0 = None;
+    }
+    let mut stale = false;
+    for (client, wants) in &waiting {
+        match &encoded.0 {
+            Some((seq, pieces)) if *seq >= wants.since => {
+                let sending = Sending { seq: *seq, pieces: pieces.clone(), next: 0 };
+                commands.entity(client).remove::<WantsWorld>().insert(sending);
             }
-        };
-        commands.entity(client).remove::<WantsWorld>().insert(Sending { seq: stats.seq, pieces, next: 0 });
+            _ => stale = true,
+        }
+    }
+    if stale && encoding.0.is_none() {
+        let now = world_now(&world, &clock);
+        let task = AsyncComputeTaskPool::get().spawn(async move { snapshot::encode(&now) });
+        encoding.0 = Some((stats.seq, task));
     }
 }
 
