@@ -60,9 +60,6 @@ fn enter_arrived_world(
         return;
     }
     let named = join.view.as_deref().and_then(|name| world.view(Some(name)));
-    if let (Some(name), None) = (&join.view, named) {
-        status.show(format!("the server's world has no view '{name}'"));
-    }
     let view = named.or(world.view(None)).cloned().unwrap_or_else(|| world.overview());
     if let Ok((mut transform, mut player)) = camera.single_mut() {
         *transform = crate::world::view_transform(&view);
@@ -72,7 +69,12 @@ fn enter_arrived_world(
         settings.time = hours;
     }
     let size = world.grid.size();
-    status.show(format!("joined: a world of {}x{}x{} voxels", size.x, size.y, size.z));
+    let mut joined = format!("joined: a world of {}x{}x{} voxels", size.x, size.y, size.z);
+    if let (Some(name), None) = (&join.view, named) {
+        let names: Vec<&str> = world.views.iter().map(|v| v.name.as_str()).collect();
+        joined += &format!("; it has no view '{name}' (its views: {})", names.join(", "));
+    }
+    status.show(joined);
 }
 
 /// T / Shift+T ask the server to move the clock (everyone sees the same time of day).

@@ -1,7 +1,8 @@
 //! The server's side: it owns the world, takes edits from clients as requests, checks them, applies them in one
 //! order and sends each applied edit to every client with its number. A joining client gets the world as it is
 //! (after edit number `seq`) in pieces, then every edit after it. The server keeps the time of day and the moving
-//! objects' phases, and saves the world as the game does.
+//! objects' phases, and saves the world as the game does. It has no log subscriber (a headless app): what its
+//! operator should see (joins, leaves, names, saves) is printed to its console.
 
 use super::protocol::*;
 use super::snapshot;
@@ -110,6 +111,7 @@ impl Plugin for NetServerPlugin {
             .insert_resource(WorldClock(hours))
             .add_message::<SaveNow>()
             .add_observer(welcome)
+            .add_observer(farewell)
             .add_systems(
                 Update,
                 (
@@ -134,10 +136,16 @@ fn welcome(
 ) {
     stats.joins += 1;
     let name = format!("player {}", stats.joins);
-    info!("{name} joined");
+    println!("{name} joined");
     commands
         .entity(add.entity)
         .insert((Peer { name, pose: None, tokens: rules.edit_burst, quiet: 0.0 }, WantsWorld { since: stats.seq }));
+}
+
+fn farewell(remove: On<Remove, Peer>, peers: Query<&Peer>) {
+    if let Ok(peer) = peers.get(remove.entity) {
+        println!("{} left", peer.name);
+    }
 }
 
 fn refill_tokens(time: Res<Time>, rules: Res<ServerRules>, mut peers: Query<&mut Peer>) {
@@ -164,7 +172,7 @@ fn take_hellos(mut hellos: MessageReader<FromClient<Hello>>, mut peers: Query<&m
         if let Ok(mut peer) = peers.get_mut(entity)
             && peer.name != name
         {
-            info!("{} is called {name}", peer.name);
+            println!("{} is called {name}", peer.name);
             peer.name = name;
         }
     }
@@ -370,10 +378,10 @@ fn save_on_schedule(
         Ok(()) => {
             stats.saves += 1;
             stats.last_save_error = None;
-            info!("saved {} (after edit {})", path.display(), stats.seq);
+            println!("saved {} (after edit {})", path.display(), stats.seq);
         }
         Err(e) => {
-            error!("could not save {}: {e}", path.display());
+            eprintln!("could not save {}: {e}", path.display());
             stats.last_save_error = Some(e.to_string());
         }
     }

@@ -386,6 +386,7 @@ fn the_server_saves_what_players_built_and_a_kill_loses_only_the_last_seconds() 
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
     assert!(stdout.contains("the server is open"), "an open server says so: {stdout}");
+    assert!(stdout.contains("player 1 joined") && stdout.contains("is called builder"), "{stdout}");
     let saved = glowbrick::world::format::load_world(&save).expect("the save loads");
     assert_eq!((saved.grid.get(lamp), saved.grid.get(block)), (material, 1));
     let backup = glowbrick::world::format::backup_path(&save);
