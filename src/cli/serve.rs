@@ -4,7 +4,7 @@
 //! edits since its last save.
 
 use super::args::GameWorldArgs;
-use crate::net::server::{ServerRules, ServerStats, WorldClock, world_now};
+use crate::net::server::{ServerRules, ServerStats, WorldClock};
 use crate::net::{server_app, transport};
 use crate::world::VoxelWorld;
 use crate::world::format::save_with_backup;
@@ -132,7 +132,9 @@ impl ServeArgs {
         app.world_mut().resource_mut::<RenetServer>().disconnect_all();
         app.update();
         println!("{}", report(&mut app));
-        let world = world_now(app.world().resource::<VoxelWorld>(), app.world().resource::<WorldClock>());
+        let hours = app.world().resource::<WorldClock>().0;
+        let mut world = app.world_mut().resource_mut::<VoxelWorld>();
+        world.time_of_day = Some(hours);
         save_with_backup(&world, &save).map_err(|e| format!("could not save {}: {e}", save.display()))?;
         println!("saved {}", save.display());
         Ok(())

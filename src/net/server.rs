@@ -265,7 +265,8 @@ fn apply_edit_asks(
     }
 }
 
-/// The world with the clock and the objects as they are now (what a joining client gets and a save holds).
+/// A copy of the world with the clock and the objects as they are now, for encoding off the tick (what a joining
+/// client gets).
 pub fn world_now(world: &VoxelWorld, clock: &WorldClock) -> VoxelWorld {
     let mut now = world.clone();
     now.time_of_day = Some(clock.0);
@@ -363,7 +364,7 @@ fn save_on_schedule(
     mut since: Local<f32>,
     mut asks: MessageReader<SaveNow>,
     rules: Res<ServerRules>,
-    world: Res<VoxelWorld>,
+    mut world: ResMut<VoxelWorld>,
     clock: Res<WorldClock>,
     mut stats: ResMut<ServerStats>,
 ) {
@@ -374,7 +375,9 @@ fn save_on_schedule(
         return;
     }
     *since = 0.0;
-    match save_with_backup(&world_now(&world, &clock), path) {
+    // The clock goes into the world itself: no copy of a large world just to save it.
+    world.bypass_change_detection().time_of_day = Some(clock.0);
+    match save_with_backup(&world, path) {
         Ok(()) => {
             stats.saves += 1;
             stats.last_save_error = None;
