@@ -34,9 +34,10 @@ struct GiParams {
     // Update iterations run before this frame's (with an offset per `seed`): fresh rays continue the entries'
     // low-discrepancy sequences from there, one run across iterations and frames alike.
     update_run: u32,
+    // Frames between two updates of a settled entry this frame (1 while the light is new).
+    period: u32,
     // Padding to 16 bytes (GiParams::_pad).
-    _pad_a: u32,
-    _pad_b: u32,
+    _pad: u32,
 }
 
 // One (voxel, face) entry. The key lives in gi_keys (0 = empty); this is its payload.
@@ -358,6 +359,30 @@ fn filtered_or(voxel: vec3<i32>, face: u32, object: u32, level: u32, fallback: v
 // (segfault in its queue thread) on `gi.frame - stamp` compared in these passes.
 fn used_within(stamp: u32, frames: u32) -> bool {
     return stamp + frames >= gi.frame;
+}
+
+// Blended frames after which an entry is settled: its blend weight has fallen to alpha (update.wgsl,
+// blend_estimate) and another frame's estimate only averages noise away.
+fn settled_samples() -> u32 {
+    return u32(ceil(2.0 / gi.alpha));
+}
+
+fn settled(samples: u32) -> bool {
+    return samples >= settled_samples();
+}
+
+// Whether a settled entry updates this frame: one frame in gi.period, the frames spread over the slots (a slot
+// is a hash of the entry's cell) so each frame takes an even share. The moving objects' entries and unsettled
+// ones update every frame (compact.wgsl).
+fn settled_turn(slot: u32) -> bool {
+    return (slot + gi.frame) % gi.period == 0u;
+}
+
+// Where an entry's low-discrepancy runs (its rays, its direct light's points) stand for a run counter `n` that
+// steps once a frame: a settled entry, updated every gi.period frames, takes one step per update, so the
+// points of its consecutive updates stay consecutive.
+fn sequence_step(n: u32, e: GiEntry) -> u32 {
+    return select(n, n / gi.period, e.object == 0u && settled(e.samples));
 }
 
 fn gi_on() -> bool {

@@ -9,7 +9,7 @@
 #import glowbrick::constants::{GI_RESTART, COUNT_GI_LIVE, COUNT_GI_EVICTED, COUNT_GI_UPDATED,
     COUNT_GI_FREED_TOTAL}
 #import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_direct, gi_work, gi_list, used_within, is_live_key, next_slot,
-    UPDATE_AGE, MAX_AGE, LOST_FACE, FREED_KEY, EMPTY_KEY, WORK_STATIC, WORK_DYNAMIC, WORK_COUNT}
+    UPDATE_AGE, MAX_AGE, settled, settled_turn, LOST_FACE, FREED_KEY, EMPTY_KEY, WORK_STATIC, WORK_DYNAMIC, WORK_COUNT}
 
 var<workgroup> due_in_group: atomic<u32>;
 var<workgroup> live_in_group: atomic<u32>;
@@ -45,7 +45,8 @@ fn age_entry(slot: u32) -> bool {
         return false;
     }
     atomicAdd(&live_in_group, 1u);
-    let due = used_within(e.last_used, UPDATE_AGE);
+    // A settled static entry updates one frame in gi.period (GiSettings::period).
+    let due = used_within(e.last_used, UPDATE_AGE) && (e.object != 0u || !settled(e.samples) || settled_turn(slot));
     // After a change of light an entry that is not updated this frame (unused for UPDATE_AGE frames) still holds
     // the old light: it has no value until it is due again, so the filter and the rays that find it skip it
     // rather than read the old light until it is freed.

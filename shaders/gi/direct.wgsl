@@ -9,7 +9,7 @@
 #import glowbrick::random::{Rng, pcg, rng_next, r2_point, rotation2}
 #import glowbrick::guards::finite3
 #import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET, GI_RESTART, GI_RESTART_SAMPLES, GI_QMC}
-#import glowbrick::gi::cache::{gi, gi_direct, tangent_axes, slot_seed, cell_of, is_surface, GiEntry}
+#import glowbrick::gi::cache::{gi, gi_direct, tangent_axes, slot_seed, cell_of, is_surface, sequence_step, GiEntry}
 
 // The blend of an entry's direct estimate: young entries average evenly, then an exponential blend over about
 // 10 frames (faster than the indirect light's alpha: direct light is the bounce's source, so its lag adds up).
@@ -99,7 +99,7 @@ fn update_direct(slot: u32, e: GiEntry) {
         gi_direct[slot] = vec4(sum / f32(GI_RESTART_SAMPLES), f32(GI_RESTART_SAMPLES));
         return;
     }
-    let estimate = face_sample(e, cell_sample_point(gi.frame, rotation, &rng), &rng);
+    let estimate = face_sample(e, cell_sample_point(sequence_step(gi.frame, e), rotation, &rng), &rng);
     let old = gi_direct[slot];
     let count = old.w;
     let weight = max(DIRECT_ALPHA, 1.0 / (count + 1.0));

@@ -14,7 +14,7 @@
 #import glowbrick::constants::{RAY_OFFSET, LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, GI_QMC, COUNT_GI_BORROWED, COUNT_RAYS_GI,
     COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
 #import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_touch, gi_find,
-    GiEntry, listed_slot, hit_level, used_within, slot_seed, world_exit, ray_direction, cosine_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
+    GiEntry, listed_slot, hit_level, used_within, settled_samples, sequence_step, slot_seed, world_exit, ray_direction, cosine_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
     WORK_STATIC, WORK_DYNAMIC}
 #import glowbrick::gi::direct::{direct_at, cell_point}
 
@@ -170,6 +170,7 @@ fn fresh_ray(e: GiEntry, plan: RayPlan, j: u32, rng: ptr<function, Rng>) -> Entr
 fn ray_radiance(ray: EntryRay, level: u32, seen: bool, own: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
     let object = trace_objects(ray.start, ray.dir, select(INF, ray.distance, ray.found));
     if object.found {
+        object_hit = true;
         return object_hit_radiance(object, ray.start + ray.dir * object.distance, seen, own, rng);
     } else if ray.found {
         return hit_radiance(ray.start + ray.dir * ray.distance, ray.face, hit_level(ray.distance, level), seen, own, rng);
@@ -198,14 +199,14 @@ fn ray_plan(e: GiEntry, slot: u32, cached: bool, dynamic: bool) -> RayPlan {
     let seed = slot_seed(slot);
     var first = 0u;
     if cached {
-        first = pcg(seed ^ 0x5bd1e995u) + (gi.frame + gi.iteration * 3u) * gi.update_rays;
+        first = pcg(seed ^ 0x5bd1e995u) + (sequence_step(gi.frame, e) + gi.iteration * 3u) * gi.update_rays;
     }
     return RayPlan(
         ray_origin(e.voxel, e.face, base),
         seed,
         pcg(gi.frame ^ (gi.iteration << 28u)),
         first,
-        (gi.update_run + gi.iteration) * gi.update_rays,
+        sequence_step(gi.update_run + gi.iteration, e) * gi.update_rays,
         rotation4(seed ^ 0x68BC21EBu),
         !cached && !dynamic,
     );
@@ -259,13 +260,19 @@ fn update_entry(slot: u32) {
         gi_entries[slot].lo = lo;
         gi_entries[slot].hi = hi;
     }
-    gi_entries[slot].samples = min(age + 1u, 1u << 20u);
+    // An entry whose rays met a moving object goes back a quarter of the way to settled: it updates every frame
+    // (compact.wgsl) for that many frames after the object was last among its hits, while the object's light and
+    // shadow move, at a blend weight at most a third above alpha.
+    let most = select(1u << 20u, max(settled_samples() - settled_samples() / 4u, 2u), object_hit);
+    gi_entries[slot].samples = min(age + 1u, most);
 }
 
 // This thread's hits that borrowed their value or traced their own direct light, summed per workgroup and
 // added to the counters once per workgroup (a global atomic per ray serialises the lanes).
 var<private> borrowed: u32;
 var<private> direct_traced: u32;
+// Whether one of this thread's rays hit a moving object (ray_radiance).
+var<private> object_hit: bool;
 var<workgroup> borrowed_in_group: atomic<u32>;
 var<workgroup> direct_traced_in_group: atomic<u32>;
 

@@ -143,7 +143,9 @@ pub struct GiParams {
     /// Update iterations run before this frame's (offset per `seed`): where fresh rays continue the entries'
     /// low-discrepancy sequences.
     pub update_run: u32,
-    pub _pad: [u32; 2],
+    /// Frames between two updates of a settled entry this frame (`FramePlan::settled_period`).
+    pub period: u32,
+    pub _pad: u32,
 }
 
 /// One GI cache entry's payload (`GiEntry` in `shaders/gi/cache.wgsl`); only the GPU writes it, Rust sizes it.

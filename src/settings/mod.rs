@@ -285,6 +285,13 @@ pub struct GiSettings {
     /// while a voxel spans a pixel or more; the default 4 keeps about one per 16-64 pixels (seed 002's adaptive
     /// cells), 3-9x fewer entries and GI passes 2.5-4x cheaper at 320x180 for about the same error.
     pub cell_pixels: u32,
+    /// Frames between two updates of a settled entry (blended for 2 / alpha frames, no moving object among its
+    /// hits): in a still scene its value only averages more noise, and at one update every `period` frames it
+    /// keeps the same noise (the blend weight per update is unchanged) for 1 / period of the rays; it follows
+    /// a slow change (a moving lantern's light elsewhere) `period` times slower. Young entries, entries a moving
+    /// object's light reaches, and every entry in the frames after a change of light or an edit update every
+    /// frame (docs/bench/why.md).
+    pub period: u32,
 }
 
 impl Default for GiSettings {
@@ -301,6 +308,7 @@ impl Default for GiSettings {
             warm_up: true,
             table: GI_TABLE_DEFAULT,
             cell_pixels: 4,
+            period: 2,
         }
     }
 }
@@ -310,6 +318,7 @@ pub const MAX_TAPS: u32 = 16;
 
 /// Valid ranges, shared by `--set` (which rejects) and the F4 panel (which clamps).
 pub const GI_RAYS_RANGE: (u32, u32) = (4, 128);
+pub const GI_PERIOD_RANGE: (u32, u32) = (1, 8);
 pub const GI_UPDATE_RAYS_RANGE: (u32, u32) = (1, 64);
 pub const GI_ALPHA_RANGE: (f32, f32) = (0.001, 1.0);
 pub const GI_TABLE_RANGE: (u32, u32) = (1 << 12, 1 << 22);

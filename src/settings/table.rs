@@ -374,6 +374,19 @@ pub static SETTINGS: &[Setting] = &[
         },
     },
     Setting {
+        key: "gi_period",
+        section: Section::Gi,
+        about: "Frames between updates of a settled entry (blended 2/alpha frames, no moving object in its rays): \
+                the same noise for 1/period of the rays, slow changes followed period times slower.",
+        field: &Range {
+            range: GI_PERIOD_RANGE,
+            step: Step::Double,
+            unit: "",
+            get: |s| s.gi.period,
+            set: |s, v| s.gi.period = v,
+        },
+    },
+    Setting {
         key: "gi_alpha",
         section: Section::Gi,
         about: "Weight of a new frame in the temporal blend (a fresh entry averages its first 1/alpha frames).",

@@ -384,6 +384,41 @@ pub fn a_glowing_object_behind_a_wall_does_not_leak_through_it() {
     assert!((with_behind - without).abs() < 0.02 * without, "no light through the wall: {with_behind} vs {without}");
 }
 
+/// `gi_period`: once the light is old, a settled entry (blended 2 / alpha frames) updates one frame in the
+/// period, so a still room's GI passes update about 1 / period of their entries a frame; entries a moving
+/// object's light reaches keep updating every frame while it moves. The walled room after 80 frames (warm-up
+/// over), entries updated in one frame: period 2 against 1, without and with a glowing block sliding high up
+/// in the lit half (out of view: its light reaches the room only through the cache).
+pub fn settled_entries_update_one_frame_in_their_period_unless_an_object_moves_near() {
+    use glowbrick::dynamic::{Motion, VoxelModel, spawn_object_in};
+    use std::sync::Arc;
+    let (world, view, glare) = walled_room();
+    let model = Arc::new(VoxelModel { name: "glare".into(), size: UVec3::new(2, 2, 2), voxels: vec![glare; 8] });
+    let updated = |period: &str, object: bool| {
+        let mut r = renderer(&world, &view, &["lighting=nee", "gi=on", "gi_alpha=0.1", period]);
+        if object {
+            let motion = Motion::Slide { offset: Vec3::new(0.0, 0.0, 10.0), period: 2.0 };
+            spawn_object_in(r.app_mut().world_mut(), model.clone(), motion, Vec3::new(23.0, 13.0, 2.0)).unwrap();
+        }
+        r.render(80).unwrap();
+        let c = r.counters().unwrap();
+        (c[GpuCounter::GiUpdated as usize] as f64, c[GpuCounter::GiLive as usize] as f64)
+    };
+    let (every, live) = updated("gi_period=1", false);
+    let (halved, _) = updated("gi_period=2", false);
+    let (every_near, _) = updated("gi_period=1", true);
+    let (halved_near, _) = updated("gi_period=2", true);
+    eprintln!(
+        "entries updated in one frame (of {live} live): still room, period 1 {every}, period 2 {halved}; \
+         with a moving object, period 1 {every_near}, period 2 {halved_near}"
+    );
+    assert!(every > 100.0 && every >= 0.9 * live, "period 1 updates every entry in use: {every} of {live}");
+    let still = halved / every;
+    assert!((0.4..0.6).contains(&still), "period 2 updates half of a still room's entries: {still:.2}");
+    let near = halved_near / every_near;
+    assert!(near > still + 0.1, "the object's light keeps entries updating: {near:.2} against {still:.2}");
+}
+
 /// The cache is world-level: with two cameras on the same view it is updated once per frame, not once per
 /// camera (each update pass counts the entries it re-shades).
 pub fn two_cameras_update_the_cache_once_per_frame() {

@@ -91,6 +91,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             the_gi_cache_converges_to_the_path_traced_reference_in_the_window_room,
             the_gi_cache_converges_with_per_voxel_detail,
             two_cameras_update_the_cache_once_per_frame,
+            settled_entries_update_one_frame_in_their_period_unless_an_object_moves_near,
             freeing_entries_keeps_the_rest_of_their_probe_chains_reachable,
             the_cache_restarts_its_blends_only_when_the_light_changes,
             an_opened_doorway_lights_the_far_side_within_thirty_frames,

@@ -221,7 +221,8 @@ impl GiCache {
             iteration: 0,
             cell_pixels: gi.cell_pixels as f32,
             update_run: plan.update_run,
-            _pad: [0; 2],
+            period: plan.settled_period(gi.period),
+            _pad: 0,
         }
     }
 

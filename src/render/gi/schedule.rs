@@ -77,6 +77,15 @@ pub struct FramePlan {
     pub update_run: u32,
 }
 
+impl FramePlan {
+    /// Frames between two updates of a settled entry (the `gi_period` setting), or 1 while the light is new: after
+    /// a change of light, during a fresh cache's warm-up and in the frames an edit restarts, every entry updates
+    /// every frame so the new light reaches all of them at once.
+    pub fn settled_period(&self, setting: u32) -> u32 {
+        if self.restart || self.edit_restart || self.iterations > 1 { 1 } else { setting.max(1) }
+    }
+}
+
 /// The schedule's state from frame to frame.
 pub struct GiSchedule {
     lighting: Option<LightingKey>,
@@ -239,6 +248,25 @@ mod tests {
             assert!(schedule.plan(events(&settings)).edit_restart);
         }
         assert!(!schedule.plan(events(&settings)).edit_restart);
+    }
+
+    #[test]
+    fn settled_entries_skip_frames_only_while_the_light_is_old() {
+        let settings = RenderSettings::default();
+        let mut schedule = GiSchedule::default();
+        assert_eq!(schedule.plan(events(&settings)).settled_period(4), 1, "the first frame restarts");
+        assert_eq!(schedule.plan(events(&settings)).settled_period(4), 1, "warming up");
+        let mut schedule = settled(&settings);
+        assert_eq!(schedule.plan(events(&settings)).settled_period(4), 4);
+        assert_eq!(schedule.plan(events(&settings)).settled_period(0), 1, "a period of 0 is every frame");
+        let edited = schedule.plan(FrameEvents { edited: true, ..events(&settings) });
+        assert_eq!(edited.settled_period(4), 1, "an edit's light reaches every entry at once");
+        for _ in 1..EDIT_RESTART_FRAMES {
+            assert_eq!(schedule.plan(events(&settings)).settled_period(4), 1);
+        }
+        assert_eq!(schedule.plan(events(&settings)).settled_period(4), 4);
+        let lamp = schedule.plan(FrameEvents { lights_changed: true, ..events(&settings) });
+        assert_eq!(lamp.settled_period(4), 1);
     }
 
     #[test]
