@@ -286,11 +286,11 @@ pub struct GiSettings {
     /// cells), 3-9x fewer entries and GI passes 2.5-4x cheaper at 320x180 for about the same error.
     pub cell_pixels: u32,
     /// Frames between two updates of a settled entry (blended for 2 / alpha frames, no moving object among its
-    /// hits): in a still scene its value only averages more noise, and at one update every `period` frames it
-    /// keeps the same noise (the blend weight per update is unchanged) for 1 / period of the rays; it follows
-    /// a slow change (a moving lantern's light elsewhere) `period` times slower. Young entries, entries a moving
-    /// object's light reaches, and every entry in the frames after a change of light or an edit update every
-    /// frame (docs/bench/why.md).
+    /// hits): at one update every `period` frames it keeps the same noise (the blend weight per update is
+    /// unchanged) for 1 / period of the GI rays, but follows every slow change `period` times slower. Young
+    /// entries, entries a moving object's light reaches, and every entry in the frames after a change of light
+    /// or an edit update every frame. 1 (every frame) by default: a large open scene's bounce light still
+    /// converges for hundreds of frames after its blends settle, and 2 doubled that (docs/bench/why.md).
     pub period: u32,
 }
 
@@ -308,7 +308,7 @@ impl Default for GiSettings {
             warm_up: true,
             table: GI_TABLE_DEFAULT,
             cell_pixels: 4,
-            period: 2,
+            period: 1,
         }
     }
 }

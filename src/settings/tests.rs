@@ -150,7 +150,7 @@ fn the_summary_shows_the_sections_that_apply() {
     );
     assert!(
         summary
-            .contains("gi_cached_rays=64 gi_update=8 gi_period=2 gi_alpha=0.03 gi_table=262144 gi_cell=4 gi_filter=on"),
+            .contains("gi_cached_rays=64 gi_update=8 gi_period=1 gi_alpha=0.03 gi_table=262144 gi_cell=4 gi_filter=on"),
         "{summary}"
     );
 }
