@@ -168,6 +168,7 @@ fn twins() -> Vec<Twin> {
                 iteration,
                 cell_pixels,
                 update_run,
+                period,
             }
         ),
         sized("gi_keys", None, GI_KEY_BYTES, 1),
