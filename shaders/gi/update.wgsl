@@ -260,10 +260,11 @@ fn update_entry(slot: u32) {
         gi_entries[slot].lo = lo;
         gi_entries[slot].hi = hi;
     }
-    // An entry whose rays met a moving object goes back a quarter of the way to settled: it updates every frame
-    // (compact.wgsl) for that many frames after the object was last among its hits, while the object's light and
-    // shadow move, at a blend weight at most a third above alpha.
-    let most = select(1u << 20u, max(settled_samples() - settled_samples() / 4u, 2u), object_hit);
+    // While settled entries skip frames, an entry whose rays met a moving object goes back a quarter of the way
+    // to settled: it updates every frame (compact.wgsl) for that many frames after the object was last among its
+    // hits, while the object's light and shadow move, at a blend weight at most a third above alpha. (At a period
+    // of 1 every entry updates every frame anyway, and its blend stays as it was.)
+    let most = select(1u << 20u, max(settled_samples() - settled_samples() / 4u, 2u), object_hit && gi.period > 1u);
     gi_entries[slot].samples = min(age + 1u, most);
 }
 
