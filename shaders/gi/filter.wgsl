@@ -29,7 +29,8 @@ fn filter_entry(slot: u32) {
         }
         filtered = sum / max(count, 1.0);
     }
-    gi_filtered[slot] = vec4(filtered, 1.0);
+    // w holds the entry's estimate variance (update.wgsl, blend_estimate).
+    gi_filtered[slot] = vec4(filtered, gi_filtered[slot].a);
 }
 
 @compute @workgroup_size(64, 1, 1)

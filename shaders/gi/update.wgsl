@@ -182,10 +182,39 @@ fn ray_radiance(ray: EntryRay, level: u32, seen: bool, own: vec3<f32>, rng: ptr<
 // (frame j weighs j + 1): their first estimates come before the light has travelled the bounces (their hits are
 // young too), and an even average keeps that shortfall for 1 / alpha frames (docs/bench/gi.md). After about
 // 2 / alpha frames it is an exponential blend.
-fn blend_estimate(slot: u32, age: u32, estimate: vec3<f32>) {
-    let weight = max(gi.alpha, 2.0 / f32(age + 2u));
-    let blended = select(mix(gi_irradiance[slot].rgb, estimate, weight), estimate, age == 0u);
-    gi_irradiance[slot] = vec4(blended, 1.0);
+//
+// A settled entry whose light is still rising (the bounces of a large scene arrive over hundreds of frames, or the
+// light changed) lags behind it by about 1 / alpha frames. So each entry also keeps a fast luminance average (at
+// FAST_BLEND times alpha, in the blended radiance's w) and the variance of its estimates about it (in the
+// filtered radiance's w): while the fast and the slow average differ by more than DRIFT_SIGMAS times the noise of
+// their difference, the entry blends at the fast weight. A still, converged entry's averages differ by noise
+// alone, so it keeps alpha and its noise (docs/bench/frame.md, "A noise-aware fast blend").
+const FAST_BLEND: f32 = 4.0;
+const DRIFT_SIGMAS: f32 = 3.0;
+const LUMINANCE: vec3<f32> = vec3(0.2126, 0.7152, 0.0722);
+
+fn blend_estimate(slot: u32, age: u32, estimate: vec3<f32>) -> bool {
+    let old = gi_irradiance[slot];
+    let young = 2.0 / f32(age + 2u);
+    let fast_alpha = min(FAST_BLEND * gi.alpha, 1.0);
+    let luminance = dot(estimate, LUMINANCE);
+    var fast = luminance;
+    var variance = 0.0;
+    var weight = 1.0;
+    var drifting = false;
+    if age > 0u {
+        let fast_weight = max(fast_alpha, young);
+        fast = mix(old.a, luminance, fast_weight);
+        let deviation = luminance - old.a;
+        variance = mix(gi_filtered[slot].a, deviation * deviation, fast_weight);
+        // Variance of an exponential average at weight a: a / (2 - a) times the estimates' variance.
+        let noise = sqrt(variance * (fast_alpha / (2.0 - fast_alpha) + gi.alpha / (2.0 - gi.alpha)));
+        drifting = age > 8u && abs(fast - dot(old.rgb, LUMINANCE)) > DRIFT_SIGMAS * noise;
+        weight = max(select(gi.alpha, fast_alpha, drifting), young);
+    }
+    gi_irradiance[slot] = vec4(mix(old.rgb, estimate, weight), fast);
+    gi_filtered[slot].a = variance;
+    return drifting;
 }
 
 // The ray generators' inputs for the entry `e` in `slot`.
@@ -255,16 +284,18 @@ fn update_entry(slot: u32) {
         atomicAdd(&counters[COUNT_GI_RESETS], 1u);
         estimate = vec3(0.0);
     }
-    blend_estimate(slot, age, estimate);
+    let drifting = blend_estimate(slot, age, estimate);
     if plan.spread {
         gi_entries[slot].lo = lo;
         gi_entries[slot].hi = hi;
     }
-    // While settled entries skip frames, an entry whose rays met a moving object goes back a quarter of the way
-    // to settled: it updates every frame (compact.wgsl) for that many frames after the object was last among its
-    // hits, while the object's light and shadow move, at a blend weight at most a third above alpha. (At a period
-    // of 1 every entry updates every frame anyway, and its blend stays as it was.)
-    let most = select(1u << 20u, max(settled_samples() - settled_samples() / 4u, 2u), object_hit && gi.period > 1u);
+    // While settled entries skip frames, an entry whose rays met a moving object, or whose light is drifting,
+    // goes back a quarter of the way to settled: it updates every frame (compact.wgsl) for that many frames after
+    // the object was last among its hits or the drift ended, at a blend weight at most a third above alpha (a
+    // drifting one at the fast weight). (At a period of 1 every entry updates every frame anyway, and its blend
+    // stays as it was.)
+    let unsettle = (object_hit || drifting) && gi.period > 1u;
+    let most = select(1u << 20u, max(settled_samples() - settled_samples() / 4u, 2u), unsettle);
     gi_entries[slot].samples = min(age + 1u, most);
 }
 
