@@ -100,6 +100,11 @@ impl DenoiseView {
         self.current.fetch_xor(1, Ordering::Relaxed);
     }
 
+    /// Which history is this frame's (the view's bind groups are cached by it).
+    pub fn parity(&self) -> usize {
+        self.current.load(Ordering::Relaxed)
+    }
+
     /// Bindings 8 to 11 of the view's group.
     pub fn bindings(&self) -> [BindingResource<'_>; 4] {
         let current = self.current.load(Ordering::Relaxed);

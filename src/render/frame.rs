@@ -284,7 +284,10 @@ pub fn view_frame(
         return;
     }
     let denoised = matches!(denoise, TechniquePipelines::Ready(_));
-    let Some(view_binding) = view_uniforms.uniforms.binding() else { return };
+    let (Some(view_binding), Some(view_buffer)) = (view_uniforms.uniforms.binding(), view_uniforms.uniforms.buffer())
+    else {
+        return;
+    };
     let size = target.main_texture().size();
     // Last frame's G-buffer and denoiser history become the previous ones that the temporal reprojections read.
     resources.gbuffers.swap();
@@ -292,7 +295,7 @@ pub fn view_frame(
         resources.denoise.swap_history();
     }
     let layout = pipeline_cache.get_bind_group_layout(&layouts.view);
-    let view_group = resources.bind_group(ctx.render_device(), &layout, target, view_binding);
+    let view_group = resources.bind_group(ctx.render_device(), &layout, target, view_buffer, view_binding);
     let diagnostics = ctx.diagnostic_recorder();
     let encoder = ctx.command_encoder();
     let mut recorder = PassRecorder {

@@ -47,6 +47,11 @@ impl GBuffers {
         self.current.fetch_xor(1, Ordering::Relaxed);
     }
 
+    /// Which of the two buffers is this frame's (the view's bind groups are cached by it).
+    pub fn parity(&self) -> usize {
+        self.current.load(Ordering::Relaxed)
+    }
+
     /// Bindings 4 and 5 of the view's group: this frame's, then last frame's.
     pub fn bindings(&self) -> [BindingResource<'_>; 2] {
         let current = self.current.load(Ordering::Relaxed);

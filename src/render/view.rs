@@ -21,6 +21,7 @@ use bevy::render::render_resource::*;
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use bevy::render::view::{ExtractedView, ViewTarget, ViewUniform};
 use std::num::NonZeroU64;
+use std::sync::Mutex;
 use std::sync::atomic::Ordering;
 
 /// Per-view, per-frame parameters for the view's shaders (`FrameParams`), before the view's own history fields.
@@ -106,7 +107,23 @@ pub struct ViewResources {
     pub gbuffers: GBuffers,
     pub restir: RestirView,
     pub denoise: DenoiseView,
+    /// The view's bind groups made so far, by what can change between frames (`ViewBindKey`): a handful, made
+    /// once each instead of every frame.
+    bind_groups: Mutex<Vec<(ViewBindKey, BindGroup)>>,
 }
+
+/// What the view's bind group binds that can change from frame to frame: the output texture (Bevy's main
+/// textures), the view uniforms' buffer (grown by Bevy), and the two ping-pong parities.
+#[derive(Clone, Copy, PartialEq, Eq)]
+struct ViewBindKey {
+    target: TextureId,
+    view_uniforms: BufferId,
+    gbuffer: usize,
+    history: usize,
+}
+
+/// More keys than a view meets in practice (2 textures x 2 x 2 parities); past it the cache starts over.
+const MAX_VIEW_BIND_GROUPS: usize = 16;
 
 impl ViewResources {
     fn new(device: &RenderDevice, size: UVec2) -> Self {
@@ -117,25 +134,39 @@ impl ViewResources {
             gbuffers: GBuffers::new(device, pixels),
             restir: RestirView::new(device, pixels),
             denoise: DenoiseView::new(device, pixels),
+            bind_groups: Mutex::new(Vec::new()),
         }
     }
 
-    /// The view's bind group (group 1) for this frame's output texture and view uniform.
+    /// The view's bind group (group 1) for this frame's output texture and view uniform: made the first time
+    /// this combination of texture, uniform buffer and ping-pong parities is met, then reused.
     pub fn bind_group(
         &self,
         device: &RenderDevice,
         layout: &BindGroupLayout,
         target: &ViewTarget,
+        view_uniforms: &Buffer,
         view_uniform: BindingResource,
     ) -> BindGroup {
+        let output = target.get_unsampled_color_attachment().view;
+        let key = ViewBindKey {
+            target: target.main_texture().id(),
+            view_uniforms: view_uniforms.id(),
+            gbuffer: self.gbuffers.parity(),
+            history: self.denoise.parity(),
+        };
+        let mut cached = self.bind_groups.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        if let Some((_, group)) = cached.iter().find(|(k, _)| *k == key) {
+            return group.clone();
+        }
         let [gbuffer, prev_gbuffer] = self.gbuffers.bindings();
         let [reservoirs_temporal, reservoirs_final] = self.restir.bindings();
         let [noisy, history, prev_history, wavelet] = self.denoise.bindings();
-        device.create_bind_group(
+        let group = device.create_bind_group(
             "glowbrick_view",
             layout,
             &BindGroupEntries::sequential((
-                target.get_unsampled_color_attachment().view,
+                output,
                 view_uniform,
                 self.view.frame_params.as_entire_binding(),
                 self.view.accumulation.as_entire_binding(),
@@ -148,7 +179,12 @@ impl ViewResources {
                 prev_history,
                 wavelet,
             )),
-        )
+        );
+        if cached.len() >= MAX_VIEW_BIND_GROUPS {
+            cached.clear();
+        }
+        cached.push((key, group.clone()));
+        group
     }
 }
 

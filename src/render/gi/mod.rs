@@ -121,7 +121,8 @@ pub fn gi_bind_group_layout() -> BindGroupLayoutDescriptor {
     )
 }
 
-/// The render world's GI cache: its tables, edit log and schedule, and this frame's bind group.
+/// The render world's GI cache: its tables, edit log and schedule, and the bind group over them (made again only
+/// when the tables are).
 #[derive(Resource)]
 pub struct GiCache {
     params: Buffer,
@@ -189,6 +190,7 @@ impl GiCache {
         }
         if shape != self.shape || world_replaced || self.schedule.seed_changed(settings.seed) {
             self.tables = Tables::new(device, shape);
+            self.bind_group = None;
             self.shape = shape;
             self.log = EditLog::default();
             self.schedule.start_fresh(settings.seed);
@@ -314,7 +316,10 @@ pub fn prepare_gi(
     if edited {
         queue.write_buffer(&cache.edits, 0, bytemuck::cast_slice(&cache.log.records()));
     }
-    cache.bind_group = Some(cache.create_bind_group(&device, &pipeline_cache.get_bind_group_layout(&layout.0)));
+    // Its buffers change only when `fit` makes new tables.
+    if cache.bind_group.is_none() {
+        cache.bind_group = Some(cache.create_bind_group(&device, &pipeline_cache.get_bind_group_layout(&layout.0)));
+    }
 }
 
 /// Adds the cache and its preparation to the render app (its passes are in `frame::world_frame`).
