@@ -7,8 +7,8 @@
 
 use crate::lights::alias::column_of;
 use crate::lights::{AliasTable, LightPool};
+use crate::world::cell_map::CellMap;
 use bevy::math::{IVec3, Vec3};
-use std::collections::HashMap;
 
 /// Cell edge in voxels: the nearby set spans 3 cells (12 voxels) around the point's cell.
 const CELL: i32 = 4;
@@ -16,7 +16,7 @@ const CELL: i32 = 4;
 /// The lights by cell, and each light's chance of being drawn by power.
 #[derive(Default)]
 pub struct NearbyLights {
-    cells: HashMap<IVec3, Vec<u32>>,
+    cells: CellMap<Vec<u32>>,
     /// By light slot.
     power_pdf: Vec<f32>,
 }
@@ -30,7 +30,7 @@ pub struct Neighbourhood<'a> {
 
 impl NearbyLights {
     pub fn of(pool: &LightPool, alias: &AliasTable) -> NearbyLights {
-        let mut cells: HashMap<IVec3, Vec<u32>> = HashMap::new();
+        let mut cells: CellMap<Vec<u32>> = CellMap::default();
         for (slot, light) in pool.lights() {
             cells.entry(cell_of(light.min.as_vec3())).or_default().push(slot);
         }

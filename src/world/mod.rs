@@ -1,6 +1,7 @@
 //! The voxel world: brick grid, palette, named camera views, edits, traversal, generation and files.
 
 pub mod camera;
+pub mod cell_map;
 pub mod edit;
 pub mod events;
 pub mod font;

@@ -5,19 +5,19 @@ pub mod vox;
 pub mod vx;
 
 use super::VoxelWorld;
+use super::cell_map::CellMap;
 use super::grid::{BRICK_VOXELS, Voxel, local_index};
 use bevy::math::IVec3;
-use std::collections::HashMap;
 
 /// Collects voxel writes brick by brick (last write wins) and builds the world at the end, so importing
 /// millions of entries costs a hash lookup each instead of a brick-collapse check each.
 pub struct BrickBuilder {
-    bricks: HashMap<IVec3, Box<[Voxel; BRICK_VOXELS]>>,
+    bricks: CellMap<Box<[Voxel; BRICK_VOXELS]>>,
 }
 
 impl BrickBuilder {
     pub fn new() -> Self {
-        BrickBuilder { bricks: HashMap::new() }
+        BrickBuilder { bricks: CellMap::default() }
     }
 
     /// Writes one voxel (callers check that `p` is inside the world).
