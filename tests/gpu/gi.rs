@@ -157,13 +157,19 @@ pub fn a_sky_seen_through_a_small_hole_is_averaged_over_fresh_directions() {
     assert!(errors[0] < 0.7 * errors[1], "fresh directions average the hole's light: {errors:?}");
 }
 
+/// A closed 20 x 12 x 20 box of `wall`, hollow inside its one-voxel walls.
+fn closed_box(palette: Palette, wall: u16) -> VoxelWorld {
+    let mut world = VoxelWorld::new(UVec3::new(20, 12, 20), palette);
+    world.grid.fill_box(IVec3::ZERO, IVec3::new(20, 12, 20), wall).unwrap();
+    world.grid.fill_box(IVec3::new(1, 1, 1), IVec3::new(19, 11, 19), 0).unwrap();
+    world
+}
+
 /// A closed white 18 x 10 x 18 room with a one-voxel hole in its ceiling, seen from a corner.
 fn hole_room() -> (VoxelWorld, CameraView) {
     let mut palette = Palette::new(vec![]);
     let white = palette.push(Material::solid("white", [0.8, 0.8, 0.8]));
-    let mut world = VoxelWorld::new(UVec3::new(20, 12, 20), palette);
-    world.grid.fill_box(IVec3::ZERO, IVec3::new(20, 12, 20), white).unwrap();
-    world.grid.fill_box(IVec3::new(1, 1, 1), IVec3::new(19, 11, 19), 0).unwrap();
+    let mut world = closed_box(palette, white);
     world.grid.fill_box(IVec3::new(9, 11, 9), IVec3::new(10, 12, 10), 0).unwrap();
     let view =
         CameraView { name: "corner".into(), origin: [2.5, 9.0, 2.5], direction: [1.0, -0.8, 1.0], fov_deg: 70.0 };
@@ -660,9 +666,7 @@ fn white_box() -> (VoxelWorld, CameraView) {
     let mut palette = Palette::new(vec![]);
     let white = palette.push(Material::solid("white", [0.9, 0.9, 0.9]));
     let lamp = palette.push(Material::emissive("lamp", [0.9; 3], [1.0; 3], 10.0));
-    let mut world = VoxelWorld::new(UVec3::new(20, 12, 20), palette);
-    world.grid.fill_box(IVec3::ZERO, IVec3::new(20, 12, 20), white).unwrap();
-    world.grid.fill_box(IVec3::new(1, 1, 1), IVec3::new(19, 11, 19), 0).unwrap();
+    let mut world = closed_box(palette, white);
     world.grid.fill_box(IVec3::new(9, 10, 9), IVec3::new(11, 11, 11), lamp).unwrap();
     let view =
         CameraView { name: "corner".into(), origin: [2.5, 6.0, 2.5], direction: [1.0, -0.3, 1.0], fov_deg: 70.0 };
