@@ -101,6 +101,13 @@ impl VoxelPipelines {
             })
             .collect()
     }
+
+    /// Whether every GI pass is compiled for this frame's traversal.
+    pub fn gi_ready(&self, cache: &PipelineCache) -> bool {
+        [&[gi::COMPACT_PASS][..], &gi::STATIC_PASSES, &gi::DYNAMIC_PASSES]
+            .iter()
+            .all(|passes| self.get(cache, passes).is_some())
+    }
 }
 
 /// Every pass's pipeline for one traversal.
@@ -276,7 +283,10 @@ pub fn view_frame(
     else {
         return;
     };
-    let Some(gi_group) = scene.gi.as_ref().and_then(|g| g.bind_group.as_ref()) else { return };
+    // GI on but not compiled yet: the frame waits for it, as for ReSTIR and the denoiser below.
+    let Some(gi_group) = scene.gi.as_ref().filter(|g| !g.compiling).and_then(|g| g.bind_group.as_ref()) else {
+        return;
+    };
     let Some(primary_pipeline) = pipelines.get(&pipeline_cache, &[primary::PRIMARY]).map(|p| p[0]) else { return };
     let restir = TechniquePipelines::of(resources.restir.runs, &pipelines, &pipeline_cache, &restir::PASSES);
     let denoise = TechniquePipelines::of(resources.denoise.runs, &pipelines, &pipeline_cache, &denoise::PASSES);
@@ -385,7 +395,7 @@ pub fn add(render_app: &mut SubApp) {
             Render,
             (
                 super::view::prepare_view_resources.after(SceneUploaded).in_set(RenderSystems::PrepareResources),
-                follow_traversal.in_set(RenderSystems::PrepareResources),
+                follow_traversal.before(gi::prepare_gi).in_set(RenderSystems::PrepareResources),
             ),
         )
         .add_systems(Core3d, view_frame.after(main_transparent_pass_3d).in_set(Core3dSystems::MainPass))

@@ -21,7 +21,7 @@ mod tables;
 pub use schedule::{RESTART_ITERATIONS, WARM_UP_FRAMES};
 pub use tables::{DYNAMIC_CAPACITY, ENTRY_BYTES, RAY_BYTES, cache_bytes, static_capacity};
 
-use super::frame::{Dispatch, VoxelPass};
+use super::frame::{Dispatch, VoxelPass, VoxelPipelines};
 use super::gpu_types::{GI_BOUNCES, GI_CACHE, GI_EDIT_RESTART, GI_FILTER, GI_QMC, GI_RESTART, GiEdit, GiParams};
 use super::scene::SceneUploaded;
 use super::scene::lights::GpuLights;
@@ -138,6 +138,9 @@ pub struct GiCache {
     pub bind_group: Option<BindGroup>,
     /// Whether GI runs this frame.
     pub enabled: bool,
+    /// GI is on but its pipelines are still compiling: the cache waits (its schedule holds) and so do the
+    /// cameras, rather than showing frames without it.
+    pub compiling: bool,
 }
 
 impl GiCache {
@@ -280,6 +283,7 @@ pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
         iterations: 1,
         bind_group: None,
         enabled: false,
+        compiling: false,
     });
 }
 
@@ -293,6 +297,7 @@ pub fn prepare_gi(
     gpu_lights: Option<Res<GpuLights>>,
     gpu_objects: Option<Res<GpuObjects>>,
     layout: Res<GiLayout>,
+    pipelines: Option<Res<VoxelPipelines>>,
     pipeline_cache: Res<PipelineCache>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
@@ -300,26 +305,33 @@ pub fn prepare_gi(
     let fallback = RenderSettings::default();
     let settings = settings.as_deref().unwrap_or(&fallback);
     cache.fit(&device, settings, gpu_world.as_ref().is_some_and(|w| w.replaced));
+    // Its buffers change only when `fit` makes new tables.
+    if cache.bind_group.is_none() {
+        cache.bind_group = Some(cache.create_bind_group(&device, &pipeline_cache.get_bind_group_layout(&layout.0)));
+    }
     // The edit log reaches the GPU only in frames that add to it (a fresh log reads as none: edit_count 0).
     let edited = cache.log.record(gpu_world.as_ref().map_or(&[][..], |w| &w.edited_bricks));
-    let plan = cache.schedule.plan(FrameEvents {
+    if edited {
+        queue.write_buffer(&cache.edits, 0, bytemuck::cast_slice(&cache.log.records()));
+    }
+    let events = FrameEvents {
         lighting: LightingKey::of(settings),
         lights_changed: gpu_lights.as_ref().is_some_and(|l| l.changed),
         objects_came_or_went: gpu_objects.as_ref().is_some_and(|o| o.set_changed),
         edited,
         warm_up: settings.gi.warm_up,
-    });
+    };
+    // A frame whose GI passes are not compiled yet must not use up the first frame's restart or the warm-up.
+    cache.compiling = settings.gi.enabled && !pipelines.is_some_and(|p| p.gi_ready(&pipeline_cache));
+    cache.enabled = settings.gi.enabled && !cache.compiling;
+    if cache.compiling {
+        cache.schedule.hold(events);
+        return;
+    }
+    let plan = cache.schedule.plan(events);
     cache.iterations = plan.iterations;
-    cache.enabled = settings.gi.enabled;
     queue.write_buffer(&cache.params, 0, bytemuck::bytes_of(&cache.params(&settings.gi, &plan)));
     queue.write_buffer(&cache.tables.work, 0, bytemuck::cast_slice(&EMPTY_WORK));
-    if edited {
-        queue.write_buffer(&cache.edits, 0, bytemuck::cast_slice(&cache.log.records()));
-    }
-    // Its buffers change only when `fit` makes new tables.
-    if cache.bind_group.is_none() {
-        cache.bind_group = Some(cache.create_bind_group(&device, &pipeline_cache.get_bind_group_layout(&layout.0)));
-    }
 }
 
 /// Adds the cache and its preparation to the render app (its passes are in `frame::world_frame`).

@@ -61,6 +61,19 @@ pub struct FrameEvents {
     pub warm_up: bool,
 }
 
+impl FrameEvents {
+    /// These events followed by `later`'s, as one frame sees them: any change in either.
+    fn then(self, later: FrameEvents) -> FrameEvents {
+        FrameEvents {
+            lighting: later.lighting,
+            lights_changed: self.lights_changed || later.lights_changed,
+            objects_came_or_went: self.objects_came_or_went || later.objects_came_or_went,
+            edited: self.edited || later.edited,
+            warm_up: later.warm_up,
+        }
+    }
+}
+
 /// What this frame runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FramePlan {
@@ -96,6 +109,8 @@ pub struct GiSchedule {
     frame: u32,
     update_run: u32,
     restarts: u32,
+    /// Events of frames the cache did not run in (its pipelines still compiling), for the next frame it runs.
+    held: Option<FrameEvents>,
 }
 
 impl Default for GiSchedule {
@@ -108,6 +123,7 @@ impl Default for GiSchedule {
             frame: FIRST_FRAME,
             update_run: 0,
             restarts: 0,
+            held: None,
         }
     }
 }
@@ -129,8 +145,15 @@ impl GiSchedule {
         self.restarts
     }
 
+    /// A frame the cache does not run in: nothing advances (a fresh cache's restart and warm-up wait for its
+    /// first real frame), and what happened reaches the next frame that runs.
+    pub fn hold(&mut self, events: FrameEvents) {
+        self.held = Some(self.held.map_or(events, |held| held.then(events)));
+    }
+
     /// Advances one frame.
     pub fn plan(&mut self, events: FrameEvents) -> FramePlan {
+        let events = self.held.take().map_or(events, |held| held.then(events));
         let restart = events.lights_changed || events.objects_came_or_went || self.lighting != Some(events.lighting);
         self.lighting = Some(events.lighting);
         self.restarts += restart as u32;
@@ -267,6 +290,26 @@ mod tests {
         assert_eq!(schedule.plan(events(&settings)).settled_period(4), 4);
         let lamp = schedule.plan(FrameEvents { lights_changed: true, ..events(&settings) });
         assert_eq!(lamp.settled_period(4), 1);
+    }
+
+    #[test]
+    fn frames_the_cache_does_not_run_in_use_up_nothing_and_lose_nothing() {
+        let settings = RenderSettings::default();
+        let mut schedule = GiSchedule::default();
+        for _ in 0..3 * WARM_UP_FRAMES {
+            schedule.hold(events(&settings));
+        }
+        let first = schedule.plan(events(&settings));
+        assert_eq!((first.restart, first.iterations, first.frame), (true, RESTART_ITERATIONS, FIRST_FRAME + 1));
+        for _ in 1..WARM_UP_FRAMES {
+            assert_eq!(schedule.plan(events(&settings)).iterations, WARM_UP_ITERATIONS, "the warm-up is whole");
+        }
+        let mut schedule = settled(&settings);
+        schedule.hold(FrameEvents { lights_changed: true, ..events(&settings) });
+        schedule.hold(FrameEvents { edited: true, ..events(&settings) });
+        let next = schedule.plan(events(&settings));
+        assert!(next.restart && next.edit_restart, "a held frame's lamp and edit reach the next one: {next:?}");
+        assert!(!schedule.plan(events(&settings)).restart, "and only it");
     }
 
     #[test]
