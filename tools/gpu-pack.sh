@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Packs what a lent GPU machine needs to run the benches into gpu-pack/ (ignored by git; pass it to the device
+# tool's `carry`): the stripped, xz-compressed release binary and Debian's Vulkan loader (the machine has the
+# NVIDIA driver and its ICD but no loader, and no network). docs/bench/gpu-h200/README.md tells the rest.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+target="${CARGO_TARGET_DIR:-target}"
+cargo build --release
+rm -rf gpu-pack
+mkdir -p gpu-pack
+strip -o gpu-pack/glowbrick "$target/release/glowbrick"
+xz -T0 gpu-pack/glowbrick
+(
+  cd gpu-pack
+  apt-get download libvulkan1 >/dev/null
+  dpkg -x libvulkan1_*.deb vulkan
+  rm libvulkan1_*.deb
+)
+du -sh gpu-pack

@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# The frame profile on a lent GPU machine, as one call (after tools/gpu-pack.sh here):
+#   tools/gpu-profile.sh OUT [SIZES] [SCENES]
+# writes under OUT the frame bench (every pass, GPU ms and counters) at SIZES (default 1920x1080) with the
+# default walk and GI cache, then with traversal=occupancy, then with the GI cache's cached static hits
+# (gi_cached_hits=on, seed 001's static/dynamic split), each in its own folder; SCENES picks cases by label
+# (default: all six). Commit what comes back under docs/bench/gpu-NAME/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out="${1:?usage: tools/gpu-profile.sh OUT [SIZES] [SCENES]}"
+sizes="${2:-1920x1080}"
+scenes=()
+[ -n "${3:-}" ] && scenes=(--scenes "$3")
+pack="$PWD/gpu-pack"
+[ -x "$pack/glowbrick" ] || xz -dk "$pack/glowbrick.xz"
+export LD_LIBRARY_PATH="$pack/vulkan/usr/lib/x86_64-linux-gnu${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+export GLOWBRICK_ASSETS="$PWD/assets"
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
+mkdir -p "$out"
+run() {
+  local name="$1"
+  shift
+  local start=$SECONDS
+  "$pack/glowbrick" bench --frame --sizes "$sizes" "${scenes[@]}" "$@" --out "$out/$name" >"$out/$name.log" 2>&1 ||
+    echo "gpu-profile: $name failed (see $name.log)"
+  echo "gpu-profile: $name in $((SECONDS - start)) s"
+}
+run frame
+run frame-occupancy --set traversal=occupancy
+run frame-gi-cached-hits --set gi_cached_hits=on
