@@ -33,7 +33,8 @@ pub struct HeadlessOptions {
     /// Frames to render before reading back (the last one is returned).
     pub frames: u32,
     pub settings: RenderSettings,
-    /// Give up when the GPU has not produced the frames by then.
+    /// Give up when the GPU has rendered no frame for this long (a long render on a slow adapter runs on while its
+    /// frames keep coming).
     pub timeout: Duration,
 }
 
@@ -260,9 +261,11 @@ impl HeadlessRenderer {
                 Ok((all.len() >= copies).then(|| all.drain(..copies).collect()))
             },
             |r| crate::render::frame::pipeline_error(r.app.sub_app(RenderApp).world()),
+            |r| r.camera_frames_rendered(),
             |r, timeout| {
                 format!(
-                    "timed out after {timeout:?} waiting for {what}: {} frames rendered (is a GPU adapter available?)",
+                    "timed out after {timeout:?} without a frame, waiting for {what}: {} frames rendered (is a GPU \
+                     adapter available?)",
                     r.camera_frames_rendered()
                 )
             },
@@ -275,15 +278,17 @@ impl HeadlessRenderer {
 }
 
 /// Runs `tick` until it returns a value. After every tick that returned none, `failed` may name an error that
-/// ends the wait at once (a pipeline that failed to compile); past `timeout`, `timed_out` says what was missing.
+/// ends the wait at once (a pipeline that failed to compile); once `progress` (frames rendered) has stood still
+/// for `timeout`, `timed_out` says what was missing. A render of many frames on a slow adapter is not a hang.
 fn wait_for<S, T>(
     state: &mut S,
     timeout: Duration,
     mut tick: impl FnMut(&mut S) -> Result<Option<T>, String>,
     failed: impl Fn(&S) -> Option<String>,
+    progress: impl Fn(&S) -> u32,
     timed_out: impl FnOnce(&S, Duration) -> String,
 ) -> Result<T, String> {
-    let start = Instant::now();
+    let mut last_progress = (progress(state), Instant::now());
     loop {
         if let Some(value) = tick(state)? {
             return Ok(value);
@@ -291,7 +296,10 @@ fn wait_for<S, T>(
         if let Some(error) = failed(state) {
             return Err(error);
         }
-        if start.elapsed() > timeout {
+        let now = progress(state);
+        if now != last_progress.0 {
+            last_progress = (now, Instant::now());
+        } else if last_progress.1.elapsed() > timeout {
             return Err(timed_out(state, timeout));
         }
     }
@@ -346,6 +354,7 @@ mod tests {
                 Ok(None)
             },
             |t| (*t >= 3).then(|| "the primary shader (primary.wgsl) failed to compile: oops".to_string()),
+            |_| 0,
             |_, _| "timed out".to_string(),
         );
         assert_eq!(result, Err("the primary shader (primary.wgsl) failed to compile: oops".to_string()));
@@ -365,6 +374,7 @@ mod tests {
                 Ok((*t == 2).then_some(*t))
             },
             |t| (*t >= 2).then(|| "a failure after the value arrived".to_string()),
+            |_| 0,
             |_, _| "timed out".to_string(),
         );
         assert_eq!(result, Ok(2));
@@ -383,10 +393,33 @@ mod tests {
                 Ok(None)
             },
             |_| None,
+            |_| 0,
             |t, timeout| format!("timed out after {timeout:?} at tick {t}"),
         );
         let error = result.unwrap_err();
         assert!(error.starts_with("timed out after 20ms at tick"), "{error}");
         assert!(ticks >= 2);
+    }
+
+    /// A wait whose frames keep coming runs past the timeout (here 5x it): only a stall ends it.
+    #[test]
+    fn frames_that_keep_coming_outlast_the_timeout() {
+        let start = Instant::now();
+        let mut ticks = 0u32;
+        let result = wait_for(
+            &mut ticks,
+            Duration::from_millis(20),
+            |t| {
+                *t += 1;
+                std::thread::sleep(Duration::from_millis(5));
+                Ok((*t == 20).then_some(*t))
+            },
+            |_| None,
+            // A frame every other tick: 10 ms apart, under the 20 ms timeout.
+            |t| *t / 2,
+            |t, timeout| format!("timed out after {timeout:?} at tick {t}"),
+        );
+        assert_eq!(result, Ok(20));
+        assert!(start.elapsed() >= Duration::from_millis(100));
     }
 }
