@@ -52,6 +52,10 @@ const RESTIR_UNBIASED: u32 = #{RESTIR_UNBIASED}u;
 const RESTIR_ONE_RAY: u32 = #{RESTIR_ONE_RAY}u;
 const RESTIR_LOCAL: u32 = #{RESTIR_LOCAL}u;
 const RESTIR_INITIAL_VISIBILITY: u32 = #{RESTIR_INITIAL_VISIBILITY}u;
+const RESTIR_LIGHT_TILES: u32 = #{RESTIR_LIGHT_TILES}u;
+// Light tiles (restir/tiles.wgsl): how many, and lights in each (a power of two).
+const LIGHT_TILES: u32 = #{LIGHT_TILES}u;
+const LIGHT_TILE_SIZE: u32 = #{LIGHT_TILE_SIZE}u;
 const DENOISE_ON: u32 = #{DENOISE_ON}u;
 const DENOISE_HISTORY: u32 = #{DENOISE_HISTORY}u;
 const MAX_TAPS: u32 = #{MAX_TAPS}u;

@@ -6,13 +6,13 @@
 
 #import glowbrick::world::{materials, voxel_at, albedo_at}
 #import glowbrick::traversal::{trace_scene, face_normal}
-#import glowbrick::lights::{Light, PickedLight, lights, scene, alias_table, pick_light, light_contains, light_size,
+#import glowbrick::lights::{Light, lights, scene, alias_table, pick_light, light_contains, light_size,
     face_exposed, light_at_voxel, light_in_box}
 #import glowbrick::random::{Rng, rng_next, rng_next_u32, pcg}
 #import glowbrick::counters::counters
 #import glowbrick::guards::finite
 #import glowbrick::constants::{RAY_OFFSET, PI, RESTIR_POINT, RESTIR_UNBIASED, RESTIR_ONE_RAY, RESTIR_LOCAL,
-    COUNT_RESERVOIR_RESETS, NO_COLUMN, NEAR_FACE}
+    RESTIR_LIGHT_TILES, LIGHT_TILES, LIGHT_TILE_SIZE, COUNT_RESERVOIR_RESETS, NO_COLUMN, NEAR_FACE}
 #import glowbrick::frame::{frame, view, Surface, luminance, surface_voxel}
 
 // 32 bytes. `face` is the light cube's face (0 +X, 1 -X, ... as the traversal numbers faces) or POINT_FACE,
@@ -35,6 +35,18 @@ struct Reservoir {
 @group(1) @binding(6) var<storage, read_write> reservoirs_temporal: array<Reservoir>;
 // Written by spatial.wgsl, read by shade.wgsl (which zeroes occluded samples) and next frame's temporal reuse.
 @group(1) @binding(7) var<storage, read_write> reservoirs_final: array<Reservoir>;
+
+// A light of this frame's light tiles (tiles.wgsl): a copy of the slot, the slot, the pick's probability.
+struct TileLight {
+    light: Light,
+    slot: u32,
+    pdf: f32,
+}
+
+// LIGHT_TILES tiles of LIGHT_TILE_SIZE lights, written by tiles.wgsl, read by initial.wgsl's candidates.
+@group(1) @binding(12) var<storage, read_write> light_tiles: array<TileLight>;
+// No tile: the candidates pick from the alias table themselves (light_tiles=off).
+const NO_TILE: u32 = 0xffffffffu;
 
 const NO_LIGHT: u32 = 0xffffffffu;
 const POINT_FACE: u32 = 6u;
@@ -289,18 +301,48 @@ fn local_lights(x: Shading) -> LocalLights {
     return local;
 }
 
+// The light tile a 4x4 block of pixels draws its candidates from this frame, or NO_TILE with light_tiles=off.
+// Blocks of 8x8 read a little faster still on lavapipe, but their 64 pixels drew 1,536 power picks from one
+// tile's 256 lights, and that correlation raised the thesis' letters1 one-frame relMSE by 6% (12 seeds); at 4x4
+// it is that of the alias table (docs/bench/why.md).
+fn pixel_tile(pixel: vec2<u32>) -> u32 {
+    if (frame.restir_flags & RESTIR_LIGHT_TILES) == 0u {
+        return NO_TILE;
+    }
+    let block = pixel / 4u;
+    return pcg((block.x | (block.y << 16u)) ^ pcg(frame.frame + 0x3C6EF372u)) % LIGHT_TILES;
+}
+
+// A light picked for a candidate: its slot, the probability of picking it, and the light itself.
+struct CandidateLight {
+    slot: u32,
+    pdf: f32,
+    light: Light,
+}
+
+// One draw of the power pick (or the uniform one): a light of the pixel's tile, or from the alias table.
+fn power_pick(tile: u32, rng: ptr<function, Rng>) -> CandidateLight {
+    if tile != NO_TILE {
+        let t = light_tiles[tile * LIGHT_TILE_SIZE + (rng_next_u32(rng) & (LIGHT_TILE_SIZE - 1u))];
+        return CandidateLight(t.slot, t.pdf, t.light);
+    }
+    let picked = pick_light(scene.light_count, scene.power_pick == 1u, rng_next_u32(rng), rng_next(rng));
+    return CandidateLight(picked.slot, picked.pdf, lights[picked.slot]);
+}
+
 // A light by the mixture of the power pick and the local lights, with the mixture's probability.
-fn pick_candidate_light(local: ptr<function, LocalLights>, rng: ptr<function, Rng>) -> PickedLight {
+fn pick_candidate_light(local: ptr<function, LocalLights>, tile: u32, rng: ptr<function, Rng>) -> CandidateLight {
     let count = (*local).count;
     if count == 0u {
-        return pick_light(scene.light_count, scene.power_pick == 1u, rng_next_u32(rng), rng_next(rng));
+        return power_pick(tile, rng);
     }
-    var picked: PickedLight;
+    var picked: CandidateLight;
     if rng_next(rng) < LOCAL_SHARE {
         let i = min(u32(rng_next(rng) * f32(count)), count - 1u);
-        picked = PickedLight((*local).slots[i], (*local).pick_pdfs[i]);
+        let slot = (*local).slots[i];
+        picked = CandidateLight(slot, (*local).pick_pdfs[i], lights[slot]);
     } else {
-        picked = pick_light(scene.light_count, scene.power_pick == 1u, rng_next_u32(rng), rng_next(rng));
+        picked = power_pick(tile, rng);
     }
     var local_pdf = 0.0;
     for (var i = 0u; i < count; i++) {
@@ -313,12 +355,12 @@ fn pick_candidate_light(local: ptr<function, LocalLights>, rng: ptr<function, Rn
 // One candidate: a light from the alias table (power or uniform) or the local lights, then, in area mode, one of the exposed faces
 // that see the shading point in proportion to its share (face_share) and a point on it (uniform in area, or in
 // solid angle when the face is near); in point mode the centre.
-fn sample_candidate(x: Shading, local: ptr<function, LocalLights>, rng: ptr<function, Rng>) -> Candidate {
+fn sample_candidate(x: Shading, local: ptr<function, LocalLights>, tile: u32, rng: ptr<function, Rng>) -> Candidate {
     var c = Candidate(empty_reservoir(), 0.0, 0.0);
-    let picked = pick_candidate_light(local, rng);
+    let picked = pick_candidate_light(local, tile, rng);
     let u_face = rng_next(rng);
     let uv = vec2(rng_next(rng), rng_next(rng));
-    let light = lights[picked.slot];
+    let light = picked.light;
     if light_size(light) == 0 {
         return c;
     }

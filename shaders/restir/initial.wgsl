@@ -8,7 +8,7 @@
 #import glowbrick::world::object_motion
 #import glowbrick::random::{Rng, rng_next}
 #import glowbrick::restir::common::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
-    shading, local_lights, LocalLights, sample_candidate, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, own_sample_rays, pixel_rng}
+    shading, local_lights, LocalLights, pixel_tile, sample_candidate, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, own_sample_rays, pixel_rng}
 
 // Temporal history is capped at this many times M_init (DESIGN.md), so old samples cannot dominate forever.
 const HISTORY_CAP: f32 = 20.0;
@@ -37,8 +37,9 @@ fn initial_pixel(id: vec3<u32>) {
     var r = empty_reservoir();
     let m_init = f32(frame.candidates);
     var local = local_lights(x);
+    let tile = pixel_tile(id.xy);
     for (var i = 0u; i < frame.candidates; i++) {
-        let c = sample_candidate(x, &local, &rng);
+        let c = sample_candidate(x, &local, tile, &rng);
         let weight = select(0.0, c.target_value / c.pdf, c.pdf > 0.0);
         stream(&r, c.r, weight, 1.0, rng_next(&rng));
     }

@@ -273,8 +273,9 @@ pub fn run_frame_bench(config: &FrameConfig, quick: bool, out: &Path) -> Result<
 }
 
 /// The pass groups of the report's time table: a prefix of the pass names and its column.
-const GROUPS: [(&str, &str); 10] = [
+const GROUPS: [(&str, &str); 11] = [
     ("glowbrick_primary", "primary"),
+    ("glowbrick_restir_tiles", "ReSTIR tiles"),
     ("glowbrick_restir_initial", "ReSTIR initial"),
     ("glowbrick_restir_spatial", "ReSTIR spatial"),
     ("glowbrick_restir_shade", "ReSTIR shade"),

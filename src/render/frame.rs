@@ -46,6 +46,9 @@ pub struct VoxelPass {
 pub enum Dispatch {
     /// One thread per pixel of the view, 8x8 workgroups; group 1 is the view.
     Pixels,
+    /// One thread per light of the view's light tiles (`restir::TILE_THREADS`), 64 per workgroup; group 1 is
+    /// the view.
+    LightTiles,
     /// One thread per slot of both GI tables, 64 per workgroup; no view.
     Slots,
     /// One thread per entry the GI compaction pass listed: the dispatch size is read from the GI work buffer at
@@ -125,7 +128,8 @@ fn queue_passes(
     all_passes()
         .into_iter()
         .map(|pass| {
-            let group1 = if pass.dispatch == Dispatch::Pixels { &layouts.view } else { &layouts.empty };
+            let per_view = matches!(pass.dispatch, Dispatch::Pixels | Dispatch::LightTiles);
+            let group1 = if per_view { &layouts.view } else { &layouts.empty };
             let id = cache.queue_compute_pipeline(ComputePipelineDescriptor {
                 label: Some(pass.name.into()),
                 layout: vec![groups[0].clone(), group1.clone(), groups[1].clone(), groups[2].clone()],
@@ -227,6 +231,7 @@ impl PassRecorder<'_> {
             Dispatch::Pixels => {
                 compute.dispatch_workgroups(view_size.width.div_ceil(8), view_size.height.div_ceil(8), 1)
             }
+            Dispatch::LightTiles => compute.dispatch_workgroups(restir::TILE_THREADS.div_ceil(64), 1, 1),
             Dispatch::Slots => {
                 let (slots, _) = self.gi_work.expect("GI passes are recorded with the cache's work");
                 compute.dispatch_workgroups(slots.div_ceil(64), 1, 1)
@@ -321,11 +326,14 @@ pub fn view_frame(
     };
     // 1. G-buffer, GI cache entries touched; the image too unless ReSTIR shades it.
     recorder.dispatch(&primary::PRIMARY, primary_pipeline, size);
-    // 2-4. Voxel ReSTIR: candidates + temporal reuse, spatial reuse, shading.
+    // 2-5. Voxel ReSTIR: the light tiles (when the candidates read them), candidates + temporal reuse, spatial
+    // reuse, shading.
     for (pass, pipeline) in restir::PASSES.iter().zip(restir.dispatched()) {
-        recorder.dispatch(pass, pipeline, size);
+        if pass.dispatch != Dispatch::LightTiles || resources.restir.tiles {
+            recorder.dispatch(pass, pipeline, size);
+        }
     }
-    // 5-9. The denoiser: temporal accumulation, then the wavelet's iterations, the last writing the image.
+    // 6-10. The denoiser: temporal accumulation, then the wavelet's iterations, the last writing the image.
     for (pass, pipeline) in denoise::PASSES.iter().zip(denoise.dispatched()) {
         recorder.dispatch(pass, pipeline, size);
     }

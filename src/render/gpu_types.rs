@@ -316,6 +316,27 @@ pub const RESTIR_ONE_RAY: u32 = 16;
 pub const RESTIR_LOCAL: u32 = 32;
 /// The initial pass tests its chosen candidate's visibility (`initial_visibility`).
 pub const RESTIR_INITIAL_VISIBILITY: u32 = 64;
+/// The initial pass draws its candidates from this frame's light tiles (`light_tiles`).
+pub const RESTIR_LIGHT_TILES: u32 = 128;
+/// Light tiles: how many, and lights in each (a power of two). A tile is 12 KB the 16 lanes of a 4x4 pixel
+/// block share; tiles x size draws per frame is small beside the candidates (57,600 pixels x 32 at 320x180).
+pub const LIGHT_TILES: u32 = 32;
+pub const LIGHT_TILE_SIZE: u32 = 1024;
+const _: () = assert!(LIGHT_TILE_SIZE.is_power_of_two());
+
+/// A light of a light tile (`TileLight` in `shaders/restir/common.wgsl`): a copy of the light slot, the slot, and
+/// the power pick's probability of it. Written by the GPU only; the Rust side is its layout.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GpuTileLight {
+    pub light: GpuLight,
+    pub slot: u32,
+    pub pdf: f32,
+    /// WGSL rounds the struct up to its 16-byte alignment.
+    pub _pad: [u32; 2],
+}
+
+pub const TILE_LIGHT_BYTES: u64 = size_of::<GpuTileLight>() as u64;
 /// `FrameParams::denoise`: the denoiser runs this frame.
 pub const DENOISE_ON: u32 = 1;
 /// `FrameParams::denoise`: last frame's denoiser history is valid (same size, nothing in the scene changed).
@@ -403,6 +424,9 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("RESTIR_ONE_RAY", U32(RESTIR_ONE_RAY)),
         ("RESTIR_LOCAL", U32(RESTIR_LOCAL)),
         ("RESTIR_INITIAL_VISIBILITY", U32(RESTIR_INITIAL_VISIBILITY)),
+        ("RESTIR_LIGHT_TILES", U32(RESTIR_LIGHT_TILES)),
+        ("LIGHT_TILES", U32(LIGHT_TILES)),
+        ("LIGHT_TILE_SIZE", U32(LIGHT_TILE_SIZE)),
         ("DENOISE_ON", U32(DENOISE_ON)),
         ("DENOISE_HISTORY", U32(DENOISE_HISTORY)),
         ("MAX_TAPS", U32(MAX_TAPS)),

@@ -1,23 +1,32 @@
 //! Voxel ReSTIR direct lighting (seed 000, DESIGN.md "Voxel ReSTIR"): three compute passes per camera after the
 //! primary pass has written the G-buffer: candidates + temporal reuse (`shaders/restir/initial.wgsl`), spatial
 //! reuse (`spatial.wgsl`) and shading (`shade.wgsl`); `common.wgsl` holds the reservoir and the resampling steps.
+//! Before them (`light_tiles=on`, the default) `tiles.wgsl` presamples this frame's light tiles, which the
+//! candidates draw their lights from.
 //! None of them runs when the scene has no lights (or ReSTIR is not the lighting mode): the primary pass then
 //! shows emission alone, and the skipped passes record no GPU time.
 //!
-//! Its per-view state (`RestirView`): the two reservoir buffers and whether last frame's are this frame's
-//! temporal history. `frame::view_frame` dispatches the passes.
+//! Its per-view state (`RestirView`): the two reservoir buffers, the light tiles, and whether last frame's
+//! reservoirs are this frame's temporal history. `frame::view_frame` dispatches the passes.
 
 use super::frame::{Dispatch, VoxelPass};
 use super::gpu_types::{
-    RESERVOIR_BYTES, RESTIR_INITIAL_VISIBILITY, RESTIR_LOCAL, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL,
-    RESTIR_TEMPORAL, RESTIR_UNBIASED,
+    LIGHT_TILE_SIZE, LIGHT_TILES, RESERVOIR_BYTES, RESTIR_INITIAL_VISIBILITY, RESTIR_LIGHT_TILES, RESTIR_LOCAL,
+    RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL, RESTIR_TEMPORAL, RESTIR_UNBIASED, TILE_LIGHT_BYTES,
 };
 use crate::settings::{DebugView, LightSample, RenderSettings, Reuse};
 use bevy::render::render_resource::{BindingResource, Buffer, BufferDescriptor, BufferUsages};
 use bevy::render::renderer::RenderDevice;
 
-/// The passes in dispatch order.
-pub const PASSES: [VoxelPass; 3] = [
+/// The passes in dispatch order: this frame's light tiles (`restir/tiles.wgsl`, one thread per tile light), then
+/// the three per-pixel passes.
+pub const PASSES: [VoxelPass; 4] = [
+    VoxelPass {
+        name: "glowbrick_restir_tiles",
+        shader: "restir/tiles.wgsl",
+        entry_point: "main",
+        dispatch: Dispatch::LightTiles,
+    },
     VoxelPass {
         name: "glowbrick_restir_initial",
         shader: "restir/initial.wgsl",
@@ -38,8 +47,11 @@ pub const PASSES: [VoxelPass; 3] = [
     },
 ];
 
-/// GPU-time names of the three passes, in dispatch order.
-pub const RESTIR_PASS_NAMES: [&str; 3] = [PASSES[0].name, PASSES[1].name, PASSES[2].name];
+/// GPU-time names of the passes, in dispatch order.
+pub const RESTIR_PASS_NAMES: [&str; 4] = [PASSES[0].name, PASSES[1].name, PASSES[2].name, PASSES[3].name];
+
+/// Threads of the light tiles' pass (one per tile light).
+pub const TILE_THREADS: u32 = LIGHT_TILES * LIGHT_TILE_SIZE;
 
 /// Whether the passes run this frame: only where there is something to sample, in a lighting mode that uses
 /// them, for a view that shows light (or the reservoirs themselves).
@@ -78,46 +90,60 @@ impl RestirParams {
                 | flag(restir.reuse == Reuse::Unbiased, RESTIR_UNBIASED)
                 | flag(restir.reuse == Reuse::OneRay, RESTIR_ONE_RAY)
                 | flag(restir.local_lights, RESTIR_LOCAL)
-                | flag(restir.initial_visibility, RESTIR_INITIAL_VISIBILITY),
+                | flag(restir.initial_visibility, RESTIR_INITIAL_VISIBILITY)
+                | flag(restir.light_tiles, RESTIR_LIGHT_TILES),
         }
     }
 }
 
-/// One view's reservoirs (group 1, bindings 6 and 7: after temporal reuse, and final) and their history.
+/// One view's reservoirs (group 1, bindings 6 and 7: after temporal reuse, and final), their history, and its
+/// light tiles (binding 12, rewritten every frame).
 pub struct RestirView {
     reservoirs_temporal: Buffer,
     reservoirs_final: Buffer,
+    light_tiles: Buffer,
     /// Whether this frame runs the passes (set in prepare, read by the frame; last frame's until then).
     pub runs: bool,
+    /// Whether this frame's candidates read light tiles, so the tiles' pass runs.
+    pub tiles: bool,
 }
 
 impl RestirView {
     pub fn new(device: &RenderDevice, pixels: u64) -> Self {
-        let buffer = |label: &'static str| {
+        let buffer = |label: &'static str, size: u64| {
             device.create_buffer(&BufferDescriptor {
                 label: Some(label),
-                size: pixels * RESERVOIR_BYTES,
+                size,
                 usage: BufferUsages::STORAGE,
                 mapped_at_creation: false,
             })
         };
         RestirView {
-            reservoirs_temporal: buffer("glowbrick_reservoirs_temporal"),
-            reservoirs_final: buffer("glowbrick_reservoirs_final"),
+            reservoirs_temporal: buffer("glowbrick_reservoirs_temporal", pixels * RESERVOIR_BYTES),
+            reservoirs_final: buffer("glowbrick_reservoirs_final", pixels * RESERVOIR_BYTES),
+            light_tiles: buffer("glowbrick_light_tiles", u64::from(TILE_THREADS) * TILE_LIGHT_BYTES),
             runs: false,
+            tiles: false,
         }
     }
 
-    /// Starts this frame: whether the passes run, and whether last frame's reservoirs are its history.
-    pub fn begin_frame(&mut self, runs: bool, lights_changed: bool) -> bool {
+    /// Starts this frame: whether the passes run (the tiles' pass with them when `tiles`), and whether last
+    /// frame's reservoirs are its history.
+    pub fn begin_frame(&mut self, runs: bool, tiles: bool, lights_changed: bool) -> bool {
         let history = history_is_valid(self.runs, runs, lights_changed);
         self.runs = runs;
+        self.tiles = tiles;
         history
     }
 
     /// Bindings 6 and 7 of the view's group.
     pub fn bindings(&self) -> [BindingResource<'_>; 2] {
         [self.reservoirs_temporal.as_entire_binding(), self.reservoirs_final.as_entire_binding()]
+    }
+
+    /// Binding 12 of the view's group.
+    pub fn tiles_binding(&self) -> BindingResource<'_> {
+        self.light_tiles.as_entire_binding()
     }
 }
 

@@ -9,7 +9,7 @@ use bevy::prelude::*;
 use bevy::shader::Shader;
 
 /// Every shader file: its path under `shaders/` and its source. Libraries first (they only define imports).
-pub const SOURCES: [(&str, &str); 22] = [
+pub const SOURCES: [(&str, &str); 23] = [
     ("lib/constants.wgsl", include_str!("../../shaders/lib/constants.wgsl")),
     ("lib/random.wgsl", include_str!("../../shaders/lib/random.wgsl")),
     ("lib/guards.wgsl", include_str!("../../shaders/lib/guards.wgsl")),
@@ -23,6 +23,7 @@ pub const SOURCES: [(&str, &str); 22] = [
     ("restir/common.wgsl", include_str!("../../shaders/restir/common.wgsl")),
     ("denoise/common.wgsl", include_str!("../../shaders/denoise/common.wgsl")),
     ("primary.wgsl", include_str!("../../shaders/primary.wgsl")),
+    ("restir/tiles.wgsl", include_str!("../../shaders/restir/tiles.wgsl")),
     ("restir/initial.wgsl", include_str!("../../shaders/restir/initial.wgsl")),
     ("restir/spatial.wgsl", include_str!("../../shaders/restir/spatial.wgsl")),
     ("restir/shade.wgsl", include_str!("../../shaders/restir/shade.wgsl")),

@@ -178,6 +178,7 @@ impl ViewResources {
                 history,
                 prev_history,
                 wavelet,
+                self.restir.tiles_binding(),
             )),
         );
         if cached.len() >= MAX_VIEW_BIND_GROUPS {
@@ -209,6 +210,8 @@ pub fn view_layout() -> BindGroupLayoutDescriptor {
                 storage(),
                 storage(),
                 storage(),
+                storage(),
+                // ReSTIR's light tiles.
                 storage(),
             ),
         ),
@@ -271,7 +274,8 @@ pub fn prepare_view_resources(
         let key = AccumulationKey { clip_from_world, settings: settings.clone(), highlight };
         let accumulate = settings.accumulate && !changes.anything;
         resources.view.begin_frame(key, accumulate, view.world_from_view.translation(), &mut params);
-        let restir_history = resources.restir.begin_frame(run_restir, changes.lights);
+        let tiles = settings.restir.light_tiles;
+        let restir_history = resources.restir.begin_frame(run_restir, tiles, changes.lights);
         params.prev_camera[3] = if restir_history { 1.0 } else { 0.0 };
         params.denoise = resources.denoise.begin_frame(run_denoise, changes.world);
         queue.write_buffer(&resources.view.frame_params, 0, bytemuck::bytes_of(&params));
@@ -287,7 +291,8 @@ mod tests {
     use super::*;
     use crate::render::gpu_types::RESTIR_UNBIASED;
     use crate::render::gpu_types::{
-        RESTIR_INITIAL_VISIBILITY, RESTIR_LOCAL, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL, RESTIR_TEMPORAL,
+        RESTIR_INITIAL_VISIBILITY, RESTIR_LIGHT_TILES, RESTIR_LOCAL, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL,
+        RESTIR_TEMPORAL,
     };
     use crate::render::scene::lights::scene_lighting;
 
@@ -300,10 +305,15 @@ mod tests {
         let default = settings(&[]);
         let params = frame_params(&default, &Highlight::default(), 0);
         // Default: temporal, spatial, one ray per neighbour, local candidates, the chosen candidate's visibility.
-        let defaults = RESTIR_TEMPORAL | RESTIR_SPATIAL | RESTIR_ONE_RAY | RESTIR_LOCAL | RESTIR_INITIAL_VISIBILITY;
+        let defaults = RESTIR_TEMPORAL
+            | RESTIR_SPATIAL
+            | RESTIR_ONE_RAY
+            | RESTIR_LOCAL
+            | RESTIR_INITIAL_VISIBILITY
+            | RESTIR_LIGHT_TILES;
         assert_eq!((scene_lighting(&default, 3).power_pick, params.restir_flags), (1, defaults));
         assert_eq!((RESTIR_TEMPORAL, RESTIR_SPATIAL, RESTIR_POINT, RESTIR_UNBIASED), (1, 2, 4, 8));
-        assert_eq!((RESTIR_ONE_RAY, RESTIR_LOCAL, RESTIR_INITIAL_VISIBILITY), (16, 32, 64));
+        assert_eq!((RESTIR_ONE_RAY, RESTIR_LOCAL, RESTIR_INITIAL_VISIBILITY, RESTIR_LIGHT_TILES), (16, 32, 64, 128));
         let biased = frame_params(&settings(&["reuse=biased"]), &Highlight::default(), 0);
         assert_eq!(biased.restir_flags, defaults & !RESTIR_ONE_RAY);
         let changed = settings(&[
@@ -313,6 +323,7 @@ mod tests {
             "temporal=off",
             "local_lights=off",
             "initial_visibility=off",
+            "light_tiles=off",
         ]);
         let params = frame_params(&changed, &Highlight::default(), 0);
         assert_eq!(

@@ -215,6 +215,11 @@ pub struct RestirSettings {
     /// the final shadow ray's verdict is the one next frame's temporal reuse inherits (W = 0 when occluded), as
     /// in RTXDI's final visibility reuse: one ray fewer per pixel.
     pub initial_visibility: bool,
+    /// Candidates drawn from presampled light tiles (RTXDI's): each frame a pass draws `LIGHT_TILES` x
+    /// `LIGHT_TILE_SIZE` lights by power into a buffer, copies of the lights beside them, and every 4x4 block of
+    /// pixels draws its candidates from one tile: one load a candidate, from a few kilobytes every lane of the
+    /// block shares, instead of two or three dependent loads scattered over the alias table and the light pool.
+    pub light_tiles: bool,
 }
 
 impl Default for RestirSettings {
@@ -232,6 +237,7 @@ impl Default for RestirSettings {
             reuse: Reuse::OneRay,
             local_lights: true,
             initial_visibility: true,
+            light_tiles: true,
         }
     }
 }

@@ -343,6 +343,13 @@ pub static SETTINGS: &[Setting] = &[
         field: &Choice { get: |s| s.restir.initial_visibility, set: |s, v| s.restir.initial_visibility = v },
     },
     Setting {
+        key: "light_tiles",
+        section: Section::Restir,
+        about: "Draw the candidates from tiles of lights presampled by power each frame (one coherent load a \
+                candidate); off, each candidate reads the alias table and the light pool itself.",
+        field: &Choice { get: |s| s.restir.light_tiles, set: |s, v| s.restir.light_tiles = v },
+    },
+    Setting {
         key: "gi",
         section: Section::General,
         about: "Indirect light from the per-face GI cache (play turns it on); off, no GI memory or pass.",

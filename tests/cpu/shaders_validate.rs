@@ -140,6 +140,7 @@ fn twins() -> Vec<Twin> {
         sized("history", None, DENOISE_TEXEL_BYTES, 1),
         sized("prev_history", None, DENOISE_TEXEL_BYTES, 1),
         sized("wavelet", None, DENOISE_TEXEL_BYTES, 1),
+        twin!("light_tiles", "TileLight", GpuTileLight { light, slot, pdf }),
         // Group 2: the lights.
         twin!("lights", "Light", GpuLight { min, size_faces, radiance, generation }),
         twin!("alias_table", "AliasEntry", AliasEntry { threshold, alias => "alias_column", slot, pdf }),

@@ -123,6 +123,7 @@ fn tests() -> Vec<(&'static str, fn())> {
         ],
         restir: [
             a_removed_light_is_never_shaded,
+            candidates_from_light_tiles_converge_as_candidates_from_the_alias_table,
             point_lights_give_hard_shadows_and_area_lights_converge,
             temporal_reuse_does_not_cross_a_face_normal_flip,
             unbiased_restir_converges_to_the_reference_on_the_cornell_box,

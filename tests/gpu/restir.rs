@@ -121,6 +121,23 @@ pub fn restir_with_temporal_reuse_converges_on_the_mountain() {
     check_convergence_of("mountain", &world, &world.views[0], &FULL_REUSE);
 }
 
+/// Light tiles (the default) against every candidate reading the alias table and the pool itself, among 1,000
+/// lamps (four times a tile's 256): the tiles' lights are draws of the same power pick, so both converge to the
+/// reference within the same bounds; and the tiles' pass runs only when the candidates read tiles.
+pub fn candidates_from_light_tiles_converge_as_candidates_from_the_alias_table() {
+    let world = load_scene("lights-1k").unwrap();
+    let view = world.view(Some("low")).unwrap().clone();
+    let cases: [(&[&str], f64); 2] = [(&["reuse=unbiased"], 0.025), (&["reuse=unbiased", "light_tiles=off"], 0.025)];
+    check_convergence_of("lights-1k", &world, &view, &cases);
+    for (pairs, tiles) in [(&["lighting=restir"][..], true), (&["lighting=restir", "light_tiles=off"][..], false)] {
+        let mut renderer = restir(&world, &view, pairs);
+        renderer.render(2).unwrap();
+        common::assert_passes_are_timed(&renderer);
+        let ran = renderer.gpu_pass_ms("glowbrick_restir_tiles").is_some();
+        assert_eq!(ran, tiles, "{pairs:?}: the light tiles' pass ran: {ran}");
+    }
+}
+
 /// A 32^3 room: white floor, a one-voxel wall across x = 16 (both faces seen from either side), and a lamp
 /// voxel on each side of it.
 fn two_sided_room() -> (VoxelWorld, [IVec3; 2]) {
