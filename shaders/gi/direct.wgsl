@@ -90,16 +90,22 @@ fn update_direct(slot: u32, e: GiEntry) {
     // Where on the cell: frame k samples point k of the entry's own shifted R2 sequence (gi_qmc), so the last
     // frames' points cover the cell evenly, as a half-lit coarse cell needs.
     let rotation = rotation2(slot_seed(slot) ^ 0x51ED270Bu);
-    if (gi.flags & GI_RESTART) != 0u {
-        // The points of the frames up to this one: the next frames' continue the run.
-        var sum = vec3(0.0);
-        for (var i = 0u; i < GI_RESTART_SAMPLES; i++) {
-            sum += face_sample(e, cell_sample_point(gi.frame - i, rotation, &rng), &rng);
-        }
+    // After a change of light the points of the frames up to this one (the next frames continue the run), else
+    // this frame's. One call site for both: the restart's samples in a loop of their own were inlined nine times,
+    // and lavapipe pays for code a dispatch holds whether its lanes run it or not (the refresh pass 26-35 ms ->
+    // 15-20 at 320x180, docs/bench/frame.md).
+    let restart = (gi.flags & GI_RESTART) != 0u;
+    let samples = select(1u, GI_RESTART_SAMPLES, restart);
+    let first = select(sequence_step(gi.frame, e), gi.frame, restart);
+    var sum = vec3(0.0);
+    for (var i = 0u; i < samples; i++) {
+        sum += face_sample(e, cell_sample_point(first - i, rotation, &rng), &rng);
+    }
+    if restart {
         gi_direct[slot] = vec4(sum / f32(GI_RESTART_SAMPLES), f32(GI_RESTART_SAMPLES));
         return;
     }
-    let estimate = face_sample(e, cell_sample_point(sequence_step(gi.frame, e), rotation, &rng), &rng);
+    let estimate = sum;
     let old = gi_direct[slot];
     let count = old.w;
     let weight = max(DIRECT_ALPHA, 1.0 / (count + 1.0));
