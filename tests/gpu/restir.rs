@@ -122,8 +122,9 @@ pub fn restir_with_temporal_reuse_converges_on_the_mountain() {
 }
 
 /// Light tiles (the default) against every candidate reading the alias table and the pool itself, among 1,000
-/// lamps (four times a tile's 256): the tiles' lights are draws of the same power pick, so both converge to the
-/// reference within the same bounds; and the tiles' pass runs only when the candidates read tiles.
+/// lamps (each 4x4 pixel block draws from a tile of 1,024 picks of them): the tiles' lights are draws of the same
+/// power pick, so both converge to the reference within the same bounds; and the tiles' pass runs only when the
+/// candidates read tiles.
 pub fn candidates_from_light_tiles_converge_as_candidates_from_the_alias_table() {
     let world = load_scene("lights-1k").unwrap();
     let view = world.view(Some("low")).unwrap().clone();
