@@ -2,7 +2,8 @@
 # The frame profile on a lent GPU machine, as one call (after tools/gpu-pack.sh here):
 #   tools/gpu-profile.sh OUT [SIZES] [SCENES]
 # writes under OUT the frame bench (every pass, GPU ms and counters) at SIZES (default 1920x1080) with the
-# default walk and GI cache, then with traversal=occupancy, then with the GI cache's cached static hits
+# default walk and GI cache (traversal=auto: the occupancy walk on a GPU), then with the plain DDA
+# (traversal=dda), then with the GI cache's cached static hits
 # (gi_cached_hits=on, seed 001's static/dynamic split), each in its own folder; SCENES picks cases by label
 # (default: all six). Commit what comes back under docs/bench/gpu-NAME/.
 set -euo pipefail
@@ -26,5 +27,5 @@ run() {
   echo "gpu-profile: $name in $((SECONDS - start)) s"
 }
 run frame
-run frame-occupancy --set traversal=occupancy
+run frame-dda --set traversal=dda
 run frame-gi-cached-hits --set gi_cached_hits=on

@@ -2,11 +2,13 @@
 // is the only WGSL file that reads a shader def: import the names from here, never write the numbers again.
 #define_import_path glowbrick::constants
 
-// The brick grid (src/world/grid.rs): top-cell flag of a pooled brick, brick edge, log2 of it, u32 words per brick.
+// The brick grid (src/world/grid.rs): top-cell flag of a pooled brick, brick edge, log2 of it, u32 words per brick,
+// the largest world edge.
 const POOLED_FLAG: u32 = #{POOLED_FLAG}u;
 const BRICK_SIZE: i32 = #{BRICK_SIZE};
 const BRICK_SHIFT: u32 = #{BRICK_SHIFT}u;
 const BRICK_WORDS: u32 = #{BRICK_WORDS}u;
+const MAX_WORLD_EDGE: u32 = #{MAX_WORLD_EDGE}u;
 
 // Secondary rays start RAY_OFFSET off their surface (src/world/traversal.rs; the CPU reference uses the same).
 const RAY_OFFSET_INVERSE: u32 = #{RAY_OFFSET_INVERSE}u;

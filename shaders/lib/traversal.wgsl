@@ -1,10 +1,10 @@
 // Ray traversal of the brick grid, two ways to the same hits (the `traversal` setting): the plain two-level DDA,
-// and a walk through the occupancy hierarchy that jumps empty cells of 128, 32, 8 and 2 voxels whole. Mirrors
+// and a walk through the occupancy hierarchy that jumps empty cells of 128 down to 2 voxels whole. Mirrors
 // src/world/traversal.rs step for step (same boundary formulas and tie rules) so GPU and CPU agree.
 #define_import_path glowbrick::traversal
 
 #import glowbrick::world::{world_info, top_cells, occupancy, brick_cell, pooled_voxel, objects, object_count, object_voxel, Object}
-#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, COUNT_TRACE_STEPS, COUNT_TRACE_LOADS}
+#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, MAX_WORLD_EDGE, COUNT_TRACE_STEPS, COUNT_TRACE_LOADS}
 #import glowbrick::counters::counters
 
 const INF: f32 = 3.0e38;
@@ -13,8 +13,8 @@ const INF: f32 = 3.0e38;
 // invocation by a pass whose entry point ends with `count_rays` (same-address atomics from a SIMD group are
 // combined by the compiler on GPUs; a workgroup sum with two barriers cost more on software Vulkan).
 var<private> rays_traced: u32;
-// Their steps (cells visited at any level of the occupancy hierarchy) and memory loads (masks, top cells, voxels).
-// Added to the frame's totals by the same call.
+// Their steps (loop steps: a brick or voxel of the DDA, a cell left at any level of the occupancy walk) and
+// memory loads (masks, top cells, voxels). Added to the frame's totals by the same call.
 var<private> trace_steps: u32;
 var<private> trace_loads: u32;
 
@@ -213,34 +213,34 @@ fn trace_dda(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
 #endif
 
 #ifdef TRAVERSAL_OCCUPANCY
-// The occupancy hierarchy (src/world/occupancy.rs): log2 of the cell edge of each level, voxel (0), 2^3 cell (1),
-// brick (2), sector (3), region (4): 0, 1, 3, 5, 7.
-fn level_shift(level: u32) -> u32 {
-    return u32(max(2 * i32(level) - 1, 0));
-}
-
-// The level a ray is at after a move along one axis from coordinate `before` to `after` at `level`: up as many
-// levels as the crossed face closes, i.e. to the first level whose cells hold both coordinates' highest differing
-// bit (bit h is inside level l's cells while h < level_shift(l + 1) = 2 l + 1).
-fn level_after_move(level: u32, before: i32, after: i32) -> u32 {
-    let h = firstLeadingBit(u32(before ^ after));
-    return max(level, min((h + 1u) / 2u, 4u));
-}
-
 fn has_child(m: vec2<u32>, bit: u32) -> bool {
     let word = select(m.y, m.x, bit < 32u);
     return ((word >> (bit & 31u)) & 1u) != 0u;
+}
+
+// Whether the child of 4^3-child mask `m` (children of edge 1 << child_shift) holding voxel v is occupied.
+fn child_occupied(m: vec2<u32>, v: vec3<i32>, child_shift: u32) -> bool {
+    let c = vec3<u32>((v >> vec3(child_shift)) & vec3(3));
+    return has_child(m, c.x + 4u * (c.y + 4u * c.z));
+}
+
+// Whether the 2^3 group of m's children holding voxel v (a cell of the derived level between the children and
+// the mask's owner) has an occupied child: bits 0, 1, 4, 5, 16, 17, 20, 21 moved to the group's corner.
+fn group_occupied(m: vec2<u32>, v: vec3<i32>, child_shift: u32) -> bool {
+    let g = vec3<u32>((v >> vec3(child_shift + 1u)) & vec3(1));
+    let word = select(m.x, m.y, g.z == 1u);
+    return (word & (0x330033u << (2u * g.x + 8u * g.y))) != 0u;
 }
 
 fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
     return u32(c.x + dims.x * (c.y + dims.y * c.z));
 }
 
-// traversal=occupancy: one flat loop over the occupancy hierarchy, step for step as `trace_occupancy_counted` in
-// src/world/traversal.rs: at
-// `level` the ray is in the cell holding voxel v; an occupied cell is entered (v re-found from the ray at t and
-// clamped into it), an empty one left through its nearest face, going up as many levels as that face closes. The
-// masks of the cells the ray is in stay in registers, so an empty step at levels 1-3 loads nothing.
+// traversal=occupancy: one move per step, as `trace_occupancy_counted` in src/world/traversal.rs: the ray is in
+// voxel v at t; the step finds the coarsest cell holding v that the masks prove empty (edge 1 << level: a region
+// (7), a 2^3 group of sectors, a sector, a group of bricks, a brick, a group of 2^3 cells, a 2^3 cell, a voxel)
+// and leaves it through its nearest face. The masks of the region, sector and brick the ray is in stay in
+// registers and are loaded only when a move enters a new one, so every step does the same few bit tests.
 fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
     let size = world_info.size;
     let entry = box_entry(origin, dir, vec3(0.0), vec3<f32>(size));
@@ -261,53 +261,67 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
     }
     let last = size - vec3(1);
     var v = clamp(vec3<i32>(floor(origin + dir * t)), vec3(0), last);
-    var level = 4u;
-    // The child masks of the region, sector and brick the ray is in, and the brick's pool slot.
+    // The child masks of the region, sector and brick the ray is in, and the brick's pool slot; `entered`: the
+    // coarsest level whose cell the last move changed (a mask of that level or below is stale).
     var region_mask = vec2(0u);
     var sector_mask = vec2(0u);
     var brick_mask = vec2(0u);
     var slot = 0u;
-    let max_steps = 5 * (size.x + size.y + size.z) + 8;
+    var entered = 7u;
+    // Every step crosses at least one voxel boundary; the bound only stops a non-finite t. A constant: lavapipe's
+    // primary pass took twice as long with the world's own size here (docs/bench/traversal.md).
+    let max_steps = 3 * i32(MAX_WORLD_EDGE) + 8;
     for (var i = 0; i < max_steps; i++) {
         trace_steps += 1u;
-        let shift = level_shift(level);
-        let edge = 1 << shift;
-        let lo = v & vec3(~(edge - 1));
-        var occupied = false;
-        if level == 0u {
-            trace_loads += 1u;
-            let material = pooled_voxel(slot, v & vec3(BRICK_SIZE - 1));
-            if material != 0u {
-                return Hit(v, face_entered(axis, positive[axis]), t, material, true, 0u);
-            }
-        } else if level == 4u {
+        if entered >= 7u {
             trace_loads += 1u;
             region_mask = occupancy[world_info.region_base + mask_index(v >> vec3(7u), world_info.regions)];
-            occupied = any(region_mask != vec2(0u));
-        } else {
-            let parent = select(select(region_mask, sector_mask, level == 2u), brick_mask, level == 1u);
-            let c = vec3<u32>((v >> vec3(shift)) & vec3(3));
-            occupied = has_child(parent, c.x + 4u * (c.y + 4u * c.z));
         }
-        if occupied {
-            v = clamp(vec3<i32>(floor(origin + dir * t)), lo, min(lo + vec3(edge - 1), last));
-            if level == 3u {
+        // The level of the coarsest empty cell holding v.
+        var level = 0u;
+        if all(region_mask == vec2(0u)) {
+            level = 7u;
+        } else if !group_occupied(region_mask, v, 5u) {
+            level = 6u;
+        } else if !child_occupied(region_mask, v, 5u) {
+            level = 5u;
+        } else {
+            if entered >= 5u {
                 trace_loads += 1u;
                 sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(5u), world_info.sectors)];
-            } else if level == 2u {
-                trace_loads += 2u;
-                let index = mask_index(v >> vec3(BRICK_SHIFT), world_info.bricks);
-                let cell = top_cells[index];
-                if cell != 0u && (cell & POOLED_FLAG) == 0u {
-                    return Hit(v, face_entered(axis, positive[axis]), t, cell, true, 0u);
-                }
-                slot = cell & ~POOLED_FLAG;
-                brick_mask = occupancy[index];
             }
-            level -= 1u;
-            continue;
+            if !group_occupied(sector_mask, v, 3u) {
+                level = 4u;
+            } else if !child_occupied(sector_mask, v, 3u) {
+                level = 3u;
+            } else {
+                if entered >= 3u {
+                    trace_loads += 1u;
+                    let index = mask_index(v >> vec3(BRICK_SHIFT), world_info.bricks);
+                    let cell = top_cells[index];
+                    if cell != 0u && (cell & POOLED_FLAG) == 0u {
+                        return Hit(v, face_entered(axis, positive[axis]), t, cell, true, 0u);
+                    }
+                    trace_loads += 1u;
+                    slot = cell & ~POOLED_FLAG;
+                    brick_mask = occupancy[index];
+                }
+                if !group_occupied(brick_mask, v, 1u) {
+                    level = 2u;
+                } else if !child_occupied(brick_mask, v, 1u) {
+                    level = 1u;
+                } else {
+                    trace_loads += 1u;
+                    let material = pooled_voxel(slot, v & vec3(BRICK_SIZE - 1));
+                    if material != 0u {
+                        return Hit(v, face_entered(axis, positive[axis]), t, material, true, 0u);
+                    }
+                }
+            }
         }
-        // Out through the nearest face of the cell (the same planes and products as `cross_t`).
+        // Out of that cell through its nearest face (the same planes and products as `cross_t`).
+        let edge = 1 << level;
+        let lo = v & vec3(~(edge - 1));
         let planes = vec3<f32>(lo + far_side * edge);
         let t_max = select((planes - origin) * inv, vec3(INF), no_dir);
         let a = min_axis(t_max);
@@ -321,7 +335,13 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
         if v[a] < 0 || v[a] > last[a] {
             break;
         }
-        level = level_after_move(level, before, v[a]);
+        entered = firstLeadingBit(u32(before ^ v[a]));
+        if level > 0u {
+            // v's other axes are the ray's only to the cell's precision: the voxel the ray is in at t, within the
+            // cell entered.
+            let cell = v & vec3(~(edge - 1));
+            v = clamp(vec3<i32>(floor(origin + dir * t)), cell, min(cell + vec3(edge - 1), last));
+        }
     }
     return miss();
 }

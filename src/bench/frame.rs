@@ -149,8 +149,7 @@ impl FrameRow {
         self.count(GpuCounter::PrimaryHits) / self.pixels()
     }
 
-    /// Traversal steps (cells visited at any level of the occupancy hierarchy) and memory loads per ray of the
-    /// per-pixel passes.
+    /// Traversal steps (the walk's loop steps) and memory loads per ray of the per-pixel passes.
     pub fn steps_per_ray(&self) -> (f64, f64) {
         let rays = self.direct_rays().max(1.0);
         (self.count(GpuCounter::TraceSteps) / rays, self.count(GpuCounter::TraceLoads) / rays)

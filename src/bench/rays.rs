@@ -6,6 +6,7 @@
 
 use crate::reference::sampling::{Pcg, cosine_direction};
 use crate::world::camera::{camera_ray, view_transform, world_from_clip};
+use crate::world::occupancy::WALK_LEVELS;
 use crate::world::recipe::generated_world;
 use crate::world::traversal::{Counts, RAY_OFFSET, Ray, trace_counted, trace_occupancy_counted};
 use crate::world::{CameraView, Hit, VoxelWorld};
@@ -59,8 +60,8 @@ pub struct Measure {
     pub rays_per_second: f64,
     pub steps_per_ray: f64,
     pub loads_per_ray: f64,
-    /// Steps per ray at each level (voxel, 2^3 cell, brick, sector, region).
-    pub levels: [f64; 5],
+    /// Steps per ray by the level of the cell left (`WALK_LEVELS`: edge 1, 2, 4 .. 128 voxels).
+    pub levels: [f64; WALK_LEVELS],
 }
 
 /// One row: a scene's ray kind, old and new.
@@ -255,8 +256,8 @@ fn markdown(rows: &[RaysRow], config: &RaysConfig) -> String {
         s,
         "`glowbrick bench --rays`: camera rays through {}x{} pixels and, from each hit, a shadow ray to a random \
          emissive voxel (the sky direction without one), a cosine diffuse ray and a sky ray; one CPU thread, both \
-         traversals on the same rays in turn, median of {} passes each. Steps: loop iterations (moves and \
-         descents); loads: words read from memory (a mask bit a ray already holds is not one; the plain DDA loads \
+         traversals on the same rays in turn, median of {} passes each. Steps: loop iterations (the DDA: a \
+         brick or a voxel; the occupancy walk: a cell left, the coarsest its masks prove empty); loads: words read from memory (a mask bit a ray already holds is not one; the plain DDA loads \
          once per step). Different: rays whose hit differs (an edge or corner met within rounding).\n",
         config.width, config.height, config.repeats
     );
@@ -285,16 +286,14 @@ fn markdown(rows: &[RaysRow], config: &RaysConfig) -> String {
         );
     }
     s.push_str(
-        "\nSteps per ray by level of the occupancy traversal (voxel, 2^3 cell, brick, sector, region):\n\n\
-         | scene | kind | voxel | cell | brick | sector | region |\n|---|---|---|---|---|---|---|\n",
+        "\nSteps per ray of the occupancy traversal by the edge of the cell left (a hit counts as a voxel; 4, 16 \
+         and 64 are the derived levels, 2^3 groups of a mask's children):\n\n\
+         | scene | kind | 1 | 2 | 4 | 8 (brick) | 16 | 32 (sector) | 64 | 128 (region) |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
-        let l = r.occupancy.levels;
-        let _ = writeln!(
-            s,
-            "| {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
-            r.scene, r.kind, l[0], l[1], l[2], l[3], l[4]
-        );
+        let levels: Vec<String> = r.occupancy.levels.iter().map(|l| format!("{l:.1}")).collect();
+        let _ = writeln!(s, "| {} | {} | {} |", r.scene, r.kind, levels.join(" | "));
     }
     s
 }

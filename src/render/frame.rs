@@ -25,7 +25,7 @@ use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::*;
-use bevy::render::renderer::{RenderContext, RenderDevice, ViewQuery};
+use bevy::render::renderer::{RenderAdapterInfo, RenderContext, RenderDevice, ViewQuery};
 use bevy::render::view::{ViewTarget, ViewUniformOffset, ViewUniforms};
 use bevy::shader::ShaderDefVal;
 use std::sync::atomic::Ordering;
@@ -82,10 +82,14 @@ fn view_layouts() -> ViewLayouts {
 /// setting asks for it) for the occupancy traversal, a shader def of its own; and the empty group 1 of world passes.
 #[derive(Resource)]
 pub struct VoxelPipelines {
+    /// Every pass's pipeline for the plain DDA and for the occupancy walk, each queued the first time a frame
+    /// needs it.
     passes: Vec<(VoxelPass, CachedComputePipelineId)>,
     occupancy: Vec<(VoxelPass, CachedComputePipelineId)>,
-    /// The traversal this frame's passes use (the extracted setting).
+    /// The walk this frame's passes use (the extracted setting, `auto` resolved for the adapter).
     traversal: Traversal,
+    /// Whether the adapter is a CPU (software Vulkan): what `traversal=auto` means.
+    cpu_adapter: bool,
     no_view: BindGroup,
 }
 
@@ -93,8 +97,8 @@ impl VoxelPipelines {
     /// The compiled pipelines of `passes` for this frame's traversal, or `None` until all of them are ready.
     fn get<'a>(&self, cache: &'a PipelineCache, passes: &[VoxelPass]) -> Option<Vec<&'a ComputePipeline>> {
         let set = match self.traversal {
-            Traversal::Dda => &self.passes,
             Traversal::Occupancy => &self.occupancy,
+            _ => &self.passes,
         };
         passes
             .iter()
@@ -143,7 +147,7 @@ fn queue_passes(
         .collect()
 }
 
-/// Follows the `traversal` setting: queues the occupancy pipelines the first time it is asked for.
+/// Follows the `traversal` setting: queues a walk's pipelines the first time it is asked for.
 #[allow(clippy::too_many_arguments)]
 fn follow_traversal(
     settings: Option<Res<RenderSettings>>,
@@ -156,10 +160,11 @@ fn follow_traversal(
     gi_layout: Res<gi::GiLayout>,
 ) {
     let (Some(mut pipelines), Some(layouts)) = (pipelines, layouts) else { return };
-    let traversal = settings.map_or(Traversal::default(), |s| s.traversal);
-    if traversal == Traversal::Occupancy && pipelines.occupancy.is_empty() {
-        let groups = [&world_layout.0, &lights_layout.0, &gi_layout.0];
-        pipelines.occupancy = queue_passes(&cache, &shaders, &layouts, groups, traversal);
+    let traversal = settings.map_or(Traversal::default(), |s| s.traversal).resolve(pipelines.cpu_adapter);
+    let groups = [&world_layout.0, &lights_layout.0, &gi_layout.0];
+    let set = if traversal == Traversal::Occupancy { &mut pipelines.occupancy } else { &mut pipelines.passes };
+    if set.is_empty() {
+        *set = queue_passes(&cache, &shaders, &layouts, groups, traversal);
     }
     if pipelines.traversal != traversal {
         pipelines.traversal = traversal;
@@ -170,17 +175,20 @@ fn init_pipelines(
     mut commands: Commands,
     pipeline_cache: Res<PipelineCache>,
     device: Res<RenderDevice>,
-    shaders: Res<GlowbrickShaders>,
-    world_layout: Res<WorldLayout>,
-    lights_layout: Res<LightsLayout>,
-    gi_layout: Res<gi::GiLayout>,
+    adapter: Res<RenderAdapterInfo>,
 ) {
     let layouts = view_layouts();
-    let groups = [&world_layout.0, &lights_layout.0, &gi_layout.0];
-    let passes = queue_passes(&pipeline_cache, &shaders, &layouts, groups, Traversal::Dda);
+    // The walks' pipelines are queued by `follow_traversal`, which knows the setting.
+    let cpu_adapter = adapter.device_type == wgpu::DeviceType::Cpu;
     let no_view =
         device.create_bind_group("glowbrick_no_view", &pipeline_cache.get_bind_group_layout(&layouts.empty), &[]);
-    commands.insert_resource(VoxelPipelines { passes, occupancy: Vec::new(), traversal: Traversal::Dda, no_view });
+    commands.insert_resource(VoxelPipelines {
+        passes: Vec::new(),
+        occupancy: Vec::new(),
+        traversal: Traversal::Auto.resolve(cpu_adapter),
+        cpu_adapter,
+        no_view,
+    });
     commands.insert_resource(layouts);
 }
 

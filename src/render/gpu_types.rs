@@ -6,7 +6,7 @@
 use crate::dynamic::MAX_OBJECT_ID;
 use crate::lights::index;
 use crate::settings::{DebugView, Lighting};
-use crate::world::grid::{BRICK_SIZE, BRICK_VOXELS, POOLED_FLAG};
+use crate::world::grid::{BRICK_SIZE, BRICK_VOXELS, MAX_WORLD_EDGE, POOLED_FLAG};
 use crate::world::traversal::RAY_OFFSET_INVERSE;
 use bevy::shader::ShaderDefVal;
 
@@ -259,8 +259,8 @@ pub enum GpuCounter {
     RaysRestirShade = 12,
     /// Pixels whose primary ray hit a voxel this frame (the pixels direct light is computed for).
     PrimaryHits = 13,
-    /// Traversal steps (cells visited at any level of the occupancy hierarchy) of the per-pixel passes' rays this
-    /// frame.
+    /// Traversal steps (the walk's loop steps: a brick or voxel of the DDA, a cell left by the occupancy walk) of
+    /// the per-pixel passes' rays this frame.
     TraceSteps = 14,
     /// Memory loads of the same rays' traversal (masks, top cells, voxels; a mask bit a ray holds is not one).
     TraceLoads = 15,
@@ -388,6 +388,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("BRICK_SIZE", I32(BRICK_SIZE)),
         ("BRICK_SHIFT", U32(brick_shift)),
         ("BRICK_WORDS", U32((BRICK_VOXELS / 2) as u32)),
+        ("MAX_WORLD_EDGE", U32(MAX_WORLD_EDGE)),
         // Secondary rays start this far off their surface (the CPU reference uses the same).
         ("RAY_OFFSET_INVERSE", U32(RAY_OFFSET_INVERSE)),
         // A light slot's packed edge and exposed faces.

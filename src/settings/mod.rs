@@ -134,16 +134,32 @@ impl Lighting {
 /// How rays walk the brick grid (`world::traversal`); both find the same voxels.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Traversal {
-    /// The plain two-level DDA: brick by brick, then voxel by voxel in stored bricks, one load per step.
+    /// The walk that suits the adapter: the plain DDA on a CPU adapter (software Vulkan, whose SIMD lanes pay for
+    /// every branch any of them takes), the occupancy masks on a GPU (whose rays wait on their memory loads).
     #[default]
+    Auto,
+    /// The plain two-level DDA: brick by brick, then voxel by voxel in stored bricks, one load per step.
     Dda,
-    /// Through the occupancy hierarchy (`world::occupancy`): empty cells of 128, 32, 8 and 2 voxels jumped whole,
-    /// 2.3-5.6x fewer loads per ray, but 10-15% slower frames on lavapipe (`docs/bench/traversal.md`).
+    /// Through the occupancy hierarchy (`world::occupancy`): one step per empty cell of 128 down to 2 voxels,
+    /// 2.0-4.8x fewer steps and 2.3-5.6x fewer loads per ray than the DDA, but slower on lavapipe
+    /// (`docs/bench/traversal.md`).
     Occupancy,
 }
 
+impl Traversal {
+    /// The walk this setting means on an adapter that is (`true`) or is not a CPU.
+    pub fn resolve(self, cpu_adapter: bool) -> Traversal {
+        match self {
+            Traversal::Auto if cpu_adapter => Traversal::Dda,
+            Traversal::Auto => Traversal::Occupancy,
+            walk => walk,
+        }
+    }
+}
+
 impl Named for Traversal {
-    const NAMES: &'static [(&'static str, Traversal)] = &[("dda", Traversal::Dda), ("occupancy", Traversal::Occupancy)];
+    const NAMES: &'static [(&'static str, Traversal)] =
+        &[("auto", Traversal::Auto), ("dda", Traversal::Dda), ("occupancy", Traversal::Occupancy)];
 }
 
 /// How NEE and ReSTIR's candidates pick a light from the pool.
@@ -387,7 +403,7 @@ impl Default for RenderSettings {
             exposure: 1.0,
             denoise: false,
             seed: 0,
-            traversal: Traversal::Dda,
+            traversal: Traversal::Auto,
             pacing: true,
             restir: RestirSettings::default(),
             gi: GiSettings::default(),

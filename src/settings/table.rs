@@ -250,7 +250,8 @@ pub static SETTINGS: &[Setting] = &[
         key: "traversal",
         section: Section::General,
         about: "How the GPU's rays walk the grid: the plain DDA, or the occupancy masks that jump empty space (fewer \
-                memory loads, more arithmetic). Both find the same voxels.",
+                steps and memory loads, more arithmetic per step); auto: the DDA on a CPU adapter (software Vulkan), \
+                the masks on a GPU. Both find the same voxels.",
         field: &Choice { get: |s| s.traversal, set: |s, v| s.traversal = v },
     },
     Setting {

@@ -1,7 +1,7 @@
 //! CPU ray traversal, two ways to the same hits (Amanatides & Woo DDAs): `trace`, over bricks then the voxels of
 //! pooled bricks, one load per step; and `trace_occupancy`, over the occupancy hierarchy of the brick grid
-//! (`world::occupancy`), jumping empty cells of 128, 32, 8 and 2 voxels and reading voxels only inside occupied 2^3
-//! cells. `shaders/lib/traversal.wgsl` mirrors both step for step (the `traversal` setting picks), so the GPU and
+//! (`world::occupancy`), leaving in one step the coarsest empty cell of 128 down to 2 voxels its masks prove empty,
+//! and reading voxels only inside occupied 2^3 cells. `shaders/lib/traversal.wgsl` mirrors both step for step (the `traversal` setting picks), so the GPU and
 //! CPU agree per pixel; keep them in sync.
 //!
 //! Conventions shared by both: `t` is distance along the unit direction; every boundary crossing is computed as
@@ -9,7 +9,7 @@
 //! hit face is the face the ray entered through; a ray starting inside a solid voxel hits it at `t = 0`.
 
 use super::grid::{BRICK_SIZE, BRICK_VOXELS, BrickCell, BrickGrid, Voxel, local_index};
-use super::occupancy::{TOP_LEVEL, child_bit, has_child};
+use super::occupancy::{BRICK_SHIFT, SECTOR_SHIFT, TOP_WALK_LEVEL, WALK_LEVELS, child_bit, has_child};
 use bevy::math::{IVec3, Vec3};
 
 /// Secondary rays start this far off the surface they leave (the GPU passes use the same, as
@@ -116,7 +116,7 @@ pub fn box_entry(ray: &Ray, lo: Vec3, hi: Vec3) -> (f32, f32, usize) {
 /// occupied one) and memory loads (mask words, top cells and voxels; a bit test of a mask a ray already holds is
 /// not a load).
 pub trait Tally {
-    /// A cell of `level` visited (`world::occupancy`: 0 voxel, 2 brick).
+    /// A cell of `level` visited (`world::occupancy::WALK_LEVELS`: 0 voxel, 3 brick).
     fn step(&mut self, level: usize);
     fn load(&mut self);
 }
@@ -138,7 +138,7 @@ pub struct Counts {
     pub steps: u64,
     pub loads: u64,
     /// Steps by level.
-    pub levels: [u64; TOP_LEVEL + 1],
+    pub levels: [u64; WALK_LEVELS],
 }
 
 impl Tally for Counts {
@@ -184,11 +184,12 @@ pub fn trace_occupancy(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option
 
 /// `trace_occupancy`, telling `tally` its steps and loads.
 ///
-/// One flat loop over the occupancy hierarchy (`world::occupancy`): at level `level` the ray is in the cell holding
-/// voxel `v`; an occupied cell is entered (the level below, `v` re-found from the ray at `t` and clamped into the
-/// cell), an empty one left through its nearest face, going up as many levels as that face closes. Every face is
-/// a voxel boundary computed as in the plain DDA, and ties go to the first axis, so the hits are the DDA's save
-/// where a ray grazes an edge within rounding of `origin + dir * t`.
+/// One move per loop step: the ray is in voxel `v` at `t`; the step finds the coarsest cell holding `v` that the
+/// masks prove empty (`WALK_LEVELS`: a region, a 2^3 group of sectors, a sector, a group of bricks, a brick, a
+/// group of 2^3 cells, a 2^3 cell, a voxel; below a region every test is a bit test of a mask the ray holds) and
+/// leaves that cell through its nearest face. A mask is loaded only when the ray enters a new region, sector or
+/// pooled brick. Every face is a voxel boundary computed as in the plain DDA, and ties go to the first axis, so the
+/// hits are the DDA's save where a ray grazes an edge within rounding of `origin + dir * t`.
 pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
     let size = grid.size().as_ivec3();
     let (mut t, t_end, mut axis) = enter_world(size.as_vec3(), ray, max_distance)?;
@@ -196,64 +197,79 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
     let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
     let occupancy = grid.occupancy();
     let last = size - IVec3::ONE;
-    let mut v = ray.at(t).floor().as_ivec3().clamp(IVec3::ZERO, last);
-    let mut level = TOP_LEVEL;
-    // masks[l]: the child mask of the level-l cell the ray is in (valid while it stays there).
-    let mut masks = [0u64; TOP_LEVEL + 1];
+    let mut v = voxel_at(ray.at(t)).clamp(IVec3::ZERO, last);
+    // The masks of the region, sector and pooled brick the ray is in, valid from the level at which they were
+    // last loaded down; `entered`: the coarsest level whose cell the last move changed (7 before the first step).
+    let (mut region_mask, mut sector_mask, mut brick_mask) = (0u64, 0u64, 0u64);
     let mut slot = 0u32;
-    // Every move crosses at least one voxel boundary and is followed by at most TOP_LEVEL descents.
-    let max_steps = (TOP_LEVEL as i32 + 1) * (size.x + size.y + size.z) + 8;
+    let mut entered = TOP_WALK_LEVEL;
+    // Every step crosses at least one voxel boundary.
+    let max_steps = size.x + size.y + size.z + 8;
     for _ in 0..max_steps {
-        tally.step(level);
-        let shift = level_shift(level);
-        let edge = 1 << shift;
-        let lo = v & !(edge - 1);
-        let occupied = match level {
-            0 => {
-                tally.load();
-                let material = grid.pool()[slot as usize * BRICK_VOXELS + local_index(v & 7_i32)];
-                if material != 0 {
-                    return Some(Hit { voxel: v, face: Face::entered(axis, positive[axis]), distance: t, material });
-                }
-                false
-            }
-            TOP_LEVEL => {
-                tally.load();
-                masks[TOP_LEVEL] = occupancy.region(v);
-                masks[TOP_LEVEL] != 0
-            }
-            _ => has_child(masks[level + 1], child_bit(v, level)),
-        };
-        if occupied {
-            // Into the cell: the voxel the ray is in at t, within the cell.
-            let hi = (lo + IVec3::splat(edge - 1)).min(last);
-            v = ray.at(t).floor().as_ivec3().clamp(lo, hi);
-            match level {
-                3 => {
-                    tally.load();
-                    masks[3] = occupancy.sector(v);
-                }
-                2 => {
-                    tally.load();
-                    let index = grid.brick_index(v >> 3_i32);
-                    match BrickCell::decode(grid.top_cell(index)) {
-                        BrickCell::Homogeneous(material) => {
-                            let face = Face::entered(axis, positive[axis]);
-                            return Some(Hit { voxel: v, face, distance: t, material });
-                        }
-                        BrickCell::Pooled(s) => slot = s,
-                        // The sector said otherwise; never with masks kept current.
-                        BrickCell::Empty => {}
-                    }
-                    tally.load();
-                    masks[2] = occupancy.brick(index);
-                }
-                _ => {}
-            }
-            level -= 1;
-            continue;
+        if entered >= 7 {
+            tally.load();
+            region_mask = occupancy.region(v);
         }
-        // Out of the cell through the face the ray reaches first.
+        // The level of the coarsest empty cell holding v.
+        let level = 'empty: {
+            if region_mask == 0 {
+                break 'empty 7;
+            }
+            if region_mask & group_bits(v, SECTOR_SHIFT) == 0 {
+                break 'empty 6;
+            }
+            if !has_child(region_mask, child_bit(v, 3)) {
+                break 'empty 5;
+            }
+            // A mask not loaded since the ray entered its cell: the steps since then left coarser empty cells.
+            if entered >= 5 {
+                tally.load();
+                sector_mask = occupancy.sector(v);
+            }
+            if sector_mask & group_bits(v, BRICK_SHIFT) == 0 {
+                break 'empty 4;
+            }
+            if !has_child(sector_mask, child_bit(v, 2)) {
+                break 'empty 3;
+            }
+            if entered >= 3 {
+                tally.load();
+                let index = grid.brick_index(v >> BRICK_SHIFT);
+                match BrickCell::decode(grid.top_cell(index)) {
+                    BrickCell::Homogeneous(material) => {
+                        tally.step(0);
+                        return Some(Hit {
+                            voxel: v,
+                            face: Face::entered(axis, positive[axis]),
+                            distance: t,
+                            material,
+                        });
+                    }
+                    BrickCell::Pooled(s) => slot = s,
+                    // The sector said otherwise; never with masks kept current.
+                    BrickCell::Empty => {}
+                }
+                tally.load();
+                brick_mask = occupancy.brick(index);
+            }
+            if brick_mask & group_bits(v, 1) == 0 {
+                break 'empty 2;
+            }
+            if !has_child(brick_mask, child_bit(v, 1)) {
+                break 'empty 1;
+            }
+            tally.load();
+            let material = grid.pool()[slot as usize * BRICK_VOXELS + local_index(v & 7_i32)];
+            if material != 0 {
+                tally.step(0);
+                return Some(Hit { voxel: v, face: Face::entered(axis, positive[axis]), distance: t, material });
+            }
+            0
+        };
+        tally.step(level);
+        // Out of that cell through the face the ray reaches first.
+        let edge = 1 << level;
+        let lo = v & !(edge - 1);
         let mut t_max = Vec3::ZERO;
         for a in 0..3 {
             t_max[a] = cross_t(ray, inv, a, (lo[a] + if positive[a] { edge } else { 0 }) as f32);
@@ -269,24 +285,25 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
         if v[a] < 0 || v[a] > last[a] {
             return None;
         }
-        level = level_after_move(level, before, v[a]);
+        entered = (31 - ((before ^ v[a]) as u32).leading_zeros()) as usize;
+        if level > 0 {
+            // v's other axes are the ray's only to the cell's precision: the voxel the ray is in at t, within the
+            // cell entered (the old cell's extent on every axis but a).
+            let lo = v & !(edge - 1);
+            v = voxel_at(ray.at(t)).clamp(lo, (lo + IVec3::splat(edge - 1)).min(last));
+        }
     }
     None
 }
 
-/// log2 of the cell edge of `level` (`LEVEL_SHIFTS`, as arithmetic: 0, 1, 3, 5, 7).
+/// The bits of a 4^3 child mask (children of edge `1 << child_shift`) that belong to the 2^3 group of children
+/// holding voxel `v`: the cell of the derived level between a mask's children and its owner.
 #[inline]
-fn level_shift(level: usize) -> i32 {
-    (2 * level as i32 - 1).max(0)
-}
-
-/// The level after a move along one axis from coordinate `before` to `after` (both in the world) at `level`: up
-/// as many levels as the crossed face closes, i.e. to the first level whose cells hold the two coordinates'
-/// highest differing bit (bit h lies inside level l's cells while h < `level_shift(l + 1)` = 2 l + 1).
-#[inline]
-fn level_after_move(level: usize, before: i32, after: i32) -> usize {
-    let h = 31 - ((before ^ after) as u32).leading_zeros() as usize;
-    level.max(h.div_ceil(2).min(TOP_LEVEL))
+fn group_bits(v: IVec3, child_shift: i32) -> u64 {
+    // Children (0|1, 0|1, 0|1) of the group at the mask's corner: bits 0, 1, 4, 5, 16, 17, 20, 21.
+    const GROUP: u64 = 0x0033_0033;
+    let g = (v >> (child_shift + 1)) & 1;
+    GROUP << (2 * g.x + 8 * g.y + 32 * g.z)
 }
 
 /// Finds the first solid voxel along `ray` within `max_distance`: the two-level DDA (bricks, skipping empty and
@@ -305,7 +322,7 @@ pub fn trace_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut
     let brick_edge = BRICK_SIZE as f32;
     let last_brick = ((grid.size().as_ivec3() - IVec3::ONE) >> 3_i32).max(IVec3::ZERO);
     let start = ray.at(t);
-    let mut brick = (start / brick_edge).floor().as_ivec3().clamp(IVec3::ZERO, last_brick);
+    let mut brick = voxel_at(start / brick_edge).clamp(IVec3::ZERO, last_brick);
     let mut brick_t_max = Vec3::ZERO;
     for a in 0..3 {
         let plane = (brick[a] + positive[a] as i32) as f32 * brick_edge;
@@ -318,7 +335,7 @@ pub fn trace_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut
         match grid.cell(brick) {
             BrickCell::Empty => {}
             BrickCell::Homogeneous(material) => {
-                let voxel = clamp_into_brick(ray.at(t).floor().as_ivec3(), brick).min(grid.size().as_ivec3() - 1);
+                let voxel = clamp_into_brick(voxel_at(ray.at(t)), brick).min(grid.size().as_ivec3() - 1);
                 return Some(Hit { voxel, face: Face::entered(axis, positive[axis]), distance: t, material });
             }
             BrickCell::Pooled(slot) => {
@@ -360,7 +377,7 @@ fn trace_in_brick(
     let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
     let lo = brick * BRICK_SIZE;
     let hi = (lo + IVec3::splat(BRICK_SIZE)).min(grid.size().as_ivec3()) - IVec3::ONE;
-    let mut voxel = ray.at(t).floor().as_ivec3().clamp(lo, hi);
+    let mut voxel = voxel_at(ray.at(t)).clamp(lo, hi);
     let voxels = grid.pool_brick(slot);
     let mut t_max = Vec3::ZERO;
     for a in 0..3 {
@@ -385,6 +402,18 @@ fn trace_in_brick(
         }
         t_max[a] = cross_t(ray, inv, a, (voxel[a] + positive[a] as i32) as f32);
     }
+}
+
+/// The voxel holding point `p`: `p.floor().as_ivec3()` without a call per component (without SSE4.1 `f32::floor`
+/// is a library call, and the occupancy walk takes three every step).
+#[inline]
+fn voxel_at(p: Vec3) -> IVec3 {
+    let floor = |x: f32| {
+        // Truncation saturates as `as_ivec3` does (NaN gives 0); below a negative non-integer it is one too high.
+        let i = x as i32;
+        i.saturating_sub((x < i as f32) as i32)
+    };
+    IVec3::new(floor(p.x), floor(p.y), floor(p.z))
 }
 
 /// The axis of the smallest component; ties go to the first in x, y, z order.
@@ -429,28 +458,30 @@ pub fn trace_brute_force(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Opti
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::world::occupancy::LEVEL_SHIFTS;
 
-    /// The arithmetic forms the loop uses are the table's shifts and the level-by-level climb.
     #[test]
-    fn level_arithmetic_matches_the_table() {
-        for (level, &shift) in LEVEL_SHIFTS.iter().enumerate() {
-            assert_eq!(level_shift(level), shift);
+    fn voxel_at_is_the_floor() {
+        let xs = [-1e10, -2147483904.0, -3.5, -1.0, -0.25, -0.0, 0.0, 0.5, 1.0, 7.999, 2147483648.0, 1e10];
+        for x in xs.into_iter().chain([f32::NAN, f32::INFINITY, f32::NEG_INFINITY]) {
+            let p = Vec3::new(x, x + 0.5, -x);
+            assert_eq!(voxel_at(p), p.floor().as_ivec3(), "{p}");
         }
-        for level in 0..=TOP_LEVEL {
-            for before in 0..600 {
-                for after in [before - 1, before + 1, before + 2, before + 8, before - 32] {
-                    if after < 0 || after == before {
-                        continue;
+    }
+
+    /// A group's bits are those of the 8 children whose coordinates halved are the group's.
+    #[test]
+    fn group_bits_are_the_eight_children_of_the_group() {
+        for shift in [1, 3, 5] {
+            for v in [IVec3::new(0, 0, 0), IVec3::new(3, 0, 2), IVec3::new(1, 2, 3), IVec3::new(2, 3, 1)] {
+                let v = v << shift;
+                let mut expected = 0u64;
+                for bit in 0..64 {
+                    let child = IVec3::new(bit & 3, (bit >> 2) & 3, bit >> 4);
+                    if child >> 1 == (v >> shift & 3) >> 1 {
+                        expected |= 1 << bit;
                     }
-                    let mut climbed = level;
-                    while climbed < TOP_LEVEL
-                        && (after >> LEVEL_SHIFTS[climbed + 1]) != (before >> LEVEL_SHIFTS[climbed + 1])
-                    {
-                        climbed += 1;
-                    }
-                    assert_eq!(level_after_move(level, before, after), climbed, "{level} {before} -> {after}");
                 }
+                assert_eq!(group_bits(v, shift), expected, "{v} {shift}");
             }
         }
     }

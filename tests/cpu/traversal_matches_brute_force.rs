@@ -219,7 +219,8 @@ fn occupancy_traversal_matches_the_plain_dda_on_large_worlds() {
     assert!(ties * 500 < hits, "ties should be rare: {ties} of {hits}");
 }
 
-/// The occupancy traversal reads several times fewer words than the plain DDA across a sparse world.
+/// The occupancy traversal reads three times fewer words, and takes 2.5 times fewer steps, than the plain DDA across
+/// a sparse world.
 #[test]
 fn occupancy_traversal_loads_fewer_words_than_the_plain_dda() {
     let mut rng = Rng(99);
@@ -233,7 +234,8 @@ fn occupancy_traversal_loads_fewer_words_than_the_plain_dda() {
         trace_counted(&grid, &ray, f32::INFINITY, &mut plain);
     }
     assert!(fast.loads * 3 < plain.loads, "loads: occupancy {} plain {}", fast.loads, plain.loads);
-    assert!(fast.steps * 4 < plain.steps * 3, "steps: occupancy {} plain {}", fast.steps, plain.steps);
+    // 2.7x here: one step a cell left, the coarsest the masks prove empty (derived 2^3 groups included).
+    assert!(fast.steps * 5 < plain.steps * 2, "steps: occupancy {} plain {}", fast.steps, plain.steps);
 }
 
 /// After every kind of edit, each mask of the hierarchy is what a rebuild from the voxels gives.

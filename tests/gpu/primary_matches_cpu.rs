@@ -11,14 +11,50 @@ use bevy::math::{UVec2, UVec3};
 use common::compare_hits;
 use glowbrick::headless::HeadlessOptions;
 use glowbrick::image_io::LinearImage;
+use glowbrick::render::gpu_types::GpuCounter;
 use glowbrick::settings::RenderSettings;
 use glowbrick::world::recipe::{generated_world, load_scene};
+use glowbrick::world::traversal::{Counts, trace_counted, trace_occupancy_counted};
 use glowbrick::world::{CameraView, VoxelWorld, trace};
 use glowbrick::world::{camera_ray, view_transform, world_from_clip};
 
 fn render(world: VoxelWorld, view: &CameraView, settings: RenderSettings, w: u32, h: u32) -> LinearImage {
+    render_counted(world, view, settings, w, h).0
+}
+
+/// The image and its last frame's traversal steps and loads (the per-pixel passes' rays).
+fn render_counted(
+    world: VoxelWorld,
+    view: &CameraView,
+    settings: RenderSettings,
+    w: u32,
+    h: u32,
+) -> (LinearImage, Counts) {
     let options = HeadlessOptions { width: w, height: h, frames: 2, settings, ..Default::default() };
-    common::renderer(world, view, &options).render(options.frames).expect("render")
+    let mut renderer = common::renderer(world, view, &options);
+    let image = renderer.render(options.frames).expect("render");
+    let counters = renderer.counters().expect("counters");
+    let steps = counters[GpuCounter::TraceSteps as usize] as u64;
+    let loads = counters[GpuCounter::TraceLoads as usize] as u64;
+    let rays = counters[GpuCounter::RaysPrimary as usize] as u64;
+    (image, Counts { rays, steps, loads, ..Default::default() })
+}
+
+/// The CPU walk's steps and loads over the camera rays of a `w` x `h` view.
+fn cpu_counts(world: &VoxelWorld, view: &CameraView, w: u32, h: u32, occupancy: bool) -> Counts {
+    let transform = view_transform(view);
+    let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
+    let mut counts = Counts::default();
+    for i in 0..w * h {
+        let ray = camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h);
+        counts.rays += 1;
+        if occupancy {
+            trace_occupancy_counted(&world.grid, &ray, f32::INFINITY, &mut counts);
+        } else {
+            trace_counted(&world.grid, &ray, f32::INFINITY, &mut counts);
+        }
+    }
+    counts
 }
 
 /// Both walks of the grid (the `traversal` setting), on rooms and on terrain wider than a region of the occupancy
@@ -39,12 +75,23 @@ pub fn gpu_primary_rays_match_cpu_traversal() {
         .map(|((n, w, v), t)| (format!("{n} traversal={t}"), w.clone(), v.clone()))
     {
         let traversal = name.rsplit(' ').next().unwrap().to_string();
-        let hit_view = RenderSettings::default().with_pairs(&["debug=hit".to_string(), traversal]).unwrap();
-        let gpu = render(world.clone(), &view, hit_view, 96, 64);
+        let hit_view = RenderSettings::default().with_pairs(&["debug=hit".to_string(), traversal.clone()]).unwrap();
+        let (gpu, counted) = render_counted(world.clone(), &view, hit_view, 96, 64);
         let c = compare_hits(&world, &view, &gpu);
         eprintln!("{name}: {} pixels, {} hits, {} mismatches", c.pixels, c.hits, c.mismatches);
         assert!(c.hits * 3 > c.pixels, "{name}: the view should mostly hit voxels ({} of {})", c.hits, c.pixels);
         assert!(c.mismatches * 200 <= c.pixels, "{name}: {} of {} pixels differ", c.mismatches, c.pixels);
+        // The GPU walks the CPU's walk step for step: its counters over the camera rays (the only rays of a
+        // `debug=hit` frame) are the CPU's, but for the few rays through an edge that the two round apart.
+        let cpu = cpu_counts(&world, &view, 96, 64, traversal == "traversal=occupancy");
+        eprintln!(
+            "{name}: steps GPU {} CPU {}, loads GPU {} CPU {}",
+            counted.steps, cpu.steps, counted.loads, cpu.loads
+        );
+        assert_eq!(counted.rays, cpu.rays, "{name}: one primary ray a pixel");
+        let near = |gpu: u64, cpu: u64| gpu.abs_diff(cpu) * 200 <= cpu;
+        assert!(near(counted.steps, cpu.steps), "{name}: steps GPU {} CPU {}", counted.steps, cpu.steps);
+        assert!(near(counted.loads, cpu.loads), "{name}: loads GPU {} CPU {}", counted.loads, cpu.loads);
     }
 }
 
