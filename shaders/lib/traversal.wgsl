@@ -218,18 +218,17 @@ fn has_child(m: vec2<u32>, bit: u32) -> bool {
     return ((word >> (bit & 31u)) & 1u) != 0u;
 }
 
-// Whether the child of 4^3-child mask `m` (children of edge 1 << child_shift) holding voxel v is occupied.
-fn child_occupied(m: vec2<u32>, v: vec3<i32>, child_shift: u32) -> bool {
-    let c = vec3<u32>((v >> vec3(child_shift)) & vec3(3));
-    return has_child(m, c.x + 4u * (c.y + 4u * c.z));
-}
-
-// Whether the 2^3 group of m's children holding voxel v (a cell of the derived level between the children and
-// the mask's owner) has an occupied child: bits 0, 1, 4, 5, 16, 17, 20, 21 moved to the group's corner.
-fn group_occupied(m: vec2<u32>, v: vec3<i32>, child_shift: u32) -> bool {
+// The level of the coarsest empty cell below 4^3-child mask m that holds voxel v (children of edge
+// 1 << child_shift, whose walk level is child_shift): its 2^3 group of children (one level up: bits 0, 1, 4, 5,
+// 16, 17, 20, 21 moved to the group's corner) or its child; 0 when the child is occupied.
+fn empty_child_level(m: vec2<u32>, v: vec3<i32>, child_shift: u32) -> u32 {
     let g = vec3<u32>((v >> vec3(child_shift + 1u)) & vec3(1));
-    let word = select(m.x, m.y, g.z == 1u);
-    return (word & (0x330033u << (2u * g.x + 8u * g.y))) != 0u;
+    let group = select(m.x, m.y, g.z == 1u) & (0x330033u << (2u * g.x + 8u * g.y));
+    let c = vec3<u32>((v >> vec3(child_shift)) & vec3(3));
+    if group == 0u {
+        return child_shift + 1u;
+    }
+    return select(child_shift, 0u, has_child(m, c.x + 4u * (c.y + 4u * c.z)));
 }
 
 fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
@@ -278,23 +277,14 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
             region_mask = occupancy[world_info.region_base + mask_index(v >> vec3(7u), world_info.regions)];
         }
         // The level of the coarsest empty cell holding v.
-        var level = 0u;
-        if all(region_mask == vec2(0u)) {
-            level = 7u;
-        } else if !group_occupied(region_mask, v, 5u) {
-            level = 6u;
-        } else if !child_occupied(region_mask, v, 5u) {
-            level = 5u;
-        } else {
+        var level = select(empty_child_level(region_mask, v, 5u), 7u, all(region_mask == vec2(0u)));
+        if level == 0u {
             if entered >= 5u {
                 trace_loads += 1u;
                 sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(5u), world_info.sectors)];
             }
-            if !group_occupied(sector_mask, v, 3u) {
-                level = 4u;
-            } else if !child_occupied(sector_mask, v, 3u) {
-                level = 3u;
-            } else {
+            level = empty_child_level(sector_mask, v, 3u);
+            if level == 0u {
                 if entered >= 3u {
                     trace_loads += 1u;
                     let index = mask_index(v >> vec3(BRICK_SHIFT), world_info.bricks);
@@ -306,11 +296,8 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
                     slot = cell & ~POOLED_FLAG;
                     brick_mask = occupancy[index];
                 }
-                if !group_occupied(brick_mask, v, 1u) {
-                    level = 2u;
-                } else if !child_occupied(brick_mask, v, 1u) {
-                    level = 1u;
-                } else {
+                level = empty_child_level(brick_mask, v, 1u);
+                if level == 0u {
                     trace_loads += 1u;
                     let material = pooled_voxel(slot, v & vec3(BRICK_SIZE - 1));
                     if material != 0u {

@@ -36,6 +36,8 @@ pub const WALK_LEVELS: usize = 8;
 pub const TOP_WALK_LEVEL: usize = WALK_LEVELS - 1;
 /// log2 of a brick's edge in voxels.
 pub const BRICK_SHIFT: i32 = LEVEL_SHIFTS[2];
+/// log2 of a brick mask's cells' edge in voxels.
+pub const CELL_SHIFT: i32 = LEVEL_SHIFTS[1];
 /// log2 of a sector's edge in voxels (4^3 bricks).
 pub const SECTOR_SHIFT: i32 = LEVEL_SHIFTS[3];
 /// log2 of a region's edge in voxels (4^3 sectors).

@@ -9,7 +9,7 @@
 //! hit face is the face the ray entered through; a ray starting inside a solid voxel hits it at `t = 0`.
 
 use super::grid::{BRICK_SIZE, BRICK_VOXELS, BrickCell, BrickGrid, Voxel, local_index};
-use super::occupancy::{BRICK_SHIFT, SECTOR_SHIFT, TOP_WALK_LEVEL, WALK_LEVELS, child_bit, has_child};
+use super::occupancy::{BRICK_SHIFT, CELL_SHIFT, SECTOR_SHIFT, TOP_WALK_LEVEL, WALK_LEVELS, has_child};
 use bevy::math::{IVec3, Vec3};
 
 /// Secondary rays start this far off the surface they leave (the GPU passes use the same, as
@@ -215,22 +215,16 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
             if region_mask == 0 {
                 break 'empty 7;
             }
-            if region_mask & group_bits(v, SECTOR_SHIFT) == 0 {
-                break 'empty 6;
-            }
-            if !has_child(region_mask, child_bit(v, 3)) {
-                break 'empty 5;
+            if let Some(level) = empty_child_level(region_mask, v, SECTOR_SHIFT) {
+                break 'empty level;
             }
             // A mask not loaded since the ray entered its cell: the steps since then left coarser empty cells.
             if entered >= 5 {
                 tally.load();
                 sector_mask = occupancy.sector(v);
             }
-            if sector_mask & group_bits(v, BRICK_SHIFT) == 0 {
-                break 'empty 4;
-            }
-            if !has_child(sector_mask, child_bit(v, 2)) {
-                break 'empty 3;
+            if let Some(level) = empty_child_level(sector_mask, v, BRICK_SHIFT) {
+                break 'empty level;
             }
             if entered >= 3 {
                 tally.load();
@@ -252,11 +246,8 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
                 tally.load();
                 brick_mask = occupancy.brick(index);
             }
-            if brick_mask & group_bits(v, 1) == 0 {
-                break 'empty 2;
-            }
-            if !has_child(brick_mask, child_bit(v, 1)) {
-                break 'empty 1;
+            if let Some(level) = empty_child_level(brick_mask, v, CELL_SHIFT) {
+                break 'empty level;
             }
             tally.load();
             let material = grid.pool()[slot as usize * BRICK_VOXELS + local_index(v & 7_i32)];
@@ -294,6 +285,21 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
         }
     }
     None
+}
+
+/// The level of the coarsest empty cell below 4^3-child mask `m` that holds voxel `v` (children of edge
+/// `1 << child_shift`, whose walk level is `child_shift`): its 2^3 group of children (one level up) or its child;
+/// `None` when the child is occupied.
+#[inline]
+fn empty_child_level(m: u64, v: IVec3, child_shift: i32) -> Option<usize> {
+    let c = (v >> child_shift) & 3;
+    if m & group_bits(v, child_shift) == 0 {
+        Some(child_shift as usize + 1)
+    } else if !has_child(m, (c.x + 4 * (c.y + 4 * c.z)) as u32) {
+        Some(child_shift as usize)
+    } else {
+        None
+    }
 }
 
 /// The bits of a 4^3 child mask (children of edge `1 << child_shift`) that belong to the 2^3 group of children
