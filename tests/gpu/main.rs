@@ -120,6 +120,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             a_rendered_sequence_returns_each_frame_with_its_own_camera,
             gpu_primary_rays_match_cpu_traversal,
             lit_render_is_finite_and_shows_emission,
+            the_game_frame_is_the_same_through_either_walk,
         ],
         restir: [
             a_removed_light_is_never_shaded,
