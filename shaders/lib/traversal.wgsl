@@ -218,17 +218,32 @@ fn has_child(m: vec2<u32>, bit: u32) -> bool {
     return ((word >> (bit & 31u)) & 1u) != 0u;
 }
 
-// The level of the coarsest empty cell below 4^3-child mask m that holds voxel v (children of edge
-// 1 << child_shift, whose walk level is child_shift): its 2^3 group of children (one level up: bits 0, 1, 4, 5,
-// 16, 17, 20, 21 moved to the group's corner) or its child; 0 when the child is occupied.
-fn empty_child_level(m: vec2<u32>, v: vec3<i32>, child_shift: u32) -> u32 {
-    let g = vec3<u32>((v >> vec3(child_shift + 1u)) & vec3(1));
-    let group = select(m.x, m.y, g.z == 1u) & (0x330033u << (2u * g.x + 8u * g.y));
-    let c = vec3<u32>((v >> vec3(child_shift)) & vec3(3));
-    if group == 0u {
-        return child_shift + 1u;
+// The coarsest empty cell below 4^3-child mask m that holds voxel v (children of edge 1 << child_shift, whose
+// walk level is child_shift), as (level, low corner): the 2^3 children reaching ahead of the ray's child on every
+// axis, else its aligned 2^3 group (one level up), else its child; level 0 when the child is occupied. A 2^3 box of
+// children at (x, y, z) is the bits 0, 1, 4, 5, 16, 17, 20, 21 moved by x + 4 y + 16 z.
+fn empty_child_cell(m: vec2<u32>, v: vec3<i32>, child_shift: u32, positive: vec3<bool>) -> vec4<i32> {
+    let c = (v >> vec3(child_shift)) & vec3(3);
+    let node = v & vec3(~((4 << child_shift) - 1));
+    let ahead = select(max(c - vec3(1), vec3(0)), min(c, vec3(2)), positive);
+    if !any_bits(m, u32(ahead.x + 4 * ahead.y + 16 * ahead.z)) {
+        return vec4(node + (ahead << vec3(child_shift)), i32(child_shift) + 1);
     }
-    return select(child_shift, 0u, has_child(m, c.x + 4u * (c.y + 4u * c.z)));
+    let aligned = c & vec3(2);
+    if !any_bits(m, u32(aligned.x + 4 * aligned.y + 16 * aligned.z)) {
+        return vec4(v & vec3(~((2 << child_shift) - 1)), i32(child_shift) + 1);
+    }
+    if !has_child(m, u32(c.x + 4 * (c.y + 4 * c.z))) {
+        return vec4(v & vec3(~((1 << child_shift) - 1)), i32(child_shift));
+    }
+    return vec4(v, 0);
+}
+
+// Whether any of the 2^3 children of m at child bit `base` (bits base + 0, 1, 4, 5, 16, 17, 20, 21) is occupied.
+fn any_bits(m: vec2<u32>, base: u32) -> bool {
+    let low = select(0u, 0x330033u << base, base < 32u);
+    let high = select(0x330033u >> (32u - base), 0x330033u << (base - 32u), base >= 32u);
+    return ((m.x & low) | (m.y & select(high, 0u, base == 0u))) != 0u;
 }
 
 fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
@@ -237,8 +252,8 @@ fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
 
 // traversal=occupancy: one move per step, as `trace_occupancy_counted` in src/world/traversal.rs: the ray is in
 // voxel v at t; the step finds the coarsest cell holding v that the masks prove empty (edge 1 << level: a region
-// (7), a 2^3 group of sectors, a sector, a group of bricks, a brick, a group of 2^3 cells, a 2^3 cell, a voxel)
-// and leaves it through its nearest face. The masks of the region, sector and brick the ray is in stay in
+// (7), a 2^3 box of sectors, a sector, a box of bricks, a brick, a box of 2^3 cells, a 2^3 cell, a voxel; a box
+// reaches ahead of the ray's own child where it can) and leaves it through its nearest face. The masks of the region, sector and brick the ray is in stay in
 // registers and are loaded only when a move enters a new one, so every step does the same few bit tests.
 fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
     let size = world_info.size;
@@ -277,14 +292,15 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
             region_mask = occupancy[world_info.region_base + mask_index(v >> vec3(7u), world_info.regions)];
         }
         // The level of the coarsest empty cell holding v.
-        var level = select(empty_child_level(region_mask, v, 5u), 7u, all(region_mask == vec2(0u)));
-        if level == 0u {
+        var cell = select(empty_child_cell(region_mask, v, 5u, positive), vec4(v & vec3(~127), 7),
+                          all(region_mask == vec2(0u)));
+        if cell.w == 0 {
             if entered >= 5u {
                 trace_loads += 1u;
                 sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(5u), world_info.sectors)];
             }
-            level = empty_child_level(sector_mask, v, 3u);
-            if level == 0u {
+            cell = empty_child_cell(sector_mask, v, 3u, positive);
+            if cell.w == 0 {
                 if entered >= 3u {
                     trace_loads += 1u;
                     let index = mask_index(v >> vec3(BRICK_SHIFT), world_info.bricks);
@@ -296,8 +312,8 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
                     slot = cell & ~POOLED_FLAG;
                     brick_mask = occupancy[index];
                 }
-                level = empty_child_level(brick_mask, v, 1u);
-                if level == 0u {
+                cell = empty_child_cell(brick_mask, v, 1u, positive);
+                if cell.w == 0 {
                     trace_loads += 1u;
                     let material = pooled_voxel(slot, v & vec3(BRICK_SIZE - 1));
                     if material != 0u {
@@ -307,8 +323,9 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
             }
         }
         // Out of that cell through its nearest face (the same planes and products as `cross_t`).
+        let level = u32(cell.w);
         let edge = 1 << level;
-        let lo = v & vec3(~(edge - 1));
+        let lo = cell.xyz;
         let planes = vec3<f32>(lo + far_side * edge);
         let t_max = select((planes - origin) * inv, vec3(INF), no_dir);
         let a = min_axis(t_max);
@@ -325,9 +342,10 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
         entered = firstLeadingBit(u32(before ^ v[a]));
         if level > 0u {
             // v's other axes are the ray's only to the cell's precision: the voxel the ray is in at t, within the
-            // cell entered.
-            let cell = v & vec3(~(edge - 1));
-            v = clamp(vec3<i32>(floor(origin + dir * t)), cell, min(cell + vec3(edge - 1), last));
+            // cell's extent on every axis but a.
+            let moved = v[a];
+            v = clamp(vec3<i32>(floor(origin + dir * t)), lo, min(lo + vec3(edge - 1), last));
+            v[a] = moved;
         }
     }
     return miss();

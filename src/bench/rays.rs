@@ -287,7 +287,7 @@ fn markdown(rows: &[RaysRow], config: &RaysConfig) -> String {
     }
     s.push_str(
         "\nSteps per ray of the occupancy traversal by the edge of the cell left (a hit counts as a voxel; 4, 16 \
-         and 64 are the derived levels, 2^3 groups of a mask's children):\n\n\
+         and 64 are the derived levels, 2^3 boxes of a mask's children):\n\n\
          | scene | kind | 1 | 2 | 4 | 8 (brick) | 16 | 32 (sector) | 64 | 128 (region) |\n\
          |---|---|---|---|---|---|---|---|---|---|\n",
     );

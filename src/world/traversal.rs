@@ -185,9 +185,10 @@ pub fn trace_occupancy(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option
 /// `trace_occupancy`, telling `tally` its steps and loads.
 ///
 /// One move per loop step: the ray is in voxel `v` at `t`; the step finds the coarsest cell holding `v` that the
-/// masks prove empty (`WALK_LEVELS`: a region, a 2^3 group of sectors, a sector, a group of bricks, a brick, a
-/// group of 2^3 cells, a 2^3 cell, a voxel; below a region every test is a bit test of a mask the ray holds) and
-/// leaves that cell through its nearest face. A mask is loaded only when the ray enters a new region, sector or
+/// masks prove empty (`WALK_LEVELS`: a region, a 2^3 box of sectors, a sector, a box of bricks, a brick, a box of
+/// 2^3 cells, a 2^3 cell, a voxel; a box is the 2^3 children of a mask reaching ahead of the ray's own child, else
+/// its aligned group; below a region every test is a bit test of a mask the ray holds) and leaves that cell
+/// through its nearest face. A mask is loaded only when the ray enters a new region, sector or
 /// pooled brick. Every face is a voxel boundary computed as in the plain DDA, and ties go to the first axis, so the
 /// hits are the DDA's save where a ray grazes an edge within rounding of `origin + dir * t`.
 pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
@@ -211,20 +212,20 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
             region_mask = occupancy.region(v);
         }
         // The level of the coarsest empty cell holding v.
-        let level = 'empty: {
+        let (level, lo) = 'empty: {
             if region_mask == 0 {
-                break 'empty 7;
+                break 'empty (7, v & !127);
             }
-            if let Some(level) = empty_child_level(region_mask, v, SECTOR_SHIFT) {
-                break 'empty level;
+            if let Some(cell) = empty_child_cell(region_mask, v, SECTOR_SHIFT, positive) {
+                break 'empty cell;
             }
             // A mask not loaded since the ray entered its cell: the steps since then left coarser empty cells.
             if entered >= 5 {
                 tally.load();
                 sector_mask = occupancy.sector(v);
             }
-            if let Some(level) = empty_child_level(sector_mask, v, BRICK_SHIFT) {
-                break 'empty level;
+            if let Some(cell) = empty_child_cell(sector_mask, v, BRICK_SHIFT, positive) {
+                break 'empty cell;
             }
             if entered >= 3 {
                 tally.load();
@@ -246,8 +247,8 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
                 tally.load();
                 brick_mask = occupancy.brick(index);
             }
-            if let Some(level) = empty_child_level(brick_mask, v, CELL_SHIFT) {
-                break 'empty level;
+            if let Some(cell) = empty_child_cell(brick_mask, v, CELL_SHIFT, positive) {
+                break 'empty cell;
             }
             tally.load();
             let material = grid.pool()[slot as usize * BRICK_VOXELS + local_index(v & 7_i32)];
@@ -255,12 +256,11 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
                 tally.step(0);
                 return Some(Hit { voxel: v, face: Face::entered(axis, positive[axis]), distance: t, material });
             }
-            0
+            (0, v)
         };
         tally.step(level);
         // Out of that cell through the face the ray reaches first.
         let edge = 1 << level;
-        let lo = v & !(edge - 1);
         let mut t_max = Vec3::ZERO;
         for a in 0..3 {
             t_max[a] = cross_t(ray, inv, a, (lo[a] + if positive[a] { edge } else { 0 }) as f32);
@@ -279,37 +279,46 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
         entered = (31 - ((before ^ v[a]) as u32).leading_zeros()) as usize;
         if level > 0 {
             // v's other axes are the ray's only to the cell's precision: the voxel the ray is in at t, within the
-            // cell entered (the old cell's extent on every axis but a).
-            let lo = v & !(edge - 1);
+            // cell's extent on every axis but a.
+            let moved = v[a];
             v = voxel_at(ray.at(t)).clamp(lo, (lo + IVec3::splat(edge - 1)).min(last));
+            v[a] = moved;
         }
     }
     None
 }
 
-/// The level of the coarsest empty cell below 4^3-child mask `m` that holds voxel `v` (children of edge
-/// `1 << child_shift`, whose walk level is `child_shift`): its 2^3 group of children (one level up) or its child;
-/// `None` when the child is occupied.
+/// The coarsest empty cell below 4^3-child mask `m` that holds voxel `v` (children of edge `1 << child_shift`,
+/// whose walk level is `child_shift`), as its level and low corner: the 2^3 children reaching ahead of the ray's
+/// child on every axis, else its aligned 2^3 group (one level up), else its child; `None` when the child is
+/// occupied.
 #[inline]
-fn empty_child_level(m: u64, v: IVec3, child_shift: i32) -> Option<usize> {
+fn empty_child_cell(m: u64, v: IVec3, child_shift: i32, positive: [bool; 3]) -> Option<(usize, IVec3)> {
     let c = (v >> child_shift) & 3;
-    if m & group_bits(v, child_shift) == 0 {
-        Some(child_shift as usize + 1)
-    } else if !has_child(m, (c.x + 4 * (c.y + 4 * c.z)) as u32) {
-        Some(child_shift as usize)
-    } else {
-        None
+    let node = v & !((4 << child_shift) - 1);
+    let mut ahead = c;
+    for a in 0..3 {
+        ahead[a] = if positive[a] { c[a].min(2) } else { (c[a] - 1).max(0) };
     }
+    if m & box_bits(ahead) == 0 {
+        return Some((child_shift as usize + 1, node + (ahead << child_shift)));
+    }
+    if m & box_bits(c & 2) == 0 {
+        return Some((child_shift as usize + 1, v & !((2 << child_shift) - 1)));
+    }
+    if !has_child(m, (c.x + 4 * (c.y + 4 * c.z)) as u32) {
+        return Some((child_shift as usize, v & !((1 << child_shift) - 1)));
+    }
+    None
 }
 
-/// The bits of a 4^3 child mask (children of edge `1 << child_shift`) that belong to the 2^3 group of children
-/// holding voxel `v`: the cell of the derived level between a mask's children and its owner.
+/// The bits of a 4^3 child mask (child `x + 4 y + 16 z`) of the 2^3 children whose lowest is `corner` (each
+/// coordinate 0..=2).
 #[inline]
-fn group_bits(v: IVec3, child_shift: i32) -> u64 {
-    // Children (0|1, 0|1, 0|1) of the group at the mask's corner: bits 0, 1, 4, 5, 16, 17, 20, 21.
-    const GROUP: u64 = 0x0033_0033;
-    let g = (v >> (child_shift + 1)) & 1;
-    GROUP << (2 * g.x + 8 * g.y + 32 * g.z)
+fn box_bits(corner: IVec3) -> u64 {
+    // Children (0|1, 0|1, 0|1): bits 0, 1, 4, 5, 16, 17, 20, 21.
+    const BOX: u64 = 0x0033_0033;
+    BOX << (corner.x + 4 * corner.y + 16 * corner.z)
 }
 
 /// Finds the first solid voxel along `ray` within `max_distance`: the two-level DDA (bricks, skipping empty and
@@ -474,21 +483,18 @@ mod tests {
         }
     }
 
-    /// A group's bits are those of the 8 children whose coordinates halved are the group's.
+    /// A box's bits are those of the 8 children from its corner to its corner + 1.
     #[test]
-    fn group_bits_are_the_eight_children_of_the_group() {
-        for shift in [1, 3, 5] {
-            for v in [IVec3::new(0, 0, 0), IVec3::new(3, 0, 2), IVec3::new(1, 2, 3), IVec3::new(2, 3, 1)] {
-                let v = v << shift;
-                let mut expected = 0u64;
-                for bit in 0..64 {
-                    let child = IVec3::new(bit & 3, (bit >> 2) & 3, bit >> 4);
-                    if child >> 1 == (v >> shift & 3) >> 1 {
-                        expected |= 1 << bit;
-                    }
+    fn box_bits_are_the_eight_children_of_the_box() {
+        for corner in [IVec3::new(0, 0, 0), IVec3::new(2, 0, 1), IVec3::new(1, 2, 2), IVec3::new(2, 2, 2)] {
+            let mut expected = 0u64;
+            for bit in 0..64 {
+                let child = IVec3::new(bit & 3, (bit >> 2) & 3, bit >> 4);
+                if child.cmpge(corner).all() && child.cmple(corner + 1).all() {
+                    expected |= 1 << bit;
                 }
-                assert_eq!(group_bits(v, shift), expected, "{v} {shift}");
             }
+            assert_eq!(box_bits(corner), expected, "{corner}");
         }
     }
 }
