@@ -141,7 +141,7 @@ pub enum Traversal {
     /// The plain two-level DDA: brick by brick, then voxel by voxel in stored bricks, one load per step.
     Dda,
     /// Through the occupancy hierarchy (`world::occupancy`): one step per empty cell of 128 down to 2 voxels,
-    /// 2.0-4.8x fewer steps and 2.3-5.6x fewer loads per ray than the DDA, but slower on lavapipe
+    /// 2.2-5.2x fewer steps and 1.4-5.6x fewer loads per ray than the DDA, but slower on lavapipe
     /// (`docs/bench/traversal.md`).
     Occupancy,
 }
