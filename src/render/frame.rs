@@ -78,12 +78,11 @@ fn view_layouts() -> ViewLayouts {
     ViewLayouts { view: view_layout(), empty: BindGroupLayoutDescriptor::new("glowbrick_no_view_layout", &[]) }
 }
 
-/// Every pass's pipeline, in `all_passes` order, for the plain DDA and (queued the first time the `traversal`
-/// setting asks for it) for the occupancy traversal, a shader def of its own; and the empty group 1 of world passes.
+/// Every pass's pipeline, in `all_passes` order, for the plain DDA and for the occupancy traversal (a shader def of
+/// its own), each set queued the first time the `traversal` setting asks for it; and the empty group 1 of world
+/// passes.
 #[derive(Resource)]
 pub struct VoxelPipelines {
-    /// Every pass's pipeline for the plain DDA and for the occupancy walk, each queued the first time a frame
-    /// needs it.
     passes: Vec<(VoxelPass, CachedComputePipelineId)>,
     occupancy: Vec<(VoxelPass, CachedComputePipelineId)>,
     /// The walk this frame's passes use (the extracted setting, `auto` resolved for the adapter).

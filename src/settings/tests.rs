@@ -201,3 +201,16 @@ fn renamed_keys_still_set_their_settings() {
     assert_eq!((old.gi.cache, old.gi.rays), (true, 16));
     assert_eq!(old, new);
 }
+
+/// `traversal=auto`, the default, is the DDA on a CPU adapter (lavapipe) and the occupancy walk on a GPU; a walk
+/// named outright is that walk on either.
+#[test]
+fn auto_traversal_is_the_dda_on_a_cpu_adapter_and_the_masks_on_a_gpu() {
+    assert_eq!(RenderSettings::default().traversal, Traversal::Auto);
+    assert_eq!(Traversal::Auto.resolve(true), Traversal::Dda);
+    assert_eq!(Traversal::Auto.resolve(false), Traversal::Occupancy);
+    for cpu in [true, false] {
+        assert_eq!(Traversal::Dda.resolve(cpu), Traversal::Dda);
+        assert_eq!(Traversal::Occupancy.resolve(cpu), Traversal::Occupancy);
+    }
+}
