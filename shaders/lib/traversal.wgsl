@@ -229,8 +229,9 @@ fn empty_child_cell(m: vec2<u32>, v: vec3<i32>, child_shift: u32, positive: vec3
     if !any_bits(m, u32(ahead.x + 4 * ahead.y + 16 * ahead.z)) {
         return vec4(node + (ahead << vec3(child_shift)), i32(child_shift) + 1);
     }
+    // The aligned group, unless it is the box just tested.
     let aligned = c & vec3(2);
-    if !any_bits(m, u32(aligned.x + 4 * aligned.y + 16 * aligned.z)) {
+    if any(aligned != ahead) && !any_bits(m, u32(aligned.x + 4 * aligned.y + 16 * aligned.z)) {
         return vec4(v & vec3(~((2 << child_shift) - 1)), i32(child_shift) + 1);
     }
     if !has_child(m, u32(c.x + 4 * (c.y + 4 * c.z))) {

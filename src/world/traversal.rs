@@ -303,7 +303,9 @@ fn empty_child_cell(m: u64, v: IVec3, child_shift: i32, positive: [bool; 3]) -> 
     if m & box_bits(ahead) == 0 {
         return Some((child_shift as usize + 1, node + (ahead << child_shift)));
     }
-    if m & box_bits(c & 2) == 0 {
+    // The aligned group, unless it is the box just tested.
+    let aligned = c & 2;
+    if aligned != ahead && m & box_bits(aligned) == 0 {
         return Some((child_shift as usize + 1, v & !((2 << child_shift) - 1)));
     }
     if !has_child(m, (c.x + 4 * (c.y + 4 * c.z)) as u32) {
