@@ -3,11 +3,11 @@
 // disk and sky of lighting=full without emitters, or the sun-only debug look. Debug views show the pass's inputs.
 
 #import glowbrick::world::{materials, Material, albedo_at}
-#import glowbrick::frame::{frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, primary_ray_dir, lit_view,
+#import glowbrick::frame::{debug_view, frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, primary_ray_dir, lit_view,
     pixel_footprint, NOT_A_VOXEL}
 #import glowbrick::gi::cache::{gi_on, gi_touch_surface, gi_incoming, camera_level}
 #import glowbrick::traversal::{Hit, trace_scene, face_normal, INF, count_rays}
-#import glowbrick::lights::{scene, sky, background, direct_sample, disk_sample, sky_sample}
+#import glowbrick::lights::{lighting_mode, power_pick_on, shadows_on, scene, sky, background, direct_sample, disk_sample, sky_sample}
 #import glowbrick::random::{Rng, pcg}
 #import glowbrick::counters::counters
 #import glowbrick::constants::{COUNT_RAYS_PRIMARY, COUNT_PRIMARY_HITS, LIGHTING_NEE, LIGHTING_EMITTERS, LIGHTING_FULL, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
@@ -42,18 +42,18 @@ fn primary_pixel(id: vec3<u32>) {
         gi_touch_surface(point, hit.face, hit.object, camera_level(pixel_footprint(point), hit.object));
     }
     // Voxel ReSTIR shades in its own passes when there is a light to sample; without one it is emission only.
-    let full = scene.mode == LIGHTING_FULL;
-    let restir = scene.mode == LIGHTING_EMITTERS || full;
-    if restir && scene.light_count > 0u && (lit_view() || frame.debug_view == DEBUG_RESERVOIR) {
+    let full = lighting_mode() == LIGHTING_FULL;
+    let restir = lighting_mode() == LIGHTING_EMITTERS || full;
+    if restir && scene.light_count > 0u && (lit_view() || debug_view() == DEBUG_RESERVOIR) {
         return;
     }
-    if frame.debug_view == DEBUG_RESERVOIR {
+    if debug_view() == DEBUG_RESERVOIR {
         // No ReSTIR pass ran (no lights, or another mode): every reservoir is empty, W = M = w_sum = 0, none reset.
         // (The shaded colour's alpha of 1 here would read as "reset for a non-finite field" to the soak.)
         write_output(id.xy, vec4(0.0));
         return;
     }
-    let nee = scene.mode == LIGHTING_NEE || restir;
+    let nee = lighting_mode() == LIGHTING_NEE || restir;
     var colour = vec4(0.0);
     if !hit.found {
         colour = miss_colour(dir, full, nee);
@@ -79,7 +79,7 @@ fn hit_colour(pixel: vec2<u32>, size: vec2<u32>, point: vec3<f32>, hit: Hit, ful
     // The material with this voxel's own albedo (per-voxel variation), for every use below.
     var material = materials[hit.material];
     material.albedo = vec4(albedo_at(hit.material, hit.voxel, hit.object), 0.0);
-    switch frame.debug_view {
+    switch debug_view() {
         case DEBUG_ALBEDO: {
             return vec4(material.albedo.rgb, 1.0);
         }
@@ -110,7 +110,7 @@ fn hit_colour(pixel: vec2<u32>, size: vec2<u32>, point: vec3<f32>, hit: Hit, ful
 // to sample, the disk and the sky), plus the GI cache's indirect light when it is on.
 fn nee_radiance(point: vec3<f32>, hit: Hit, normal: vec3<f32>, material: Material, full: bool, rng: ptr<function, Rng>) -> vec3<f32> {
     var radiance = material.radiance.rgb
-        + direct_sample(point, normal, material.albedo.rgb, scene.light_count, scene.power_pick == 1u, rng);
+        + direct_sample(point, normal, material.albedo.rgb, scene.light_count, power_pick_on(), rng);
     if full {
         radiance += disk_sample(point, normal, material.albedo.rgb, rng);
         if !gi_on() {
@@ -130,7 +130,7 @@ fn sun_look(point: vec3<f32>, hit: Hit, normal: vec3<f32>, material: Material) -
     let cos_sun = dot(normal, sun_dir);
     if scene.sun.w > 0.0 && cos_sun > 0.0 {
         sun = cos_sun;
-        if scene.shadows != 0u {
+        if shadows_on() {
             // Start just off the face so the shadow ray does not hit its own voxel.
             if trace_scene(point + normal * RAY_OFFSET, sun_dir, INF).found {
                 sun = 0.0;

@@ -5,7 +5,7 @@
 // grazing angle). The last iteration remodulates, draws the highlight and writes the image.
 
 #import glowbrick::world::{materials, albedo_at}
-#import glowbrick::frame::{frame, view, gbuffer, history, wavelet, unpack_surface, pixel_index, present, draw_highlight,
+#import glowbrick::frame::{debug_view, frame, view, gbuffer, history, wavelet, unpack_surface, pixel_index, present, draw_highlight,
     surface_voxel, luminance, pixel_footprint}
 #import glowbrick::constants::{DEBUG_VARIANCE, DEBUG_HISTORY}
 #import glowbrick::denoise::common::{MAX_HISTORY, ALBEDO_FLOOR, same_plane}
@@ -108,9 +108,9 @@ fn step_8_and_write(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let m = materials[s.material];
     var colour = max(albedo_at(s.material, surface_voxel(s), s.object), vec3(ALBEDO_FLOOR)) * f.rgb + m.radiance.rgb * frame.exposure;
-    if frame.debug_view == DEBUG_VARIANCE {
+    if debug_view() == DEBUG_VARIANCE {
         colour = vec3(sqrt(f.a));
-    } else if frame.debug_view == DEBUG_HISTORY {
+    } else if debug_view() == DEBUG_HISTORY {
         colour = vec3(history[2u * index].a / MAX_HISTORY);
     }
     let depth = distance(view.world_position, s.point);

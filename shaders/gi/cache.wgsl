@@ -7,7 +7,7 @@
 #import glowbrick::traversal::{face_normal, box_entry}
 #import glowbrick::random::pcg
 #import glowbrick::counters::counters
-#import glowbrick::constants::{RAY_OFFSET, COUNT_GI_INSERTED, COUNT_GI_FULL, GI_WORK_STATIC_WORD, GI_WORK_DYNAMIC_WORD,
+#import glowbrick::constants::{KEY_GENERIC, KEY_GI, KEY_GI_FLAGS, RAY_OFFSET, COUNT_GI_INSERTED, COUNT_GI_FULL, GI_WORK_STATIC_WORD, GI_WORK_DYNAMIC_WORD,
     GI_WORK_COUNT_WORD}
 
 struct GiParams {
@@ -385,8 +385,20 @@ fn sequence_step(n: u32, e: GiEntry) -> u32 {
     return select(n, n / gi.period, e.object == 0u && settled(e.samples));
 }
 
+// Whether GI is on, and its setting bits (GI_CACHE, GI_FILTER, GI_BOUNCES, GI_QMC; not the per-frame restarts):
+// the pipeline's own (constants.wgsl, KEY_*) or the uniform's in a generic build.
 fn gi_on() -> bool {
-    return gi.enabled == 1u;
+    if KEY_GI == KEY_GENERIC {
+        return gi.enabled == 1u;
+    }
+    return KEY_GI == 1u;
+}
+
+fn gi_setting(bit: u32) -> bool {
+    if KEY_GI_FLAGS == KEY_GENERIC {
+        return (gi.flags & bit) != 0u;
+    }
+    return (KEY_GI_FLAGS & bit) != 0u;
 }
 
 // Incoming indirect radiance (irradiance / pi) at `point` on `face` (of the static world, or of object

@@ -5,11 +5,11 @@
 
 #import glowbrick::world::{voxel_at, albedo_at}
 #import glowbrick::traversal::{trace_scene, face_normal, INF}
-#import glowbrick::lights::{scene, direct_sample, disk_sample}
+#import glowbrick::lights::{lighting_mode, power_pick_on, shadows_on, scene, direct_sample, disk_sample}
 #import glowbrick::random::{Rng, pcg, rng_next, r2_point, rotation2}
 #import glowbrick::guards::finite3
 #import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET, GI_RESTART, GI_RESTART_SAMPLES, GI_QMC}
-#import glowbrick::gi::cache::{gi, gi_direct, tangent_axes, slot_seed, cell_of, is_surface, sequence_step, GiEntry}
+#import glowbrick::gi::cache::{gi_setting, gi, gi_direct, tangent_axes, slot_seed, cell_of, is_surface, sequence_step, GiEntry}
 
 // The blend of an entry's direct estimate: young entries average evenly, then an exponential blend over about
 // 10 frames (faster than the indirect light's alpha: direct light is the bounce's source, so its lag adds up).
@@ -19,15 +19,15 @@ const DIRECT_ALPHA: f32 = 0.1;
 // one next-event-estimation sample of the light pool, plus one of the disk with lighting=full. (The sky is not
 // direct light here: the cache's own rays that leave the world bring it, update.wgsl.)
 fn direct_at(point: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
-    if scene.mode != LIGHTING_SUN {
-        var direct = direct_sample(point, n, albedo, scene.light_count, scene.power_pick == 1u, rng);
-        if scene.mode == LIGHTING_FULL {
+    if lighting_mode() != LIGHTING_SUN {
+        var direct = direct_sample(point, n, albedo, scene.light_count, power_pick_on(), rng);
+        if lighting_mode() == LIGHTING_FULL {
             direct += disk_sample(point, n, albedo, rng);
         }
         return direct;
     }
     let cos_sun = dot(n, scene.sun.xyz);
-    if scene.sun.w > 0.0 && cos_sun > 0.0 && (scene.shadows == 0u || !trace_scene(point + n * RAY_OFFSET, scene.sun.xyz, INF).found) {
+    if scene.sun.w > 0.0 && cos_sun > 0.0 && (!shadows_on() || !trace_scene(point + n * RAY_OFFSET, scene.sun.xyz, INF).found) {
         return albedo * scene.sun_radiance.rgb * cos_sun;
     }
     return vec3(0.0);
@@ -71,7 +71,7 @@ fn face_sample(e: GiEntry, u: vec2<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
 
 // Point k of the entry's own R2 sequence (`rotation`), or with gi_qmc=off a random one.
 fn cell_sample_point(k: u32, rotation: vec2<u32>, rng: ptr<function, Rng>) -> vec2<f32> {
-    if (gi.flags & GI_QMC) != 0u {
+    if gi_setting(GI_QMC) {
         return r2_point(k, rotation);
     }
     return vec2(rng_next(rng), rng_next(rng));

@@ -3,7 +3,7 @@
 // around it (filter on), or the entry's own value (off).
 // Same orientation keeps the two sides of a one-voxel wall apart: the far side faces the other way.
 
-#import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_find, cell_of, listed_slot, NOT_FOUND, WORK_STATIC,
+#import glowbrick::gi::cache::{gi_setting, gi, gi_entries, gi_irradiance, gi_filtered, gi_find, cell_of, listed_slot, NOT_FOUND, WORK_STATIC,
     WORK_DYNAMIC}
 #import glowbrick::constants::GI_FILTER
 
@@ -15,7 +15,7 @@ fn filter_entry(slot: u32) {
     var filtered = gi_irradiance[slot].rgb;
     // A coarse entry is a cell's average already: a 3x3x3 block of cells would blur light across 3 x 2^level
     // voxels and add bias (docs/bench/why.md).
-    if (gi.flags & GI_FILTER) != 0u && e.level == 0u {
+    if gi_setting(GI_FILTER) && e.level == 0u {
         var sum = vec3(0.0);
         var count = 0.0;
         // One loop over the 27 offsets, the entry itself included.

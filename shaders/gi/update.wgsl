@@ -7,13 +7,13 @@
 
 #import glowbrick::world::{materials, voxel_at, objects, object_index, object_count, albedo_at}
 #import glowbrick::traversal::{Hit, trace, trace_objects, trace_scene, face_normal, INF, count_rays_only}
-#import glowbrick::lights::{scene, sky}
+#import glowbrick::lights::{lighting_mode, scene, sky}
 #import glowbrick::random::{Rng, pcg, rng_next, r4_point, rotation4}
 #import glowbrick::guards::finite3
 #import glowbrick::counters::counters
 #import glowbrick::constants::{RAY_OFFSET, LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, GI_QMC, COUNT_GI_BORROWED, COUNT_RAYS_GI,
     COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
-#import glowbrick::gi::cache::{gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_touch, gi_find,
+#import glowbrick::gi::cache::{gi_setting, gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_touch, gi_find,
     GiEntry, listed_slot, hit_level, used_within, settled_samples, sequence_step, slot_seed, world_exit, ray_direction, cosine_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
     WORK_STATIC, WORK_DYNAMIC}
 #import glowbrick::gi::direct::{direct_at, cell_point}
@@ -46,7 +46,7 @@ fn hit_radiance(point: vec3<f32>, face: u32, level: u32, seen: bool, fallback: v
     }
     var m = materials[id];
     m.albedo = vec4(albedo_at(id, voxel, 0u), 0.0);
-    let bounces = (gi.flags & GI_BOUNCES) != 0u;
+    let bounces = gi_setting(GI_BOUNCES);
     // Entries the camera sees bring the entries their rays hit into the cache (with bounces on); others only look
     // up. The hit face's entry, at the level of detail of the hit's distance, holds its direct light (the face's
     // or cell's average, refresh.wgsl).
@@ -64,7 +64,7 @@ fn hit_radiance(point: vec3<f32>, face: u32, level: u32, seen: bool, fallback: v
         direct_traced++;
         radiance = direct_at(point, n, m.albedo.rgb, rng);
     }
-    if scene.mode == LIGHTING_SUN {
+    if lighting_mode() == LIGHTING_SUN {
         radiance += m.radiance.rgb;
     }
     if bounces {
@@ -86,7 +86,7 @@ fn object_hit_radiance(hit: Hit, point: vec3<f32>, seen: bool, fallback: vec3<f3
     let n = face_normal(hit.face);
     let m = materials[hit.material];
     var radiance = m.radiance.rgb + direct_at(point, n, m.albedo.rgb, rng);
-    if (gi.flags & GI_BOUNCES) != 0u {
+    if gi_setting(GI_BOUNCES) {
         var slot = NOT_FOUND;
         if seen {
             slot = gi_touch(hit.voxel, hit.face, hit.object, 0u, false);
@@ -100,7 +100,7 @@ fn object_hit_radiance(hit: Hit, point: vec3<f32>, seen: bool, fallback: vec3<f3
 
 // A ray that leaves the world sees the sky (not the disk: hits sample that as direct light) where there is one.
 fn miss_radiance(dir: vec3<f32>) -> vec3<f32> {
-    return select(vec3(0.0), sky(dir), scene.mode == LIGHTING_SUN || scene.mode == LIGHTING_FULL);
+    return select(vec3(0.0), sky(dir), lighting_mode() == LIGHTING_SUN || lighting_mode() == LIGHTING_FULL);
 }
 
 // One of an entry's rays this frame: where it starts, where it goes, and the static world's hit (if any).
@@ -148,7 +148,7 @@ fn fresh_ray(e: GiEntry, plan: RayPlan, j: u32, rng: ptr<function, Rng>) -> Entr
     var dir: vec3<f32>;
     // The start point's place on the cell.
     var across: vec2<f32>;
-    if (gi.flags & GI_QMC) != 0u {
+    if gi_setting(GI_QMC) {
         let u = r4_point(plan.run + j, plan.rotation);
         dir = cosine_direction(e.face, u.xy);
         across = u.zw;
@@ -248,7 +248,7 @@ fn update_entry(slot: u32) {
     let e = gi_entries[slot];
     let dynamic = e.object != 0u;
     // The refresh pass (refresh.wgsl) has brought the cached hits up to date this frame.
-    let cached = (gi.flags & GI_CACHE) != 0u && !dynamic;
+    let cached = gi_setting(GI_CACHE) && !dynamic;
     let plan = ray_plan(e, slot, cached, dynamic);
     let samples = e.samples;
     // After a change of light the blend starts over from this frame's estimate (the samples count stays for

@@ -105,3 +105,19 @@ const COUNT_RAYS_GI: u32 = #{COUNT_RAYS_GI}u;
 const COUNT_RESERVOIR_RESETS: u32 = #{COUNT_RESERVOIR_RESETS}u;
 const COUNT_GI_RESETS: u32 = #{COUNT_GI_RESETS}u;
 const COUNT_GI_FREED_TOTAL: u32 = #{COUNT_GI_FREED_TOTAL}u;
+
+// The settings each pipeline is compiled for (src/render/pass_key.rs, `PassKey`): the code for other values is not
+// in it, which a GPU pays for in registers and software Vulkan in time (Mesa 22.3's lavapipe runs both sides of
+// every branch). Read them through the accessors beside their uniforms (`lighting_mode`, `debug_view`,
+// `restir_flag`, `gi_on`, `gi_setting`, `object_count`, ...). KEY_GENERIC: not compiled in, the accessor reads the uniform (the
+// tests that compose one library function alone).
+const KEY_GENERIC: u32 = #{KEY_GENERIC}u;
+const KEY_LIGHTING: u32 = #{KEY_LIGHTING}u;
+const KEY_SHADOWS: u32 = #{KEY_SHADOWS}u;
+const KEY_POWER_PICK: u32 = #{KEY_POWER_PICK}u;
+const KEY_DEBUG_VIEW: u32 = #{KEY_DEBUG_VIEW}u;
+const KEY_RESTIR_FLAGS: u32 = #{KEY_RESTIR_FLAGS}u;
+const KEY_GI: u32 = #{KEY_GI}u;
+const KEY_GI_FLAGS: u32 = #{KEY_GI_FLAGS}u;
+// 0: the world has no moving objects this frame; 1: it has.
+const KEY_OBJECTS: u32 = #{KEY_OBJECTS}u;

@@ -6,7 +6,7 @@
 #import bevy_render::view::View
 #import glowbrick::traversal::face_normal
 #import glowbrick::guards::finite3
-#import glowbrick::constants::{GBUFFER_FACE_SHIFT, GBUFFER_MATERIAL_SHIFT, GBUFFER_MATERIAL_MASK, GBUFFER_OBJECT_SHIFT,
+#import glowbrick::constants::{KEY_GENERIC, KEY_DEBUG_VIEW, KEY_RESTIR_FLAGS, GBUFFER_FACE_SHIFT, GBUFFER_MATERIAL_SHIFT, GBUFFER_MATERIAL_MASK, GBUFFER_OBJECT_SHIFT,
     DENOISE_ON, DEBUG_NONE, DEBUG_VARIANCE, DEBUG_HISTORY}
 
 // FrameParams in src/render/gpu_types.rs: one view's parameters this frame (the scene's lighting, the same for
@@ -62,7 +62,24 @@ fn luminance(c: vec3<f32>) -> f32 {
 
 // Whether the view shows the lit image (or the denoiser's view of it), as DebugView::is_lit.
 fn lit_view() -> bool {
-    return frame.debug_view == DEBUG_NONE || frame.debug_view == DEBUG_VARIANCE || frame.debug_view == DEBUG_HISTORY;
+    let shown = debug_view();
+    return shown == DEBUG_NONE || shown == DEBUG_VARIANCE || shown == DEBUG_HISTORY;
+}
+
+// The view's settings: the pipeline's own (constants.wgsl, KEY_*) or the uniform's in a generic build.
+fn debug_view() -> u32 {
+    if KEY_DEBUG_VIEW == KEY_GENERIC {
+        return frame.debug_view;
+    }
+    return KEY_DEBUG_VIEW;
+}
+
+// Whether any of the ReSTIR setting bits `bits` (RESTIR_*) is on.
+fn restir_flag(bits: u32) -> bool {
+    if KEY_RESTIR_FLAGS == KEY_GENERIC {
+        return (frame.restir_flags & bits) != 0u;
+    }
+    return (KEY_RESTIR_FLAGS & bits) != 0u;
 }
 
 fn denoising() -> bool {

@@ -7,7 +7,7 @@
 #import glowbrick::world::world_info
 #import glowbrick::random::{Rng, rng_next, rng_next_u32}
 #import glowbrick::constants::{RAY_OFFSET, PI, LIGHT_FACES_SHIFT, LIGHT_SIZE_MASK, BRICK_SIZE, NO_COLUMN, LIGHT_HASH_X,
-    LIGHT_HASH_Y, LIGHT_HASH_Z, LIGHT_HASH_MIX_1, LIGHT_HASH_MIX_2}
+    LIGHT_HASH_Y, LIGHT_HASH_Z, LIGHT_HASH_MIX_1, LIGHT_HASH_MIX_2, KEY_GENERIC, KEY_LIGHTING, KEY_SHADOWS, KEY_POWER_PICK}
 
 struct Light {
     min: vec3<i32>,
@@ -44,6 +44,28 @@ struct SceneLighting {
 @group(2) @binding(0) var<storage, read> lights: array<Light>;
 @group(2) @binding(1) var<storage, read> alias_table: array<AliasEntry>;
 @group(2) @binding(2) var<uniform> scene: SceneLighting;
+
+// The lighting settings: the pipeline's own (constants.wgsl, KEY_*) or the uniform's in a generic build.
+fn lighting_mode() -> u32 {
+    if KEY_LIGHTING == KEY_GENERIC {
+        return scene.mode;
+    }
+    return KEY_LIGHTING;
+}
+
+fn shadows_on() -> bool {
+    if KEY_SHADOWS == KEY_GENERIC {
+        return scene.shadows != 0u;
+    }
+    return KEY_SHADOWS != 0u;
+}
+
+fn power_pick_on() -> bool {
+    if KEY_POWER_PICK == KEY_GENERIC {
+        return scene.power_pick == 1u;
+    }
+    return KEY_POWER_PICK == 1u;
+}
 // Light cube -> alias column, open addressing at load <= 1/2 (src/lights/index.rs builds it; an entry is only the
 // column, the key is checked against the light itself), then one bit per brick of the world (top-grid order, 32
 // a word): the brick holds a light (src/lights/bricks.rs). Word 0 is the index's capacity, its entries follow
@@ -95,7 +117,7 @@ fn disk_sample(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function,
     if cos_surface <= 0.0 {
         return vec3(0.0);
     }
-    if scene.shadows != 0u && trace_scene(p + n * RAY_OFFSET, dir, INF).found {
+    if shadows_on() && trace_scene(p + n * RAY_OFFSET, dir, INF).found {
         return vec3(0.0);
     }
     return albedo * scene.sun_radiance.rgb * cos_surface;

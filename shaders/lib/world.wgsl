@@ -1,7 +1,7 @@
 // The brick grid on the GPU: bindings and voxel lookup. Mirrors src/world/grid.rs.
 #define_import_path glowbrick::world
 
-#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, BRICK_WORDS}
+#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, BRICK_WORDS, KEY_OBJECTS}
 
 // WorldInfo in src/render/gpu_types.rs.
 struct WorldInfo {
@@ -51,7 +51,12 @@ struct Object {
 @group(0) @binding(4) var<storage, read> objects: array<Object>;
 @group(0) @binding(5) var<storage, read> object_voxels: array<u32>;
 
+// Pipelines compiled for a world without moving objects (KEY_OBJECTS 0) hold none of their code: every
+// `trace_scene` is the static walk alone.
 fn object_count() -> u32 {
+    if KEY_OBJECTS == 0u {
+        return 0u;
+    }
     return world_info.object_count;
 }
 

@@ -6,14 +6,14 @@
 
 #import glowbrick::world::{materials, voxel_at, albedo_at}
 #import glowbrick::traversal::{trace_scene, face_normal}
-#import glowbrick::lights::{Light, lights, scene, alias_table, pick_light, light_contains, light_size,
+#import glowbrick::lights::{power_pick_on, Light, lights, scene, alias_table, pick_light, light_contains, light_size,
     face_exposed, light_at_voxel, light_in_box}
 #import glowbrick::random::{Rng, rng_next, rng_next_u32, pcg}
 #import glowbrick::counters::counters
 #import glowbrick::guards::finite
 #import glowbrick::constants::{RAY_OFFSET, PI, RESTIR_POINT, RESTIR_UNBIASED, RESTIR_ONE_RAY, RESTIR_LOCAL,
     RESTIR_LIGHT_TILES, LIGHT_TILES, LIGHT_TILE_SIZE, COUNT_RESERVOIR_RESETS, NO_COLUMN, NEAR_FACE}
-#import glowbrick::frame::{frame, view, Surface, luminance, surface_voxel}
+#import glowbrick::frame::{restir_flag, frame, view, Surface, luminance, surface_voxel}
 
 // 32 bytes. `face` is the light cube's face (0 +X, 1 -X, ... as the traversal numbers faces) or POINT_FACE,
 // `uv` the point on it (pack2x16unorm). `w_sum` is only meaningful while a pass streams candidates; `big_w` is the
@@ -253,7 +253,7 @@ struct LocalLights {
 fn local_lights(x: Shading) -> LocalLights {
     var local: LocalLights;
     local.count = 0u;
-    if (frame.restir_flags & RESTIR_LOCAL) == 0u || scene.light_count <= 1u {
+    if !restir_flag(RESTIR_LOCAL) || scene.light_count <= 1u {
         return local;
     }
     let n = vec3<i32>(round(x.normal));
@@ -292,7 +292,7 @@ fn local_lights(x: Shading) -> LocalLights {
                 if !known && local.count < LOCAL_LIGHTS {
                     local.slots[local.count] = slot;
                     local.pick_pdfs[local.count] =
-                        select(1.0 / f32(scene.light_count), alias_table[column].pdf, scene.power_pick == 1u);
+                        select(1.0 / f32(scene.light_count), alias_table[column].pdf, power_pick_on());
                     local.count++;
                 }
             }
@@ -306,7 +306,7 @@ fn local_lights(x: Shading) -> LocalLights {
 // tile's 256 lights, and that correlation raised the thesis' letters1 one-frame relMSE by 6% (12 seeds); at 4x4
 // it is that of the alias table (docs/bench/why.md).
 fn pixel_tile(pixel: vec2<u32>) -> u32 {
-    if (frame.restir_flags & RESTIR_LIGHT_TILES) == 0u {
+    if !restir_flag(RESTIR_LIGHT_TILES) {
         return NO_TILE;
     }
     let block = pixel / 4u;
@@ -326,7 +326,7 @@ fn power_pick(tile: u32, rng: ptr<function, Rng>) -> CandidateLight {
         let t = light_tiles[tile * LIGHT_TILE_SIZE + (rng_next_u32(rng) & (LIGHT_TILE_SIZE - 1u))];
         return CandidateLight(t.slot, t.pdf, t.light);
     }
-    let picked = pick_light(scene.light_count, scene.power_pick == 1u, rng_next_u32(rng), rng_next(rng));
+    let picked = pick_light(scene.light_count, power_pick_on(), rng_next_u32(rng), rng_next(rng));
     return CandidateLight(picked.slot, picked.pdf, lights[picked.slot]);
 }
 
@@ -367,7 +367,7 @@ fn sample_candidate(x: Shading, local: ptr<function, LocalLights>, tile: u32, rn
     c.r.slot = picked.slot;
     c.r.generation = light.generation;
     c.r.uv = pack2x16unorm(uv);
-    if (frame.restir_flags & RESTIR_POINT) != 0u {
+    if restir_flag(RESTIR_POINT) {
         c.r.face = POINT_FACE;
         c.r.uv = pack2x16unorm(vec2(0.5));
         c.pdf = picked.pdf;
@@ -468,14 +468,14 @@ fn pair_weight(m_i: f32, p_i: f32, m_c_share: f32, p_c: f32, share: f32) -> f32 
 }
 
 fn unbiased() -> bool {
-    return (frame.restir_flags & RESTIR_UNBIASED) != 0u;
+    return restir_flag(RESTIR_UNBIASED);
 }
 
 // Whether the MIS weight of a pixel's own sample tests that the other input sees it: in both unbiased variants.
 // That ray is what keeps the weights summing to 1 where visibility differs; the second ray of `unbiased` only
 // keeps occluded samples from being picked (noise, not bias).
 fn own_sample_rays() -> bool {
-    return (frame.restir_flags & (RESTIR_UNBIASED | RESTIR_ONE_RAY)) != 0u;
+    return restir_flag(RESTIR_UNBIASED | RESTIR_ONE_RAY);
 }
 
 // Random numbers per pixel, pass and frame.

@@ -3,7 +3,7 @@
 
 #import glowbrick::traversal::{count_rays}
 #import glowbrick::constants::COUNT_RAYS_RESTIR_INITIAL
-#import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index, previous_pixel}
+#import glowbrick::frame::{restir_flag, frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index, previous_pixel}
 #import glowbrick::constants::{RESTIR_TEMPORAL, RESTIR_INITIAL_VISIBILITY}
 #import glowbrick::world::object_motion
 #import glowbrick::random::{Rng, rng_next}
@@ -48,13 +48,13 @@ fn initial_pixel(id: vec3<u32>) {
     r.target_value = own_target;
     // Visibility reuse (thesis §4.4): an occluded choice keeps its M but contributes nothing when reused. Without
     // this ray the shading pass's final shadow ray gives the same verdict to next frame's reuse.
-    let test_visibility = (frame.restir_flags & RESTIR_INITIAL_VISIBILITY) != 0u;
+    let test_visibility = restir_flag(RESTIR_INITIAL_VISIBILITY);
     if test_visibility && r.big_w > 0.0 && !reservoir_visible(x, r) {
         r.big_w = 0.0;
         r.w_sum = 0.0;
     }
 
-    if (frame.restir_flags & RESTIR_TEMPORAL) != 0u && frame.prev_camera.w > 0.0 {
+    if restir_flag(RESTIR_TEMPORAL) && frame.prev_camera.w > 0.0 {
         // A moving object's surface has no temporal reuse: the reuse would weigh the old sample at the object's
         // old place against this frame's geometry (the objects buffer holds only where objects are now); both
         // following the object and reusing across its edges brighten a sliding block (the motion bench,

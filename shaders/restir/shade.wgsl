@@ -7,12 +7,12 @@
 #import glowbrick::traversal::{count_rays}
 #import glowbrick::constants::COUNT_RAYS_RESTIR_SHADE
 #import glowbrick::world::materials
-#import glowbrick::frame::{frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output,
+#import glowbrick::frame::{debug_view, frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output,
     primary_ray_dir, pixel_footprint}
 #import glowbrick::constants::{DEBUG_RESERVOIR, LIGHTING_FULL}
 #import glowbrick::guards::finite
 #import glowbrick::restir::common::{reservoirs_final, validated, shading, unshadowed, reservoir_visible, pixel_rng, NO_LIGHT}
-#import glowbrick::lights::{lights, scene, background, disk_sample, sky_sample}
+#import glowbrick::lights::{lighting_mode, lights, scene, background, disk_sample, sky_sample}
 #import glowbrick::gi::cache::{gi_on, gi_incoming, camera_level}
 
 @compute @workgroup_size(8, 8, 1)
@@ -28,12 +28,12 @@ fn shade_pixel(id: vec3<u32>) {
     }
     let index = pixel_index(id.xy);
     let surface = unpack_surface(gbuffer[index]);
-    let full = scene.mode == LIGHTING_FULL;
+    let full = lighting_mode() == LIGHTING_FULL;
     if !surface.found {
         // A miss sees the sky and the disk with lighting=full, nothing with emitters only (the thesis' protocol).
         // The reservoir view shows a miss as an empty reservoir: an alpha of 1 there reads as "reset for a
         // non-finite field".
-        if frame.debug_view == DEBUG_RESERVOIR {
+        if debug_view() == DEBUG_RESERVOIR {
             write_output(id.xy, vec4(0.0));
             return;
         }
@@ -47,7 +47,7 @@ fn shade_pixel(id: vec3<u32>) {
     let x = shading(surface);
     let raw = reservoirs_final[index];
     var r = validated(raw);
-    if frame.debug_view == DEBUG_RESERVOIR {
+    if debug_view() == DEBUG_RESERVOIR {
         // The stress run's view of the reservoir: raw W, M, w_sum, and whether validation had to reset it for a
         // non-finite field (counted, never shaded).
         let bad = !(finite(raw.w_sum) && finite(raw.m) && finite(raw.big_w) && finite(raw.target_value));

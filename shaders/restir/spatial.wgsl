@@ -3,7 +3,7 @@
 
 #import glowbrick::traversal::{count_rays}
 #import glowbrick::constants::COUNT_RAYS_RESTIR_SPATIAL
-#import glowbrick::frame::{frame, view, gbuffer, unpack_surface, pixel_index}
+#import glowbrick::frame::{restir_flag, frame, view, gbuffer, unpack_surface, pixel_index}
 #import glowbrick::constants::{RESTIR_SPATIAL, MAX_TAPS, PI}
 #import glowbrick::random::{Rng, rng_next}
 #import glowbrick::restir::common::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
@@ -23,7 +23,7 @@ fn spatial_pixel(id: vec3<u32>) {
     let index = pixel_index(id.xy);
     let own = validated(reservoirs_temporal[index]);
     let surface = unpack_surface(gbuffer[index]);
-    if !surface.found || (frame.restir_flags & RESTIR_SPATIAL) == 0u || frame.taps == 0u {
+    if !surface.found || !restir_flag(RESTIR_SPATIAL) || frame.taps == 0u {
         reservoirs_final[index] = own;
         return;
     }

@@ -7,7 +7,7 @@
 // correlated within a frame; frames draw new tiles).
 
 #import glowbrick::frame::frame
-#import glowbrick::lights::{lights, scene, pick_light}
+#import glowbrick::lights::{power_pick_on, lights, scene, pick_light}
 #import glowbrick::random::{Rng, pcg, rng_next, rng_next_u32}
 #import glowbrick::restir::common::{TileLight, light_tiles}
 #import glowbrick::constants::{LIGHT_TILES, LIGHT_TILE_SIZE}
@@ -19,6 +19,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     var rng = Rng(pcg(i ^ pcg(frame.frame * 0x9E3779B9u + 0x7F4A7C15u)));
-    let picked = pick_light(scene.light_count, scene.power_pick == 1u, rng_next_u32(&rng), rng_next(&rng));
+    let picked = pick_light(scene.light_count, power_pick_on(), rng_next_u32(&rng), rng_next(&rng));
     light_tiles[i] = TileLight(lights[picked.slot], picked.slot, picked.pdf);
 }

@@ -14,6 +14,7 @@
 
 use super::gi::{self, GiCache};
 use super::gpu_types::shader_defs;
+use super::pass_key::PassKey;
 use super::scene::lights::{GpuLights, LightsLayout};
 use super::scene::objects::GpuObjects;
 use super::scene::world::{GpuWorld, WorldLayout};
@@ -27,7 +28,7 @@ use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::*;
 use bevy::render::renderer::{RenderAdapterInfo, RenderContext, RenderDevice, ViewQuery};
 use bevy::render::view::{ViewTarget, ViewUniformOffset, ViewUniforms};
-use bevy::shader::ShaderDefVal;
+use std::collections::HashMap;
 use std::sync::atomic::Ordering;
 
 /// One compute pass of the voxel renderer.
@@ -78,27 +79,23 @@ fn view_layouts() -> ViewLayouts {
     ViewLayouts { view: view_layout(), empty: BindGroupLayoutDescriptor::new("glowbrick_no_view_layout", &[]) }
 }
 
-/// Every pass's pipeline, in `all_passes` order, for the plain DDA and for the occupancy traversal (a shader def of
-/// its own), each set queued the first time the `traversal` setting asks for it; and the empty group 1 of world
-/// passes.
+/// Every pass's pipeline, in `all_passes` order, for each `PassKey` (the walk and the settings the shaders
+/// branch on) a frame has asked for, each set queued the first time; and the empty group 1 of world passes. Sets
+/// are kept, so a setting toggled back costs nothing.
 #[derive(Resource)]
 pub struct VoxelPipelines {
-    passes: Vec<(VoxelPass, CachedComputePipelineId)>,
-    occupancy: Vec<(VoxelPass, CachedComputePipelineId)>,
-    /// The walk this frame's passes use (the extracted setting, `auto` resolved for the adapter).
-    traversal: Traversal,
+    sets: HashMap<PassKey, Vec<(VoxelPass, CachedComputePipelineId)>>,
+    /// The key of this frame's passes (the extracted settings, `auto` resolved for the adapter).
+    key: PassKey,
     /// Whether the adapter is a CPU (software Vulkan): what `traversal=auto` means.
     cpu_adapter: bool,
     no_view: BindGroup,
 }
 
 impl VoxelPipelines {
-    /// The compiled pipelines of `passes` for this frame's traversal, or `None` until all of them are ready.
+    /// The compiled pipelines of `passes` for this frame's key, or `None` until all of them are ready.
     fn get<'a>(&self, cache: &'a PipelineCache, passes: &[VoxelPass]) -> Option<Vec<&'a ComputePipeline>> {
-        let set = match self.traversal {
-            Traversal::Occupancy => &self.occupancy,
-            _ => &self.passes,
-        };
+        let set = self.sets.get(&self.key)?;
         passes
             .iter()
             .map(|pass| {
@@ -108,7 +105,7 @@ impl VoxelPipelines {
             .collect()
     }
 
-    /// Whether every GI pass is compiled for this frame's traversal.
+    /// Whether every GI pass is compiled for this frame's key.
     pub fn gi_ready(&self, cache: &PipelineCache) -> bool {
         [&[gi::COMPACT_PASS][..], &gi::STATIC_PASSES, &gi::DYNAMIC_PASSES]
             .iter()
@@ -116,18 +113,16 @@ impl VoxelPipelines {
     }
 }
 
-/// Every pass's pipeline for one traversal.
+/// Every pass's pipeline for one key.
 fn queue_passes(
     cache: &PipelineCache,
     shaders: &GlowbrickShaders,
     layouts: &ViewLayouts,
     groups: [&BindGroupLayoutDescriptor; 3],
-    traversal: Traversal,
+    key: &PassKey,
 ) -> Vec<(VoxelPass, CachedComputePipelineId)> {
     let mut defs = shader_defs();
-    if traversal == Traversal::Occupancy {
-        defs.push(ShaderDefVal::Bool("TRAVERSAL_OCCUPANCY".into(), true));
-    }
+    defs.extend(key.shader_defs());
     all_passes()
         .into_iter()
         .map(|pass| {
@@ -146,9 +141,9 @@ fn queue_passes(
         .collect()
 }
 
-/// Follows the `traversal` setting: queues a walk's pipelines the first time it is asked for.
+/// Follows the settings: this frame's key, its pipelines queued the first time it is met.
 #[allow(clippy::too_many_arguments)]
-fn follow_traversal(
+fn follow_settings(
     settings: Option<Res<RenderSettings>>,
     pipelines: Option<ResMut<VoxelPipelines>>,
     cache: Res<PipelineCache>,
@@ -157,16 +152,20 @@ fn follow_traversal(
     world_layout: Res<WorldLayout>,
     lights_layout: Res<LightsLayout>,
     gi_layout: Res<gi::GiLayout>,
+    objects: Option<Res<GpuObjects>>,
 ) {
     let (Some(mut pipelines), Some(layouts)) = (pipelines, layouts) else { return };
-    let traversal = settings.map_or(Traversal::default(), |s| s.traversal).resolve(pipelines.cpu_adapter);
-    let groups = [&world_layout.0, &lights_layout.0, &gi_layout.0];
-    let set = if traversal == Traversal::Occupancy { &mut pipelines.occupancy } else { &mut pipelines.passes };
-    if set.is_empty() {
-        *set = queue_passes(&cache, &shaders, &layouts, groups, traversal);
+    let fallback = RenderSettings::default();
+    let settings = settings.as_deref().unwrap_or(&fallback);
+    let objects = objects.is_some_and(|o| o.count > 0);
+    let key = PassKey::of(settings, settings.traversal.resolve(pipelines.cpu_adapter), objects);
+    if !pipelines.sets.contains_key(&key) {
+        let groups = [&world_layout.0, &lights_layout.0, &gi_layout.0];
+        let set = queue_passes(&cache, &shaders, &layouts, groups, &key);
+        pipelines.sets.insert(key, set);
     }
-    if pipelines.traversal != traversal {
-        pipelines.traversal = traversal;
+    if pipelines.key != key {
+        pipelines.key = key;
     }
 }
 
@@ -177,17 +176,12 @@ fn init_pipelines(
     adapter: Res<RenderAdapterInfo>,
 ) {
     let layouts = view_layouts();
-    // The walks' pipelines are queued by `follow_traversal`, which knows the setting.
+    // The pipelines are queued by `follow_settings`, which knows the settings.
     let cpu_adapter = adapter.device_type == wgpu::DeviceType::Cpu;
     let no_view =
         device.create_bind_group("glowbrick_no_view", &pipeline_cache.get_bind_group_layout(&layouts.empty), &[]);
-    commands.insert_resource(VoxelPipelines {
-        passes: Vec::new(),
-        occupancy: Vec::new(),
-        traversal: Traversal::Auto.resolve(cpu_adapter),
-        cpu_adapter,
-        no_view,
-    });
+    let key = PassKey::of(&RenderSettings::default(), Traversal::Auto.resolve(cpu_adapter), false);
+    commands.insert_resource(VoxelPipelines { sets: HashMap::new(), key, cpu_adapter, no_view });
     commands.insert_resource(layouts);
 }
 
@@ -196,13 +190,11 @@ fn init_pipelines(
 pub fn pipeline_error(render_world: &World) -> Option<String> {
     let pipelines = render_world.get_resource::<VoxelPipelines>()?;
     let cache = render_world.resource::<PipelineCache>();
-    pipelines.passes.iter().chain(&pipelines.occupancy).find_map(|(pass, id)| {
-        match cache.get_compute_pipeline_state(*id) {
-            CachedPipelineState::Err(e) if !matches!(e, bevy::shader::ShaderCacheError::ShaderNotLoaded(_)) => {
-                Some(format!("the {} shader ({}) failed to compile: {e}", pass.name, pass.shader))
-            }
-            _ => None,
+    pipelines.sets.values().flatten().find_map(|(pass, id)| match cache.get_compute_pipeline_state(*id) {
+        CachedPipelineState::Err(e) if !matches!(e, bevy::shader::ShaderCacheError::ShaderNotLoaded(_)) => {
+            Some(format!("the {} shader ({}) failed to compile: {e}", pass.name, pass.shader))
         }
+        _ => None,
     })
 }
 
@@ -410,7 +402,7 @@ pub fn add(render_app: &mut SubApp) {
             Render,
             (
                 super::view::prepare_view_resources.after(SceneUploaded).in_set(RenderSystems::PrepareResources),
-                follow_traversal.before(gi::prepare_gi).in_set(RenderSystems::PrepareResources),
+                follow_settings.after(SceneUploaded).before(gi::prepare_gi).in_set(RenderSystems::PrepareResources),
             ),
         )
         .add_systems(Core3d, view_frame.after(main_transparent_pass_3d).in_set(Core3dSystems::MainPass))

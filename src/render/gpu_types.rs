@@ -477,8 +477,17 @@ mod tests {
                 format!("const {name}: {} = #{{{name}}}{suffix};", if suffix == "u" { "u32" } else { "i32" });
             assert_eq!(constants.matches(&declaration).count(), 1, "constants.wgsl lacks `{declaration}`");
         }
+        // The pass key's defs (`pass_key`): KEY_GENERIC and one per specialised setting.
+        for name in super::super::pass_key::KEY_NAMES.iter().chain(&["KEY_GENERIC"]) {
+            let declaration = format!("const {name}: u32 = #{{{name}}}u;");
+            assert_eq!(constants.matches(&declaration).count(), 1, "constants.wgsl lacks `{declaration}`");
+        }
         let defs = constants.matches("#{").count();
-        assert_eq!(defs, shared_constants().len(), "constants.wgsl reads a def the table does not have");
+        assert_eq!(
+            defs,
+            shared_constants().len() + super::super::pass_key::KEY_NAMES.len() + 1,
+            "constants.wgsl reads a def the table does not have"
+        );
         for (path, source) in super::super::shaders::SOURCES {
             if !path.ends_with("constants.wgsl") {
                 assert!(!source.contains("#{"), "{path} reads a shader def; use glowbrick::constants instead");

@@ -19,6 +19,7 @@ pub mod denoise;
 pub mod frame;
 pub mod gi;
 pub mod gpu_types;
+pub mod pass_key;
 pub mod primary;
 pub mod restir;
 pub mod scene;

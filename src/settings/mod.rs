@@ -132,7 +132,7 @@ impl Lighting {
 }
 
 /// How rays walk the brick grid (`world::traversal`); both find the same voxels.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Traversal {
     /// The walk that suits the adapter: the plain DDA on a CPU adapter (software Vulkan, whose SIMD lanes pay for
     /// every branch any of them takes), the occupancy masks on a GPU (whose rays wait on their memory loads).

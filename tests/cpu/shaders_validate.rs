@@ -57,6 +57,47 @@ fn every_shader_validates_with_the_occupancy_traversal() {
     }
 }
 
+/// Every pass validates as the pipelines compile it: specialised for a frame's settings (`PassKey`), each
+/// accessor folded to a constant, for the default frame and for settings that take the other side of each branch.
+#[test]
+fn every_shader_validates_specialised_for_the_settings() {
+    use glowbrick::render::pass_key::PassKey;
+    use glowbrick::settings::{DebugView, Lighting, RenderSettings, Traversal};
+    let default = RenderSettings::default();
+    let mut others = vec![];
+    for change in [
+        (|s: &mut RenderSettings| s.lighting = Lighting::Nee) as fn(&mut RenderSettings),
+        |s| s.lighting = Lighting::Sun,
+        |s| s.debug = DebugView::Reservoir,
+        |s| s.debug = DebugView::Albedo,
+        |s| {
+            s.gi.enabled = false;
+            s.shadows = false;
+        },
+        |s| {
+            s.gi.cache = true;
+            s.restir.light_tiles = false;
+            s.restir.local_lights = false;
+        },
+    ] {
+        let mut settings = default.clone();
+        change(&mut settings);
+        others.push(settings);
+    }
+    for (settings, traversal) in std::iter::once((&default, Traversal::Occupancy))
+        .chain(std::iter::once(&default).chain(&others).map(|s| (s, Traversal::Dda)))
+    {
+        let key = PassKey::of(settings, traversal, traversal == Traversal::Dda).shader_defs();
+        let mut composer = compose::composer_with(&key);
+        for &(path, source) in SOURCES.iter().filter(|(_, s)| !s.contains("#define_import_path")) {
+            let module = compose::compose_keyed(&mut composer, path, source, &key);
+            if let Err(e) = Validator::new(ValidationFlags::all(), Capabilities::all()).validate(&module) {
+                panic!("{path} for {settings:?}, {traversal:?}: {e:?}");
+            }
+        }
+    }
+}
+
 /// A buffer binding and the Rust side that fills it.
 struct Twin {
     /// The WGSL global, as declared (before naga_oil decorates it with its module).

@@ -3,6 +3,7 @@
 
 use bevy::shader::ShaderDefVal;
 use glowbrick::render::gpu_types::shader_defs;
+use glowbrick::render::pass_key::PassKey;
 use glowbrick::render::shaders::SOURCES;
 use naga::valid::Capabilities;
 use naga_oil::compose::{
@@ -21,9 +22,12 @@ struct View {
 }
 ";
 
-fn defs() -> HashMap<String, ShaderDefValue> {
+/// The shared constants and a generic pass key, with `extra` (a pipeline's key) on top.
+fn defs_with(extra: &[ShaderDefVal]) -> HashMap<String, ShaderDefValue> {
     shader_defs()
         .into_iter()
+        .chain(PassKey::generic_defs())
+        .chain(extra.iter().cloned())
         .map(|d| match d {
             ShaderDefVal::Bool(k, v) => (k, ShaderDefValue::Bool(v)),
             ShaderDefVal::Int(k, v) => (k, ShaderDefValue::Int(v)),
@@ -32,7 +36,11 @@ fn defs() -> HashMap<String, ShaderDefValue> {
         .collect()
 }
 
-fn library(composer: &mut Composer, path: &str, source: &str) {
+fn defs() -> HashMap<String, ShaderDefValue> {
+    defs_with(&[])
+}
+
+fn library(composer: &mut Composer, path: &str, source: &str, defs: &HashMap<String, ShaderDefValue>) {
     let added = composer
         .add_composable_module(ComposableModuleDescriptor {
             source,
@@ -40,7 +48,7 @@ fn library(composer: &mut Composer, path: &str, source: &str) {
             language: ShaderLanguage::Wgsl,
             as_name: None,
             additional_imports: &[],
-            shader_defs: defs(),
+            shader_defs: defs.clone(),
         })
         .map(|_| ());
     if let Err(e) = added {
@@ -50,12 +58,32 @@ fn library(composer: &mut Composer, path: &str, source: &str) {
 
 /// A composer holding every library shader (the files with a `#define_import_path`).
 pub fn composer() -> Composer {
+    composer_with(&[])
+}
+
+/// `composer` with `extra` defs (a pipeline's `PassKey`) on top.
+pub fn composer_with(extra: &[ShaderDefVal]) -> Composer {
+    let defs = defs_with(extra);
     let mut composer = Composer::default().with_capabilities(Capabilities::all());
-    library(&mut composer, "bevy_render/view.wgsl", VIEW);
+    library(&mut composer, "bevy_render/view.wgsl", VIEW, &defs);
     for (path, source) in SOURCES.iter().filter(|(_, s)| s.contains("#define_import_path")) {
-        library(&mut composer, path, source);
+        library(&mut composer, path, source, &defs);
     }
     composer
+}
+
+/// A pass composed as a pipeline of `key` compiles it (`composer` from `composer_with` the same defs).
+#[allow(dead_code)]
+pub fn compose_keyed(composer: &mut Composer, path: &str, source: &str, key: &[ShaderDefVal]) -> naga::Module {
+    composer
+        .make_naga_module(NagaModuleDescriptor {
+            source,
+            file_path: path,
+            shader_type: ShaderType::Wgsl,
+            shader_defs: defs_with(key),
+            additional_imports: &[],
+        })
+        .unwrap_or_else(|e| panic!("{path}: {}", e.emit_to_string(composer)))
 }
 
 /// `source` (a pass, or a test's own shader importing the libraries) composed into one naga module.

@@ -206,12 +206,7 @@ impl GiCache {
         let rays = self.shape.rays;
         GiParams {
             enabled: gi.enabled as u32,
-            flags: flag(gi.filter, GI_FILTER)
-                | flag(gi.bounces, GI_BOUNCES)
-                | flag(gi.cache, GI_CACHE)
-                | flag(plan.restart, GI_RESTART)
-                | flag(plan.edit_restart, GI_EDIT_RESTART)
-                | flag(gi.qmc, GI_QMC),
+            flags: setting_flags(gi) | flag(plan.restart, GI_RESTART) | flag(plan.edit_restart, GI_EDIT_RESTART),
             rays,
             // With cached hits an entry re-shades at most its K directions a frame; fresh ones are drawn as many
             // as asked.
@@ -285,6 +280,12 @@ pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
         enabled: false,
         compiling: false,
     });
+}
+
+/// The `GiParams.flags` bits the settings decide (the rest are this frame's restarts).
+pub fn setting_flags(gi: &GiSettings) -> u32 {
+    let flag = |on: bool, bit: u32| if on { bit } else { 0 };
+    flag(gi.filter, GI_FILTER) | flag(gi.bounces, GI_BOUNCES) | flag(gi.cache, GI_CACHE) | flag(gi.qmc, GI_QMC)
 }
 
 /// Sizes the tables for the settings, logs this frame's edits, plans the frame and writes the parameters (Render
