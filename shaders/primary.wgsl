@@ -53,7 +53,9 @@ fn primary_pixel(id: vec3<u32>) {
         write_output(id.xy, vec4(0.0));
         return;
     }
-    let nee = lighting_mode() == LIGHTING_NEE || restir;
+    // (The uniform, not the setting's constant: with `nee` folded to false, Mesa 22.3's lavapipe crashed at this
+    // shader's first dispatch; lighting=sun, the debug look, keeps a runtime test.)
+    let nee = scene.mode == LIGHTING_NEE || restir;
     var colour = vec4(0.0);
     if !hit.found {
         colour = miss_colour(dir, full, nee);

@@ -192,7 +192,8 @@ impl HeadlessRenderer {
 
     /// Renders one frame and returns its image: the frame that applies whatever was asked before the call (an
     /// edit message, a setting), not a later one. (The copy arrives while the next frame renders, so two frames
-    /// run.)
+    /// run.) A setting that needs pipelines not compiled yet (a new `render::pass_key::PassKey`) shows only once
+    /// they are: `render` waits for them, this does not.
     pub fn render_next(&mut self) -> Result<LinearImage, String> {
         let copies = self.read_back(self.texture_readback(), 1, "the next frame", |_| true)?;
         decode_rgba32f(&copies[0], self.width, self.height)

@@ -322,7 +322,8 @@ struct CandidateLight {
 
 // One draw of the power pick (or the uniform one): a light of the pixel's tile, or from the alias table.
 fn power_pick(tile: u32, rng: ptr<function, Rng>) -> CandidateLight {
-    if tile != NO_TILE {
+    // (The setting, not `tile != NO_TILE`: a constant the compiler folds, so only one path is in the shader.)
+    if restir_flag(RESTIR_LIGHT_TILES) {
         let t = light_tiles[tile * LIGHT_TILE_SIZE + (rng_next_u32(rng) & (LIGHT_TILE_SIZE - 1u))];
         return CandidateLight(t.slot, t.pdf, t.light);
     }
@@ -331,24 +332,29 @@ fn power_pick(tile: u32, rng: ptr<function, Rng>) -> CandidateLight {
 }
 
 // A light by the mixture of the power pick and the local lights, with the mixture's probability.
+// One call site of each pick: software Vulkan runs every branch's code, so a second copy of the power pick would
+// cost every candidate its time again (the same draws as two branches would take).
 fn pick_candidate_light(local: ptr<function, LocalLights>, tile: u32, rng: ptr<function, Rng>) -> CandidateLight {
     let count = (*local).count;
-    if count == 0u {
-        return power_pick(tile, rng);
+    var from_local = false;
+    if count > 0u {
+        from_local = rng_next(rng) < LOCAL_SHARE;
     }
     var picked: CandidateLight;
-    if rng_next(rng) < LOCAL_SHARE {
+    if from_local {
         let i = min(u32(rng_next(rng) * f32(count)), count - 1u);
         let slot = (*local).slots[i];
         picked = CandidateLight(slot, (*local).pick_pdfs[i], lights[slot]);
     } else {
         picked = power_pick(tile, rng);
     }
-    var local_pdf = 0.0;
-    for (var i = 0u; i < count; i++) {
-        local_pdf = select(local_pdf, 1.0 / f32(count), (*local).slots[i] == picked.slot);
+    if count > 0u {
+        var local_pdf = 0.0;
+        for (var i = 0u; i < count; i++) {
+            local_pdf = select(local_pdf, 1.0 / f32(count), (*local).slots[i] == picked.slot);
+        }
+        picked.pdf = (1.0 - LOCAL_SHARE) * picked.pdf + LOCAL_SHARE * local_pdf;
     }
-    picked.pdf = (1.0 - LOCAL_SHARE) * picked.pdf + LOCAL_SHARE * local_pdf;
     return picked;
 }
 

@@ -32,6 +32,7 @@ mod gi;
 mod headless;
 mod nee_converges;
 mod objects;
+mod pass_keys;
 mod primary_matches_cpu;
 mod ray_budget;
 mod restir;
@@ -115,6 +116,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             a_lanterns_light_reaches_the_floor_through_the_gi_cache,
             with_an_object_in_view_restir_converges_to_the_reference,
         ],
+        pass_keys: [every_specialised_pipeline_set_compiles_and_renders],
         ray_budget: [the_game_frame_keeps_to_its_rays_per_pixel],
         primary_matches_cpu: [
             a_rendered_sequence_returns_each_frame_with_its_own_camera,
