@@ -91,6 +91,10 @@ pub fn run_game(
             Update,
             (undo::history_keys, lighting_toggle_keys, debug_view_key, window_fit::fit_window_to_screen),
         );
+    // A settings change shows the generic pipelines' frame while its own compile, never a blank one.
+    if let Some(render_app) = app.get_sub_app_mut(bevy::render::RenderApp) {
+        render_app.insert_resource(crate::render::frame::GenericFallback);
+    }
     match join {
         Some(join) => {
             let name = join.name.clone();

@@ -92,17 +92,27 @@ pub struct VoxelPipelines {
     no_view: BindGroup,
 }
 
+/// Keep the generic pipelines (`PassKey::generic`, right for any settings) compiled beside each key's, and run
+/// them while a new key's set compiles: the game inserts this, so a settings change (a debug view, a lighting
+/// toggle) never shows a blank frame. Headless renders wait for the key's set instead of compiling two.
+#[derive(Resource)]
+pub struct GenericFallback;
+
 impl VoxelPipelines {
-    /// The compiled pipelines of `passes` for this frame's key, or `None` until all of them are ready.
+    /// The compiled pipelines of `passes` for this frame's key (or, with `GenericFallback`, the generic ones while
+    /// the key's compile), or `None` until all of them are ready.
     fn get<'a>(&self, cache: &'a PipelineCache, passes: &[VoxelPass]) -> Option<Vec<&'a ComputePipeline>> {
-        let set = self.sets.get(&self.key)?;
-        passes
-            .iter()
-            .map(|pass| {
-                let (_, id) = set.iter().find(|(p, _)| p.name == pass.name)?;
-                cache.get_compute_pipeline(*id)
-            })
-            .collect()
+        let ready = |key: &PassKey| -> Option<Vec<&'a ComputePipeline>> {
+            let set = self.sets.get(key)?;
+            passes
+                .iter()
+                .map(|pass| {
+                    let (_, id) = set.iter().find(|(p, _)| p.name == pass.name)?;
+                    cache.get_compute_pipeline(*id)
+                })
+                .collect()
+        };
+        ready(&self.key).or_else(|| ready(&PassKey::generic(self.key.traversal)))
     }
 
     /// Whether every GI pass is compiled for this frame's key.
@@ -153,16 +163,21 @@ fn follow_settings(
     lights_layout: Res<LightsLayout>,
     gi_layout: Res<gi::GiLayout>,
     objects: Option<Res<GpuObjects>>,
+    generic_fallback: Option<Res<GenericFallback>>,
 ) {
     let (Some(mut pipelines), Some(layouts)) = (pipelines, layouts) else { return };
     let fallback = RenderSettings::default();
     let settings = settings.as_deref().unwrap_or(&fallback);
     let objects = objects.is_some_and(|o| o.count > 0);
-    let key = PassKey::of(settings, settings.traversal.resolve(pipelines.cpu_adapter), objects);
-    if !pipelines.sets.contains_key(&key) {
-        let groups = [&world_layout.0, &lights_layout.0, &gi_layout.0];
-        let set = queue_passes(&cache, &shaders, &layouts, groups, &key);
-        pipelines.sets.insert(key, set);
+    let traversal = settings.traversal.resolve(pipelines.cpu_adapter);
+    let key = PassKey::of(settings, traversal, objects);
+    let generic = generic_fallback.map(|_| PassKey::generic(traversal));
+    for key in std::iter::once(key).chain(generic) {
+        if !pipelines.sets.contains_key(&key) {
+            let groups = [&world_layout.0, &lights_layout.0, &gi_layout.0];
+            let set = queue_passes(&cache, &shaders, &layouts, groups, &key);
+            pipelines.sets.insert(key, set);
+        }
     }
     if pipelines.key != key {
         pipelines.key = key;

@@ -57,6 +57,23 @@ impl PassKey {
         }
     }
 
+    /// A key that specialises nothing but the walk: every accessor reads its uniform, so its pipelines are right
+    /// for any settings (the game's fallback while a new key's set compiles).
+    pub fn generic(traversal: Traversal) -> Self {
+        let g = KEY_GENERIC;
+        PassKey {
+            traversal,
+            lighting: g,
+            shadows: g,
+            power_pick: g,
+            debug_view: g,
+            restir_flags: g,
+            gi: g,
+            gi_flags: g,
+            objects: g,
+        }
+    }
+
     /// The key's shader defs (added to the shared constants').
     pub fn shader_defs(&self) -> Vec<ShaderDefVal> {
         let mut defs = key_defs([
@@ -157,5 +174,8 @@ mod tests {
         let defs = PassKey::generic_defs();
         assert_eq!(defs.len(), KEY_NAMES.len() + 1);
         assert!(KEY_NAMES.iter().all(|name| value(&defs, name) == Some(KEY_GENERIC)));
+        let generic = PassKey::generic(Traversal::Dda).shader_defs();
+        assert!(KEY_NAMES.iter().all(|name| value(&generic, name) == Some(KEY_GENERIC)));
+        assert_ne!(PassKey::generic(Traversal::Dda), PassKey::of(&RenderSettings::default(), Traversal::Dda, false));
     }
 }
