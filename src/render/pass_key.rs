@@ -91,11 +91,6 @@ impl PassKey {
         }
         defs
     }
-
-    /// Defs that specialise nothing: every accessor reads its uniform (for composing a library function alone).
-    pub fn generic_defs() -> Vec<ShaderDefVal> {
-        key_defs([KEY_GENERIC; 8])
-    }
 }
 
 /// The defs' names, in `key_defs`' order (constants.wgsl declares each once).
@@ -171,11 +166,9 @@ mod tests {
 
     #[test]
     fn generic_defs_specialise_nothing() {
-        let defs = PassKey::generic_defs();
+        let defs = PassKey::generic(Traversal::Dda).shader_defs();
         assert_eq!(defs.len(), KEY_NAMES.len() + 1);
         assert!(KEY_NAMES.iter().all(|name| value(&defs, name) == Some(KEY_GENERIC)));
-        let generic = PassKey::generic(Traversal::Dda).shader_defs();
-        assert!(KEY_NAMES.iter().all(|name| value(&generic, name) == Some(KEY_GENERIC)));
         assert_ne!(PassKey::generic(Traversal::Dda), PassKey::of(&RenderSettings::default(), Traversal::Dda, false));
     }
 }

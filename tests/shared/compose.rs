@@ -5,6 +5,7 @@ use bevy::shader::ShaderDefVal;
 use glowbrick::render::gpu_types::shader_defs;
 use glowbrick::render::pass_key::PassKey;
 use glowbrick::render::shaders::SOURCES;
+use glowbrick::settings::Traversal;
 use naga::valid::Capabilities;
 use naga_oil::compose::{
     ComposableModuleDescriptor, Composer, NagaModuleDescriptor, ShaderDefValue, ShaderLanguage, ShaderType,
@@ -26,7 +27,7 @@ struct View {
 fn defs_with(extra: &[ShaderDefVal]) -> HashMap<String, ShaderDefValue> {
     shader_defs()
         .into_iter()
-        .chain(PassKey::generic_defs())
+        .chain(PassKey::generic(Traversal::Dda).shader_defs())
         .chain(extra.iter().cloned())
         .map(|d| match d {
             ShaderDefVal::Bool(k, v) => (k, ShaderDefValue::Bool(v)),
