@@ -177,19 +177,7 @@ fn probe_slot(cell: vec3<i32>, face: u32, object: u32, level: u32, i: u32) -> u3
 // The slot of the entry of `voxel`'s face at `level`, or NOT_FOUND. Freed and busy slots do not end the chain:
 // an entry inserted past a slot that was freed since must stay reachable.
 fn gi_find(voxel: vec3<i32>, face: u32, object: u32, level: u32) -> u32 {
-    let cell = cell_of(voxel, level);
-    let checksum = key_checksum(cell, face, object, level);
-    for (var i = 0u; i < MAX_PROBES; i++) {
-        let slot = probe_slot(cell, face, object, level, i);
-        let key = atomicLoad(&gi_keys[slot]);
-        if key == checksum {
-            return slot;
-        }
-        if key == EMPTY_KEY {
-            break;
-        }
-    }
-    return NOT_FOUND;
+    return gi_probe(voxel, face, object, level, false, false);
 }
 
 // Claims `slot` (empty or freed, as `expected`) for a new entry: marks it busy, writes the payload, then
@@ -225,6 +213,12 @@ fn claim(slot: u32, expected: u32, checksum: u32, voxel: vec3<i32>, face: u32, o
 // else the empty slot that ends the chain. NOT_FOUND when the probe window is full (counted) or when another
 // thread took the slot first (the entry has no value this frame either way; the next frame inserts it).
 fn gi_touch(voxel: vec3<i32>, face: u32, object: u32, level: u32, seen: bool) -> u32 {
+    return gi_probe(voxel, face, object, level, true, seen);
+}
+
+// gi_touch (`touch`) or gi_find (not), in one body: a caller that decides per thread which one it needs calls
+// this once, where two calls would each cost every lane on software Vulkan, which runs both sides of a branch.
+fn gi_probe(voxel: vec3<i32>, face: u32, object: u32, level: u32, touch: bool, seen: bool) -> u32 {
     let cell = cell_of(voxel, level);
     let checksum = key_checksum(cell, face, object, level);
     var freed = NOT_FOUND;
@@ -233,10 +227,10 @@ fn gi_touch(voxel: vec3<i32>, face: u32, object: u32, level: u32, seen: bool) ->
         let key = atomicLoad(&gi_keys[slot]);
         if key == checksum {
             // Every toucher writes the same values: a benign race, and skipped when already set.
-            if gi_entries[slot].last_used != gi.frame {
+            if touch && gi_entries[slot].last_used != gi.frame {
                 gi_entries[slot].last_used = gi.frame;
             }
-            if seen && gi_entries[slot].last_seen != gi.frame {
+            if touch && seen && gi_entries[slot].last_seen != gi.frame {
                 gi_entries[slot].last_seen = gi.frame;
             }
             return slot;
@@ -245,6 +239,9 @@ fn gi_touch(voxel: vec3<i32>, face: u32, object: u32, level: u32, seen: bool) ->
             freed = slot;
         }
         if key == EMPTY_KEY {
+            if !touch {
+                return NOT_FOUND;
+            }
             let reuse = freed != NOT_FOUND;
             let chosen = select(slot, freed, reuse);
             if claim(chosen, select(EMPTY_KEY, FREED_KEY, reuse), checksum, voxel, face, object, level, seen) == checksum {
@@ -252,6 +249,9 @@ fn gi_touch(voxel: vec3<i32>, face: u32, object: u32, level: u32, seen: bool) ->
             }
             return NOT_FOUND;
         }
+    }
+    if !touch {
+        return NOT_FOUND;
     }
     if freed != NOT_FOUND && claim(freed, FREED_KEY, checksum, voxel, face, object, level, seen) == checksum {
         return freed;

@@ -13,7 +13,7 @@
 #import glowbrick::counters::counters
 #import glowbrick::constants::{RAY_OFFSET, LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, GI_QMC, COUNT_GI_BORROWED, COUNT_RAYS_GI,
     COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
-#import glowbrick::gi::cache::{gi_setting, gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_touch, gi_find,
+#import glowbrick::gi::cache::{gi_setting, gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_probe,
     GiEntry, listed_slot, hit_level, used_within, settled_samples, sequence_step, slot_seed, world_exit, ray_direction, cosine_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
     WORK_STATIC, WORK_DYNAMIC}
 #import glowbrick::gi::direct::{direct_at, cell_point}
@@ -32,68 +32,70 @@ fn incoming_at(slot: u32, fallback: vec3<f32>) -> vec3<f32> {
     return fallback;
 }
 
-// Light arriving along a ray that hit (voxel, face) at `point`: the hit face's direct light, with bounces on its
-// cached indirect light (last frame's filtered value: stable while this pass writes), and in sun-and-sky mode
-// its emission. With emitter lighting the emission is left out: the shading passes' light sampling already
-// brings every emitter's direct light to the pixel, and counting it again here would double it.
-fn hit_radiance(point: vec3<f32>, face: u32, level: u32, seen: bool, fallback: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
-    let n = face_normal(face);
-    let voxel = vec3<i32>(floor(point - n * 0.5));
-    let id = voxel_at(voxel);
-    if id == 0u {
-        // Removed this frame, before the edit reached the cache.
-        return vec3(0.0);
+// The face a ray brings light from: the static world's (voxel, face) or a moving object's, where the ray met it.
+struct RayHit {
+    point: vec3<f32>,
+    voxel: vec3<i32>,
+    face: u32,
+    // 0: the static world.
+    object: u32,
+    material: u32,
+    // The level of the hit face's entry: the static world's from the hit's distance, an object's 0.
+    level: u32,
+}
+
+// Light arriving along a ray that hit `hit`: the hit face's direct light, with bounces on its cached indirect
+// light (last frame's filtered value: stable while this pass writes), and emission where the shading passes do
+// not already count it.
+//
+// The static world's hit face: its direct light is its entry's estimate (the face's or cell's average,
+// refresh.wgsl), traced here only where it has none; emission only in sun-and-sky mode (with emitter lighting
+// the shading passes' light sampling already brings every emitter's direct light to the pixel, and counting it
+// again here would double it).
+//
+// A moving object's face: its emission always (objects' emitters are not in the light pool, so this is the only
+// way their light reaches other surfaces), its direct light traced, and with bounces on, the indirect light of
+// its entry in the moving objects' table (a lantern's frame, lit by its own core, passes that light on), touched
+// by entries the camera sees as static hits are. Static entries read it and never cache it: their cached hits
+// stay static (the split).
+//
+// One body for both, with one call of each costly step (the entry's lookup, the traced direct light): software
+// Vulkan runs both sides of every branch, so two bodies cost every ray both.
+fn hit_radiance(hit: RayHit, seen: bool, fallback: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+    let on_object = hit.object != 0u;
+    var id = hit.material;
+    if !on_object {
+        id = voxel_at(hit.voxel);
+        if id == 0u {
+            // Removed this frame, before the edit reached the cache.
+            return vec3(0.0);
+        }
     }
-    var m = materials[id];
-    m.albedo = vec4(albedo_at(id, voxel, 0u), 0.0);
+    let m = materials[id];
+    let albedo = albedo_at(id, hit.voxel, hit.object);
     let bounces = gi_setting(GI_BOUNCES);
     // Entries the camera sees bring the entries their rays hit into the cache (with bounces on); others only look
-    // up. The hit face's entry, at the level of detail of the hit's distance, holds its direct light (the face's
-    // or cell's average, refresh.wgsl).
-    var slot = NOT_FOUND;
-    if seen && bounces {
-        slot = gi_touch(voxel, face, 0u, level, false);
-    } else {
-        slot = gi_find(voxel, face, 0u, level);
-    }
+    // up.
+    let slot = gi_probe(hit.voxel, hit.face, hit.object, hit.level, seen && bounces, false);
     var radiance = vec3(0.0);
-    if slot != NOT_FOUND && gi_direct[slot].w > 0.0 {
+    if !on_object && slot != NOT_FOUND && gi_direct[slot].w > 0.0 {
         radiance = gi_direct[slot].rgb;
     } else {
-        // No estimate yet (new, or not in the cache): this ray's own sample, unbiased, counted.
-        direct_traced++;
-        radiance = direct_at(point, n, m.albedo.rgb, rng);
+        // No estimate yet (new, or not in the cache), or a moving face: this ray's own sample, unbiased (counted
+        // for the static world's faces).
+        if !on_object {
+            direct_traced++;
+        }
+        radiance = direct_at(hit.point, face_normal(hit.face), albedo, rng);
     }
-    if lighting_mode() == LIGHTING_SUN {
+    if on_object || lighting_mode() == LIGHTING_SUN {
         radiance += m.radiance.rgb;
     }
     if bounces {
         // A hit face without a value yet (or no room for it in a full table) borrows the shooting entry's own
         // indirect light: nearby surfaces of a room see similar indirect light, and leaving it out would
         // darken every later bounce.
-        radiance += m.albedo.rgb * incoming_at(slot, fallback);
-    }
-    return radiance;
-}
-
-// Light arriving along a ray that hit a moving object's voxel: its emission (objects' emitters are not in the
-// light pool, so this is the only way their light reaches other surfaces), its direct light, and with bounces
-// on, the indirect light of the object's face: its entry in the moving objects' table (a lantern's frame, lit
-// by its own core, passes that light on), touched by entries the camera sees as static hits are; the shooting
-// entry's own where it has none yet (counted). Static entries read it and never cache it: their cached hits stay
-// static (the split).
-fn object_hit_radiance(hit: Hit, point: vec3<f32>, seen: bool, fallback: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
-    let n = face_normal(hit.face);
-    let m = materials[hit.material];
-    var radiance = m.radiance.rgb + direct_at(point, n, m.albedo.rgb, rng);
-    if gi_setting(GI_BOUNCES) {
-        var slot = NOT_FOUND;
-        if seen {
-            slot = gi_touch(hit.voxel, hit.face, hit.object, 0u, false);
-        } else {
-            slot = gi_find(hit.voxel, hit.face, hit.object, 0u);
-        }
-        radiance += m.albedo.rgb * incoming_at(slot, fallback);
+        radiance += albedo * incoming_at(slot, fallback);
     }
     return radiance;
 }
@@ -169,13 +171,19 @@ fn fresh_ray(e: GiEntry, plan: RayPlan, j: u32, rng: ptr<function, Rng>) -> Entr
 // The light a ray brings: a moving object in front of the static hit replaces it for this frame.
 fn ray_radiance(ray: EntryRay, level: u32, seen: bool, own: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
     let object = trace_objects(ray.start, ray.dir, select(INF, ray.distance, ray.found));
+    if !object.found && !ray.found {
+        return miss_radiance(ray.dir);
+    }
+    var hit: RayHit;
     if object.found {
         object_hit = true;
-        return object_hit_radiance(object, ray.start + ray.dir * object.distance, seen, own, rng);
-    } else if ray.found {
-        return hit_radiance(ray.start + ray.dir * ray.distance, ray.face, hit_level(ray.distance, level), seen, own, rng);
+        hit = RayHit(ray.start + ray.dir * object.distance, object.voxel, object.face, object.object, object.material, 0u);
+    } else {
+        let point = ray.start + ray.dir * ray.distance;
+        let voxel = vec3<i32>(floor(point - face_normal(ray.face) * 0.5));
+        hit = RayHit(point, voxel, ray.face, 0u, 0u, hit_level(ray.distance, level));
     }
-    return miss_radiance(ray.dir);
+    return hit_radiance(hit, seen, own, rng);
 }
 
 // Blends this frame's estimate into the entry. Young entries average with weights growing linearly with age
@@ -244,9 +252,10 @@ fn ray_plan(e: GiEntry, slot: u32, cached: bool, dynamic: bool) -> RayPlan {
 // Ages and re-shades the entry in `slot`. Static entries read their cached static hits and test only
 // the moving objects per frame; a moving object's entries trace everything every frame (nothing of theirs stays
 // put).
-fn update_entry(slot: u32) {
+// `dynamic`: the slot lies in the moving objects' table (its entry's object is not 0). A constant of each entry
+// point, so each compiles only its own table's paths.
+fn update_entry(slot: u32, dynamic: bool) {
     let e = gi_entries[slot];
-    let dynamic = e.object != 0u;
     // The refresh pass (refresh.wgsl) has brought the cached hits up to date this frame.
     let cached = gi_setting(GI_CACHE) && !dynamic;
     let plan = ray_plan(e, slot, cached, dynamic);
@@ -317,7 +326,7 @@ fn update_listed(work: u32, i: u32, local: u32) {
     workgroupBarrier();
     let slot = listed_slot(work, i);
     if slot != NOT_FOUND {
-        update_entry(slot);
+        update_entry(slot, work == WORK_DYNAMIC);
     }
     if borrowed > 0u {
         atomicAdd(&borrowed_in_group, borrowed);
