@@ -123,14 +123,18 @@ fn unshadowed(x: Shading, light: Light, face: u32, uv: vec2<f32>) -> vec3<f32> {
     if face == POINT_FACE {
         // The faces that face the point and touch air: a buried face emits nothing (the reference skips it too).
         // On axis a the face towards the point is -a when the light lies at +a (face index 2a + 1).
-        var projected = 0.0;
-        for (var axis = 0u; axis < 3u; axis++) {
-            if face_exposed(light, axis * 2u + select(0u, 1u, wi[axis] > 0.0)) {
-                projected += abs(wi[axis]);
+        // Only point mode's pipelines hold this: in area mode a centre sample (one kept from before a switch of
+        // mode) is worth nothing, and every candidate's target would pay for the loop on software Vulkan.
+        if restir_flag(RESTIR_POINT) {
+            var projected = 0.0;
+            for (var axis = 0u; axis < 3u; axis++) {
+                if face_exposed(light, axis * 2u + select(0u, 1u, wi[axis] > 0.0)) {
+                    projected += abs(wi[axis]);
+                }
             }
+            let size = f32(light_size(light));
+            cos_area = projected * size * size;
         }
-        let size = f32(light_size(light));
-        cos_area = projected * size * size;
     } else {
         cos_area = -dot(face_normal(face), wi);
     }
