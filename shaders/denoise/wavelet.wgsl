@@ -1,6 +1,7 @@
-// Denoiser passes 2-5 (render::denoise): the edge-aware a-trous wavelet, a 5x5 B3-spline kernel spread 1, 2, 4
-// and 8 pixels apart, ping-ponging between the two halves of `wavelet`. A tap counts only on the pixel's own
-// voxel-face plane (exact geometry edges) and is weighted down by its luminance difference against the
+// Denoiser passes 2-6 (render::denoise): the edge-aware a-trous wavelet, a 3x3 binomial kernel spread 1, 2, 4, 8
+// and 16 pixels apart, ping-ponging between the two halves of `wavelet` (45 taps a pixel, where four 5x5 B3
+// iterations took 100 for about the same reach: docs/bench/denoise.md, "A 3x3 kernel"). A tap counts only on the
+// pixel's own voxel-face plane (exact geometry edges) and is weighted down by its luminance difference against the
 // variance, and by how much farther it lies in the world than its offset in pixels says (a plane seen at a
 // grazing angle). The last iteration remodulates, draws the highlight and writes the image.
 
@@ -13,9 +14,9 @@
 // A tap whose luminance differs by this many standard deviations weighs 1/e as much (SVGF's sigma_l).
 const SIGMA_LUMINANCE: f32 = 4.0;
 
-// The B3 spline's weights (1/16, 1/4, 3/8, 1/4, 1/16) by offset.
+// The binomial weights (1/4, 1/2, 1/4) by offset.
 fn kernel(offset: i32) -> f32 {
-    return select(select(1.0 / 16.0, 1.0 / 4.0, abs(offset) == 1), 3.0 / 8.0, offset == 0);
+    return select(0.25, 0.5, offset == 0);
 }
 
 fn pixel_count() -> u32 {
@@ -38,8 +39,8 @@ fn filtered(pixel: vec2<u32>, step: i32, source: u32) -> vec4<f32> {
     var sum = vec3(0.0);
     var variance = 0.0;
     var weights = 0.0;
-    for (var dy = -2; dy <= 2; dy++) {
-        for (var dx = -2; dx <= 2; dx++) {
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
             let q = vec2<i32>(pixel) + vec2(dx, dy) * step;
             if any(q < vec2(0)) || any(q >= size) {
                 continue;
@@ -93,13 +94,20 @@ fn step_4(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
+@compute @workgroup_size(8, 8, 1)
+fn step_8(@builtin(global_invocation_id) id: vec3<u32>) {
+    if all(id.xy < vec2<u32>(view.viewport.zw)) {
+        wavelet[pixel_index(id.xy)] = filtered(id.xy, 8, pixel_count());
+    }
+}
+
 // The last iteration, remodulated (albedo x light + emission), with the highlight, into the image.
 @compute @workgroup_size(8, 8, 1)
-fn step_8_and_write(@builtin(global_invocation_id) id: vec3<u32>) {
+fn step_16_and_write(@builtin(global_invocation_id) id: vec3<u32>) {
     if any(id.xy >= vec2<u32>(view.viewport.zw)) {
         return;
     }
-    let f = filtered(id.xy, 8, pixel_count());
+    let f = filtered(id.xy, 16, 0u);
     let index = pixel_index(id.xy);
     let s = unpack_surface(gbuffer[index]);
     if !s.found || f.a < 0.0 {

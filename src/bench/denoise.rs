@@ -297,8 +297,8 @@ fn cost_markdown(costs: &[CostRow], adapter: &str) -> String {
          other passes (direct = primary + ReSTIR's three; GI = the cache's four). The GPU share is the \
          denoiser's passes over all the timed passes (wall time also holds the CPU's part of a frame and the \
          read-back).\n\n| size | frame ms raw | frame ms denoised | share of the frame | temporal | wavelet 1 \
-         | 2 | 4 | 8 + write | GPU ms direct | GPU ms GI | GPU share |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
+         | 2 | 4 | 8 | 16 + write | GPU ms direct | GPU ms GI | GPU share |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let ms = |v: Option<f64>| v.map_or("-".to_string(), |ms| format!("{ms:.2}"));
     for c in costs {

@@ -7,10 +7,11 @@
 //!    10%), blend (1 / history length, at least 0.1), luminance moments give the variance (a 3x3 estimate while
 //!    the history is short). No firefly clamp: one at 10x the brightest neighbour cost -5% of the mean and
 //!    gained nothing (docs/bench/denoise.md).
-//! 2. `wavelet` (`shaders/denoise/wavelet.wgsl`), passes 2 to 5: four a-trous iterations of a 5x5 B3-spline
-//!    kernel (steps 1, 2, 4, 8 pixels), each tap kept only on the same voxel-face plane (voxel faces are flat: an
-//!    exact edge stop) and weighted by luminance against the larger variance of the pair (each pixel's own
-//!    darkened the image by 5%: a dark pixel refused a bright neighbour's light); the last remodulates (albedo x
+//! 2. `wavelet` (`shaders/denoise/wavelet.wgsl`), passes 2 to 6: five a-trous iterations of a 3x3 binomial
+//!    kernel (steps 1, 2, 4, 8, 16 pixels: 45 taps a pixel where four 5x5 B3 iterations took 100), each tap kept
+//!    only on the same voxel-face plane (voxel faces are flat: an exact edge stop) and weighted by luminance
+//!    against the larger variance of the pair (each pixel's own darkened the image by 5%: a dark pixel refused a
+//!    bright neighbour's light); the last remodulates (albedo x
 //!    filtered + emission), draws the highlight and writes the image.
 //!
 //! Its per-view state (`DenoiseView`): the noisy frame, the history (this and last frame's, swapped), the wavelet's
@@ -30,17 +31,18 @@ const fn pass(name: &'static str, shader: &'static str, entry_point: &'static st
 }
 
 /// The passes in dispatch order.
-pub const PASSES: [VoxelPass; 5] = [
+pub const PASSES: [VoxelPass; 6] = [
     pass("glowbrick_denoise_temporal", "denoise/temporal.wgsl", "main"),
     pass("glowbrick_denoise_wavelet_1", "denoise/wavelet.wgsl", "step_1"),
     pass("glowbrick_denoise_wavelet_2", "denoise/wavelet.wgsl", "step_2"),
     pass("glowbrick_denoise_wavelet_4", "denoise/wavelet.wgsl", "step_4"),
-    pass("glowbrick_denoise_wavelet_8", "denoise/wavelet.wgsl", "step_8_and_write"),
+    pass("glowbrick_denoise_wavelet_8", "denoise/wavelet.wgsl", "step_8"),
+    pass("glowbrick_denoise_wavelet_16", "denoise/wavelet.wgsl", "step_16_and_write"),
 ];
 
 /// GPU-time names of the passes, in dispatch order.
-pub const DENOISE_PASS_NAMES: [&str; 5] =
-    [PASSES[0].name, PASSES[1].name, PASSES[2].name, PASSES[3].name, PASSES[4].name];
+pub const DENOISE_PASS_NAMES: [&str; 6] =
+    [PASSES[0].name, PASSES[1].name, PASSES[2].name, PASSES[3].name, PASSES[4].name, PASSES[5].name];
 
 /// Whether the passes run this frame: when asked for, on a view that shows light.
 pub fn runs(settings: &RenderSettings) -> bool {
