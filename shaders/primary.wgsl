@@ -7,7 +7,7 @@
     pixel_footprint, NOT_A_VOXEL}
 #import glowbrick::gi::cache::{gi_on, gi_touch_surface, gi_incoming, camera_level}
 #import glowbrick::traversal::{Hit, trace_scene, face_normal, INF, count_rays}
-#import glowbrick::lights::{lighting_mode, power_pick_on, pool_has_lights, shadows_on, scene, sky, background, direct_sample, disk_sample, sky_sample}
+#import glowbrick::lights::{lighting_mode, power_pick_on, shadows_on, scene, sky, background, direct_sample, disk_sample, sky_sample}
 #import glowbrick::random::{Rng, pcg}
 #import glowbrick::counters::counters
 #import glowbrick::constants::{COUNT_RAYS_PRIMARY, COUNT_PRIMARY_HITS, LIGHTING_NEE, LIGHTING_EMITTERS, LIGHTING_FULL, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
@@ -44,9 +44,7 @@ fn primary_pixel(id: vec3<u32>) {
     // Voxel ReSTIR shades in its own passes when there is a light to sample; without one it is emission only.
     let full = lighting_mode() == LIGHTING_FULL;
     let restir = lighting_mode() == LIGHTING_EMITTERS || full;
-    // (`pool_has_lights` is the pipeline's constant: a pass that would return here for every pixel compiles without
-    // the shading below, which software Vulkan would otherwise run under a mask.)
-    if restir && pool_has_lights() && (lit_view() || debug_view() == DEBUG_RESERVOIR) {
+    if restir && scene.light_count > 0u && (lit_view() || debug_view() == DEBUG_RESERVOIR) {
         return;
     }
     if debug_view() == DEBUG_RESERVOIR {

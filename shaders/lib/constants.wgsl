@@ -121,5 +121,3 @@ const KEY_GI: u32 = #{KEY_GI}u;
 const KEY_GI_FLAGS: u32 = #{KEY_GI_FLAGS}u;
 // 0: the world has no moving objects this frame; 1: it has.
 const KEY_OBJECTS: u32 = #{KEY_OBJECTS}u;
-// 0: the light pool is empty this frame; 1: it holds a light.
-const KEY_LIGHTS: u32 = #{KEY_LIGHTS}u;

@@ -7,7 +7,7 @@
 #import glowbrick::world::world_info
 #import glowbrick::random::{Rng, rng_next, rng_next_u32}
 #import glowbrick::constants::{RAY_OFFSET, PI, LIGHT_FACES_SHIFT, LIGHT_SIZE_MASK, BRICK_SIZE, NO_COLUMN, LIGHT_HASH_X,
-    LIGHT_HASH_Y, LIGHT_HASH_Z, LIGHT_HASH_MIX_1, LIGHT_HASH_MIX_2, KEY_GENERIC, KEY_LIGHTING, KEY_SHADOWS, KEY_POWER_PICK, KEY_LIGHTS}
+    LIGHT_HASH_Y, LIGHT_HASH_Z, LIGHT_HASH_MIX_1, LIGHT_HASH_MIX_2, KEY_GENERIC, KEY_LIGHTING, KEY_SHADOWS, KEY_POWER_PICK}
 
 struct Light {
     min: vec3<i32>,
@@ -65,14 +65,6 @@ fn power_pick_on() -> bool {
         return scene.power_pick == 1u;
     }
     return KEY_POWER_PICK == 1u;
-}
-
-// Whether the light pool holds a light this frame.
-fn pool_has_lights() -> bool {
-    if KEY_LIGHTS == KEY_GENERIC {
-        return scene.light_count > 0u;
-    }
-    return KEY_LIGHTS == 1u;
 }
 // Light cube -> alias column, open addressing at load <= 1/2 (src/lights/index.rs builds it; an entry is only the
 // column, the key is checked against the light itself), then one bit per brick of the world (top-grid order, 32

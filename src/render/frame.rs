@@ -163,7 +163,6 @@ fn follow_settings(
     lights_layout: Res<LightsLayout>,
     gi_layout: Res<gi::GiLayout>,
     objects: Option<Res<GpuObjects>>,
-    lights: Option<Res<GpuLights>>,
     generic_fallback: Option<Res<GenericFallback>>,
 ) {
     let (Some(mut pipelines), Some(layouts)) = (pipelines, layouts) else { return };
@@ -171,8 +170,7 @@ fn follow_settings(
     let settings = settings.as_deref().unwrap_or(&fallback);
     let objects = objects.is_some_and(|o| o.count > 0);
     let traversal = settings.traversal.resolve(pipelines.cpu_adapter);
-    let lights = lights.is_some_and(|l| l.light_count > 0);
-    let key = PassKey::of(settings, traversal, objects, lights);
+    let key = PassKey::of(settings, traversal, objects);
     let generic = generic_fallback.map(|_| PassKey::generic(traversal));
     for key in std::iter::once(key).chain(generic) {
         if !pipelines.sets.contains_key(&key) {
@@ -197,7 +195,7 @@ fn init_pipelines(
     let cpu_adapter = adapter.device_type == wgpu::DeviceType::Cpu;
     let no_view =
         device.create_bind_group("glowbrick_no_view", &pipeline_cache.get_bind_group_layout(&layouts.empty), &[]);
-    let key = PassKey::of(&RenderSettings::default(), Traversal::Auto.resolve(cpu_adapter), false, false);
+    let key = PassKey::of(&RenderSettings::default(), Traversal::Auto.resolve(cpu_adapter), false);
     commands.insert_resource(VoxelPipelines { sets: HashMap::new(), key, cpu_adapter, no_view });
     commands.insert_resource(layouts);
 }

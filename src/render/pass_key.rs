@@ -1,6 +1,6 @@
 //! The settings every voxel pipeline is compiled for. A frame's passes branch on a handful of settings that stay
 //! the same for many frames (the lighting mode, the debug view, ReSTIR's and the GI cache's switches, the walk,
-//! whether the world holds moving objects, whether the light pool holds a light);
+//! whether the world holds moving objects);
 //! compiling each pipeline for the frame's values leaves the other values' code out of it. On a GPU that saves
 //! registers; on this project's software Vulkan (Mesa 22.3's lavapipe, which runs both sides of every branch under
 //! a mask) it saves the time of every pass that holds code the frame does not run (`docs/bench/frame.md`).
@@ -36,16 +36,13 @@ pub struct PassKey {
     /// 1 when the world holds moving objects this frame (`WorldInfo.object_count` above 0): without them every
     /// shadow and GI ray is the static walk alone.
     objects: u32,
-    /// 1 when the light pool holds a light this frame (`SceneLighting.light_count` above 0): the primary pass
-    /// then leaves lit pixels to Voxel ReSTIR and holds none of its own shading.
-    lights: u32,
 }
 
 impl PassKey {
     /// The key of a frame under `settings`, with `auto` already resolved to `traversal`, in a world with or
-    /// without moving objects and lights. Each value is computed by the function that fills its uniform, so the
-    /// two cannot disagree.
-    pub fn of(settings: &RenderSettings, traversal: Traversal, objects: bool, lights: bool) -> Self {
+    /// without moving objects. Each value is computed by the function that fills its uniform, so the two cannot
+    /// disagree.
+    pub fn of(settings: &RenderSettings, traversal: Traversal, objects: bool) -> Self {
         let scene = scene_lighting(settings, 0);
         PassKey {
             traversal,
@@ -57,7 +54,6 @@ impl PassKey {
             gi: settings.gi.enabled as u32,
             gi_flags: gi::setting_flags(&settings.gi),
             objects: objects as u32,
-            lights: lights as u32,
         }
     }
 
@@ -75,7 +71,6 @@ impl PassKey {
             gi: g,
             gi_flags: g,
             objects: g,
-            lights: g,
         }
     }
 
@@ -90,7 +85,6 @@ impl PassKey {
             self.gi,
             self.gi_flags,
             self.objects,
-            self.lights,
         ]);
         if self.traversal == Traversal::Occupancy {
             defs.push(ShaderDefVal::Bool("TRAVERSAL_OCCUPANCY".into(), true));
@@ -100,7 +94,7 @@ impl PassKey {
 }
 
 /// The defs' names, in `key_defs`' order (constants.wgsl declares each once).
-pub const KEY_NAMES: [&str; 9] = [
+pub const KEY_NAMES: [&str; 8] = [
     "KEY_LIGHTING",
     "KEY_SHADOWS",
     "KEY_POWER_PICK",
@@ -109,10 +103,9 @@ pub const KEY_NAMES: [&str; 9] = [
     "KEY_GI",
     "KEY_GI_FLAGS",
     "KEY_OBJECTS",
-    "KEY_LIGHTS",
 ];
 
-fn key_defs(values: [u32; 9]) -> Vec<ShaderDefVal> {
+fn key_defs(values: [u32; 8]) -> Vec<ShaderDefVal> {
     let mut defs = vec![ShaderDefVal::UInt("KEY_GENERIC".into(), KEY_GENERIC)];
     defs.extend(KEY_NAMES.iter().zip(values).map(|(name, value)| ShaderDefVal::UInt((*name).into(), value)));
     defs
@@ -136,7 +129,7 @@ mod tests {
     #[test]
     fn every_specialised_setting_is_in_the_key() {
         let base = RenderSettings::default();
-        let key = |s: &RenderSettings| PassKey::of(s, Traversal::Dda, false, true);
+        let key = |s: &RenderSettings| PassKey::of(s, Traversal::Dda, false);
         let defs = key(&base).shader_defs();
         assert_eq!(value(&defs, "KEY_LIGHTING"), Some(base.lighting as u32));
         assert_eq!(value(&defs, "KEY_DEBUG_VIEW"), Some(0));
@@ -165,11 +158,9 @@ mod tests {
         tuned.exposure *= 2.0;
         tuned.time = 20.0;
         assert_eq!(key(&tuned), key(&base));
-        assert_ne!(PassKey::of(&base, Traversal::Dda, true, true), key(&base));
-        assert_eq!(value(&PassKey::of(&base, Traversal::Dda, true, true).shader_defs(), "KEY_OBJECTS"), Some(1));
-        assert_ne!(PassKey::of(&base, Traversal::Dda, false, false), key(&base));
-        assert_eq!(value(&key(&base).shader_defs(), "KEY_LIGHTS"), Some(1));
-        let walk = PassKey::of(&base, Traversal::Occupancy, false, true).shader_defs();
+        assert_ne!(PassKey::of(&base, Traversal::Dda, true), key(&base));
+        assert_eq!(value(&PassKey::of(&base, Traversal::Dda, true).shader_defs(), "KEY_OBJECTS"), Some(1));
+        let walk = PassKey::of(&base, Traversal::Occupancy, false).shader_defs();
         assert!(walk.iter().any(|d| matches!(d, ShaderDefVal::Bool(n, true) if n == "TRAVERSAL_OCCUPANCY")));
     }
 
@@ -178,7 +169,6 @@ mod tests {
         let defs = PassKey::generic(Traversal::Dda).shader_defs();
         assert_eq!(defs.len(), KEY_NAMES.len() + 1);
         assert!(KEY_NAMES.iter().all(|name| value(&defs, name) == Some(KEY_GENERIC)));
-        let default = PassKey::of(&RenderSettings::default(), Traversal::Dda, false, false);
-        assert_ne!(PassKey::generic(Traversal::Dda), default);
+        assert_ne!(PassKey::generic(Traversal::Dda), PassKey::of(&RenderSettings::default(), Traversal::Dda, false));
     }
 }

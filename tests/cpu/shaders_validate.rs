@@ -87,9 +87,7 @@ fn every_shader_validates_specialised_for_the_settings() {
     for (settings, traversal) in std::iter::once((&default, Traversal::Occupancy))
         .chain(std::iter::once(&default).chain(&others).map(|s| (s, Traversal::Dda)))
     {
-        // With moving objects and lights for the DDA's keys, with neither for the occupancy walk's.
-        let full_world = traversal == Traversal::Dda;
-        let key = PassKey::of(settings, traversal, full_world, full_world).shader_defs();
+        let key = PassKey::of(settings, traversal, traversal == Traversal::Dda).shader_defs();
         let mut composer = compose::composer_with(&key);
         for &(path, source) in SOURCES.iter().filter(|(_, s)| !s.contains("#define_import_path")) {
             let module = compose::compose_keyed(&mut composer, path, source, &key);
