@@ -115,6 +115,13 @@ impl VoxelPipelines {
         ready(&self.key).or_else(|| ready(&PassKey::generic(self.key.traversal)))
     }
 
+    /// Whether a camera's passes are compiled for this frame's key (or the generic fallback's): the primary
+    /// pass, and ReSTIR's and the denoiser's where they run.
+    pub fn views_ready(&self, cache: &PipelineCache, restir: bool, denoise: bool) -> bool {
+        let ready = |runs: bool, passes: &[VoxelPass]| !runs || self.get(cache, passes).is_some();
+        ready(true, &[primary::PRIMARY]) && ready(restir, &restir::PASSES) && ready(denoise, &denoise::PASSES)
+    }
+
     /// Whether every GI pass is compiled for this frame's key.
     pub fn gi_ready(&self, cache: &PipelineCache) -> bool {
         [&[gi::COMPACT_PASS][..], &gi::STATIC_PASSES, &gi::DYNAMIC_PASSES]
