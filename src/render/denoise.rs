@@ -11,8 +11,8 @@
 //!    kernel (steps 1, 2, 4, 8, 16 pixels: 45 taps a pixel where four 5x5 B3 iterations took 100), each tap kept
 //!    only on the same voxel-face plane (voxel faces are flat: an exact edge stop) and weighted by luminance
 //!    against the larger variance of the pair (each pixel's own darkened the image by 5%: a dark pixel refused a
-//!    bright neighbour's light); the last remodulates (albedo x
-//!    filtered + emission), draws the highlight and writes the image.
+//!    bright neighbour's light); the last remodulates (albedo x filtered + emission), draws the highlight and
+//!    writes the image.
 //!
 //! Its per-view state (`DenoiseView`): the noisy frame, the history (this and last frame's, swapped), the wavelet's
 //! ping-pong, and the rule that restarts the history on frames where an edit changed the world or its lights,
