@@ -1,6 +1,6 @@
-// Primary rays: one per pixel through the brick grid, into the G-buffer. Where Voxel ReSTIR shades (emitters to
-// sample, lighting=full or emitters) that is all; otherwise this pass shades too: next-event estimation, the
-// disk and sky of lighting=full without emitters, or the sun-only debug look. Debug views show the pass's inputs.
+// Primary rays: one per pixel through the brick grid, into the G-buffer. Where Voxel ReSTIR shades
+// (lighting=full or emitters) that is all; otherwise this pass shades too: next-event estimation, or the
+// sun-only debug look. Debug views show the pass's inputs.
 
 #import glowbrick::world::{materials, Material, albedo_at}
 #import glowbrick::frame::{debug_view, frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, primary_ray_dir, lit_view,
@@ -41,14 +41,15 @@ fn primary_pixel(id: vec3<u32>) {
     if gi_on() && hit.found {
         gi_touch_surface(point, hit.face, hit.object, camera_level(pixel_footprint(point), hit.object));
     }
-    // Voxel ReSTIR shades in its own passes when there is a light to sample; without one it is emission only.
+    // Voxel ReSTIR's shading pass shades its lit views (and its reservoir view), with or without lights to
+    // sample (restir::shades). Both are the pass key's constants, so that pipeline holds none of the code below.
     let full = lighting_mode() == LIGHTING_FULL;
     let restir = lighting_mode() == LIGHTING_EMITTERS || full;
-    if restir && scene.light_count > 0u && (lit_view() || debug_view() == DEBUG_RESERVOIR) {
+    if restir && (lit_view() || debug_view() == DEBUG_RESERVOIR) {
         return;
     }
     if debug_view() == DEBUG_RESERVOIR {
-        // No ReSTIR pass ran (no lights, or another mode): every reservoir is empty, W = M = w_sum = 0, none reset.
+        // No ReSTIR pass ran (another mode): every reservoir is empty, W = M = w_sum = 0, none reset.
         // (The shaded colour's alpha of 1 here would read as "reset for a non-finite field" to the soak.)
         write_output(id.xy, vec4(0.0));
         return;

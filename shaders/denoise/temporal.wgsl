@@ -33,29 +33,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     // did not lower the error (docs/bench/denoise.md); the wavelet's luminance weights already keep a lone
     // bright sample from smearing.
     let c = demodulated(index, s);
-    // This frame's 3x3 neighbourhood on the same plane: its spread stands in for the variance while the history
-    // is short.
-    var sum = 0.0;
-    var sum_squares = 0.0;
-    var count = 0.0;
-    for (var dy = -1; dy <= 1; dy++) {
-        for (var dx = -1; dx <= 1; dx++) {
-            let q = vec2<i32>(id.xy) + vec2(dx, dy);
-            if any(q < vec2(0)) || any(q >= vec2<i32>(size)) {
-                continue;
-            }
-            let qi = pixel_index(vec2<u32>(q));
-            let sq = unpack_surface(gbuffer[qi]);
-            if !same_plane(s, sq) {
-                continue;
-            }
-            let l = luminance(demodulated(qi, sq));
-            sum += l;
-            sum_squares += l * l;
-            count += 1.0;
-        }
-    }
-
     // Last frame's history where the same surface was seen: same face axis and sign, same object, depth within
     // 10% (as ReSTIR's temporal reuse). A moving object's point is where it was last frame (its motion vector).
     var length = 0.0;
@@ -78,6 +55,28 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     length = min(length + 1.0, MAX_HISTORY);
+    // While the history is short, this frame's 3x3 neighbourhood on the same plane: its spread stands in for the
+    // variance. One loop of length 0 once the history is long enough: software Vulkan runs a loop's body under a
+    // mask for as long as any lane needs it, so the nine lookups cost a settled pixel nothing but the first.
+    var sum = 0.0;
+    var sum_squares = 0.0;
+    var count = 0.0;
+    let cells = select(0, 9, length < 4.0);
+    for (var cell = 0; cell < cells; cell++) {
+        let q = vec2<i32>(id.xy) + vec2(cell % 3 - 1, cell / 3 - 1);
+        if any(q < vec2(0)) || any(q >= vec2<i32>(size)) {
+            continue;
+        }
+        let qi = pixel_index(vec2<u32>(q));
+        let sq = unpack_surface(gbuffer[qi]);
+        if !same_plane(s, sq) {
+            continue;
+        }
+        let l = luminance(demodulated(qi, sq));
+        sum += l;
+        sum_squares += l * l;
+        count += 1.0;
+    }
     let alpha = 1.0 / length;
     let colour = mix(previous, c, alpha);
     let lc = luminance(c);

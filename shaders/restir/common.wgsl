@@ -232,9 +232,9 @@ fn sample_face_solid_angle(p: vec3<f32>, lo: vec3<f32>, size: f32, face: u32, u:
 
 struct Candidate {
     r: Reservoir,
-    // Source pdf in the sample's measure (area or per light).
+    // Source pdf: per unit area of the point for a far face, of the (light, face) pair for a near one (its point is
+    // drawn after resampling, draw_point), per light in point mode.
     pdf: f32,
-    target_value: f32,
 }
 
 // The lights touching the air in front of a face, found once per pixel: a lamp lying beside a surface lights it
@@ -362,11 +362,41 @@ fn pick_candidate_light(local: ptr<function, LocalLights>, tile: u32, rng: ptr<f
     return picked;
 }
 
-// One candidate: a light from the alias table (power or uniform) or the local lights, then, in area mode, one of the exposed faces
-// that see the shading point in proportion to its share (face_share) and a point on it (uniform in area, or in
-// solid angle when the face is near); in point mode the centre.
+// Whether the point on face `face` is drawn by solid angle (within NEAR_FACE face sizes of its centre), not by area.
+fn near_face(x: Shading, light: Light, face: u32) -> bool {
+    return distance(x.point, light_point(light, face, vec2(0.5))) < f32(NEAR_FACE) * f32(light_size(light));
+}
+
+// A near face's target, which a candidate is resampled by before its point exists: the light's reflected luminance
+// through the face, albedo/pi Le times the receiver's cosine towards the face's centre times the face's share
+// (face_share). It must be positive wherever the face lights the pixel at all: a face whose centre lies below the
+// pixel's horizon while an edge rises above it gets a quarter of that edge's cosine.
+fn face_target(x: Shading, light: Light, face: u32, share: f32) -> f32 {
+    let size = f32(light_size(light));
+    let to_centre = light_point(light, face, vec2(0.5)) - x.point;
+    // The receiver's normal lies on one axis; along it the face spans its size unless it is the face's own axis.
+    let height = dot(x.normal, to_centre);
+    let span = select(0.5 * size, 0.0, abs(x.normal[face / 2u]) > 0.5);
+    let highest = height + span;
+    if !(highest > 0.0) {
+        return 0.0;
+    }
+    let cos_surface = min(max(height, 0.25 * highest) * inverseSqrt(max(dot(to_centre, to_centre), 1e-8)), 1.0);
+    return luminance(x.albedo * light.radiance) * cos_surface * share / PI;
+}
+
+// One candidate: a light from the alias table (power or uniform) or the local lights, then, in area mode, one of
+// the exposed faces that see the shading point in proportion to its share (face_share) and, far from the face, a
+// point on it uniform in area; in point mode the centre.
+//
+// Near a face its point is drawn by solid angle, and that draw (four acos) cost a fifth of the candidates' pass
+// when every candidate made it: software Vulkan runs it for every candidate under a mask where any lane of the
+// group is near a light. So a near candidate is the (light, face) pair with target face_target x p(point | pair):
+// its resampling weight face_target / p(pair) does not depend on the point, which is drawn only for the chosen one
+// (draw_point), from the random numbers the candidate kept. The target is still a function of the sample alone
+// (which faces are near depends only on the pixel and the face), so the reservoir's W stays unbiased.
 fn sample_candidate(x: Shading, local: ptr<function, LocalLights>, tile: u32, rng: ptr<function, Rng>) -> Candidate {
-    var c = Candidate(empty_reservoir(), 0.0, 0.0);
+    var c = Candidate(empty_reservoir(), 0.0);
     let picked = pick_candidate_light(local, tile, rng);
     let u_face = rng_next(rng);
     let uv = vec2(rng_next(rng), rng_next(rng));
@@ -376,66 +406,85 @@ fn sample_candidate(x: Shading, local: ptr<function, LocalLights>, tile: u32, rn
     }
     c.r.slot = picked.slot;
     c.r.generation = light.generation;
-    c.r.uv = pack2x16unorm(uv);
     if restir_flag(RESTIR_POINT) {
         c.r.face = POINT_FACE;
         c.r.uv = pack2x16unorm(vec2(0.5));
         c.pdf = picked.pdf;
-    } else {
-        let lo = vec3<f32>(light.min);
-        let size = f32(light_size(light));
-        var omega: array<f32, 3>;
-        var faces: array<u32, 3>;
-        var total = 0.0;
-        for (var axis = 0u; axis < 3u; axis++) {
-            var face = 6u;
-            if x.point[axis] > lo[axis] + size && face_exposed(light, axis * 2u) {
-                face = axis * 2u;
-            } else if x.point[axis] < lo[axis] && face_exposed(light, axis * 2u + 1u) {
-                face = axis * 2u + 1u;
-            }
-            faces[axis] = face;
-            omega[axis] = 0.0;
-            if face != 6u {
-                omega[axis] = face_share(x.point, lo, size, face);
-                total += omega[axis];
-            }
+        c.r.target_value = luminance(unshadowed(x, light, POINT_FACE, vec2(0.5)));
+        return c;
+    }
+    let lo = vec3<f32>(light.min);
+    let size = f32(light_size(light));
+    var omega: array<f32, 3>;
+    var faces: array<u32, 3>;
+    var total = 0.0;
+    for (var axis = 0u; axis < 3u; axis++) {
+        var face = 6u;
+        if x.point[axis] > lo[axis] + size && face_exposed(light, axis * 2u) {
+            face = axis * 2u;
+        } else if x.point[axis] < lo[axis] && face_exposed(light, axis * 2u + 1u) {
+            face = axis * 2u + 1u;
         }
-        if !(total > 0.0) || !finite(total) {
-            return c;
-        }
-        // Pick a face by its share of the total solid angle.
-        var pick = u_face * total;
-        var chosen = 0u;
-        for (var axis = 0u; axis < 3u; axis++) {
-            if omega[axis] > 0.0 {
-                chosen = axis;
-                if pick < omega[axis] {
-                    break;
-                }
-                pick -= omega[axis];
-            }
-        }
-        c.r.face = faces[chosen];
-        let face_pdf = picked.pdf * (omega[chosen] / total);
-        c.pdf = face_pdf / (size * size);
-        let centre = light_point(light, c.r.face, vec2(0.5));
-        // Within NEAR_FACE face sizes of a face's centre, a candidate's point is drawn by solid angle, not by area.
-        if distance(x.point, centre) < f32(NEAR_FACE) * size {
-            let near = sample_face_solid_angle(x.point, lo, size, c.r.face, uv);
-            if near.solid_angle > 0.0 {
-                // Quantise first so the pdf and target are those of the point actually stored.
-                c.r.uv = pack2x16unorm(near.uv);
-                let to_point = light_point(light, c.r.face, unpack2x16unorm(c.r.uv)) - x.point;
-                let d2 = dot(to_point, to_point);
-                let cos_light = -dot(face_normal(c.r.face), to_point) * inverseSqrt(d2);
-                // Uniform in solid angle, per unit area: cos / (d^2 x solid angle).
-                c.pdf = face_pdf * max(cos_light, 0.0) / (d2 * near.solid_angle);
-            }
+        faces[axis] = face;
+        omega[axis] = 0.0;
+        if face != 6u {
+            omega[axis] = face_share(x.point, lo, size, face);
+            total += omega[axis];
         }
     }
-    c.target_value = luminance(unshadowed(x, light, c.r.face, unpack2x16unorm(c.r.uv)));
+    if !(total > 0.0) || !finite(total) {
+        return c;
+    }
+    // Pick a face by its share of the total solid angle.
+    var pick = u_face * total;
+    var chosen = 0u;
+    for (var axis = 0u; axis < 3u; axis++) {
+        if omega[axis] > 0.0 {
+            chosen = axis;
+            if pick < omega[axis] {
+                break;
+            }
+            pick -= omega[axis];
+        }
+    }
+    c.r.face = faces[chosen];
+    c.r.uv = pack2x16unorm(uv);
+    let pair_pdf = picked.pdf * (omega[chosen] / total);
+    if near_face(x, light, c.r.face) {
+        c.pdf = pair_pdf;
+        c.r.target_value = face_target(x, light, c.r.face, omega[chosen]);
+    } else {
+        c.pdf = pair_pdf / (size * size);
+        c.r.target_value = luminance(unshadowed(x, light, c.r.face, unpack2x16unorm(c.r.uv)));
+    }
     return c;
+}
+
+// The chosen candidate's point where it was left to be drawn (a near face): uniform in the solid angle the face
+// subtends, from the random numbers the candidate kept in `uv` (uniform in area where that angle is too small to
+// sample in f32). Returns the point's pdf per unit area, or 1 where the candidate's target was already its point's
+// (a far face, point mode, no light).
+fn draw_point(x: Shading, r: ptr<function, Reservoir>) -> f32 {
+    if (*r).slot == NO_LIGHT || (*r).face == POINT_FACE {
+        return 1.0;
+    }
+    let light = lights[(*r).slot];
+    if !near_face(x, light, (*r).face) {
+        return 1.0;
+    }
+    let lo = vec3<f32>(light.min);
+    let size = f32(light_size(light));
+    let near = sample_face_solid_angle(x.point, lo, size, (*r).face, unpack2x16unorm((*r).uv));
+    if !(near.solid_angle > 0.0) {
+        return 1.0 / (size * size);
+    }
+    // Quantise first so the pdf is that of the point actually stored.
+    (*r).uv = pack2x16unorm(near.uv);
+    let to_point = light_point(light, (*r).face, unpack2x16unorm((*r).uv)) - x.point;
+    let d2 = dot(to_point, to_point);
+    let cos_light = -dot(face_normal((*r).face), to_point) * inverseSqrt(d2);
+    // Uniform in solid angle, per unit area: cos / (d^2 x solid angle).
+    return max(cos_light, 0.0) / (d2 * near.solid_angle);
 }
 
 // Streams one weighted input into `r`: kept with probability weight / w_sum. Returns whether it was kept.

@@ -7,8 +7,9 @@
 #import glowbrick::constants::{RESTIR_TEMPORAL, RESTIR_INITIAL_VISIBILITY}
 #import glowbrick::world::object_motion
 #import glowbrick::random::{Rng, rng_next}
+#import glowbrick::guards::finite
 #import glowbrick::restir::common::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
-    shading, local_lights, LocalLights, pixel_tile, sample_candidate, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, own_sample_rays, pixel_rng}
+    shading, local_lights, LocalLights, pixel_tile, sample_candidate, draw_point, stream, finalize, pair_weight, target_of, reservoir_visible, unbiased, own_sample_rays, pixel_rng}
 
 // Temporal history is capped at this many times M_init (DESIGN.md), so old samples cannot dominate forever.
 const HISTORY_CAP: f32 = 20.0;
@@ -40,11 +41,17 @@ fn initial_pixel(id: vec3<u32>) {
     let tile = pixel_tile(id.xy);
     for (var i = 0u; i < frame.candidates; i++) {
         let c = sample_candidate(x, &local, tile, &rng);
-        let weight = select(0.0, c.target_value / c.pdf, c.pdf > 0.0);
+        let weight = select(0.0, c.r.target_value / c.pdf, c.pdf > 0.0);
         stream(&r, c.r, weight, 1.0, rng_next(&rng));
     }
+    // W = w_sum / (M x the chosen candidate's target); a near face's candidate was resampled by its face's target
+    // times its point's pdf, the point drawn now.
+    let pair_target = r.target_value;
+    let point_pdf = draw_point(x, &r);
     let own_target = target_of(x, r);
-    r.big_w = select(0.0, r.w_sum / (r.m * own_target), r.m * own_target > 0.0);
+    let denominator = r.m * pair_target * point_pdf;
+    r.big_w = select(0.0, r.w_sum / denominator, denominator > 0.0 && own_target > 0.0);
+    r.big_w = select(0.0, r.big_w, finite(r.big_w));
     r.target_value = own_target;
     // Visibility reuse (thesis §4.4): an occluded choice keeps its M but contributes nothing when reused. Without
     // this ray the shading pass's final shadow ray gives the same verdict to next frame's reuse.

@@ -11,7 +11,8 @@
     primary_ray_dir, pixel_footprint}
 #import glowbrick::constants::{DEBUG_RESERVOIR, LIGHTING_FULL}
 #import glowbrick::guards::finite
-#import glowbrick::restir::common::{reservoirs_final, validated, shading, unshadowed, reservoir_visible, pixel_rng, NO_LIGHT}
+#import glowbrick::restir::common::{reservoirs_final, validated, shading, unshadowed, reservoir_visible, pixel_rng, NO_LIGHT,
+    empty_reservoir}
 #import glowbrick::lights::{lighting_mode, lights, scene, background, disk_sample, sky_sample}
 #import glowbrick::gi::cache::{gi_on, gi_incoming, camera_level}
 
@@ -45,7 +46,12 @@ fn shade_pixel(id: vec3<u32>) {
         return;
     }
     let x = shading(surface);
-    let raw = reservoirs_final[index];
+    // Without lights to sample the other passes do not run (restir::samples): emission, the disk, the sky and
+    // the GI cache only.
+    var raw = empty_reservoir();
+    if scene.light_count > 0u {
+        raw = reservoirs_final[index];
+    }
     var r = validated(raw);
     if debug_view() == DEBUG_RESERVOIR {
         // The stress run's view of the reservoir: raw W, M, w_sum, and whether validation had to reset it for a
@@ -63,7 +69,9 @@ fn shade_pixel(id: vec3<u32>) {
             r.w_sum = 0.0;
         }
     }
-    reservoirs_final[index] = r;
+    if scene.light_count > 0u {
+        reservoirs_final[index] = r;
+    }
     if full {
         var rng = pixel_rng(id.xy, 3u);
         radiance += disk_sample(x.point, x.normal, x.albedo, &rng);

@@ -314,7 +314,7 @@ pub fn view_frame(
         return;
     };
     let Some(primary_pipeline) = pipelines.get(&pipeline_cache, &[primary::PRIMARY]).map(|p| p[0]) else { return };
-    let restir = TechniquePipelines::of(resources.restir.runs, &pipelines, &pipeline_cache, &restir::PASSES);
+    let restir = TechniquePipelines::of(resources.restir.passes.shades, &pipelines, &pipeline_cache, &restir::PASSES);
     let denoise = TechniquePipelines::of(resources.denoise.runs, &pipelines, &pipeline_cache, &denoise::PASSES);
     if matches!(restir, TechniquePipelines::Compiling) || matches!(denoise, TechniquePipelines::Compiling) {
         return;
@@ -348,9 +348,9 @@ pub fn view_frame(
     // 1. G-buffer, GI cache entries touched; the image too unless ReSTIR shades it.
     recorder.dispatch(&primary::PRIMARY, primary_pipeline, size);
     // 2-5. Voxel ReSTIR: the light tiles (when the candidates read them), candidates + temporal reuse, spatial
-    // reuse, shading.
+    // reuse (when there are lights to sample), shading.
     for (pass, pipeline) in restir::PASSES.iter().zip(restir.dispatched()) {
-        if pass.dispatch != Dispatch::LightTiles || resources.restir.tiles {
+        if resources.restir.passes.dispatches(pass) {
             recorder.dispatch(pass, pipeline, size);
         }
     }

@@ -39,13 +39,11 @@ pub const PASSES: [VoxelPass; 4] = [
         entry_point: "main",
         dispatch: Dispatch::Pixels,
     },
-    VoxelPass {
-        name: "glowbrick_restir_shade",
-        shader: "restir/shade.wgsl",
-        entry_point: "main",
-        dispatch: Dispatch::Pixels,
-    },
+    VoxelPass { name: SHADE_PASS, shader: "restir/shade.wgsl", entry_point: "main", dispatch: Dispatch::Pixels },
 ];
+
+/// The last pass, which shades the image (also without lights to sample).
+const SHADE_PASS: &str = "glowbrick_restir_shade";
 
 /// GPU-time names of the passes, in dispatch order.
 pub const RESTIR_PASS_NAMES: [&str; 4] = [PASSES[0].name, PASSES[1].name, PASSES[2].name, PASSES[3].name];
@@ -53,12 +51,41 @@ pub const RESTIR_PASS_NAMES: [&str; 4] = [PASSES[0].name, PASSES[1].name, PASSES
 /// Threads of the light tiles' pass (one per tile light).
 pub const TILE_THREADS: u32 = LIGHT_TILES * LIGHT_TILE_SIZE;
 
-/// Whether the passes run this frame: only where there is something to sample, in a lighting mode that uses
-/// them, for a view that shows light (or the reservoirs themselves).
-pub fn runs(settings: &RenderSettings, light_count: u32) -> bool {
-    settings.lighting.uses_restir()
-        && (settings.debug.is_lit() || settings.debug == DebugView::Reservoir)
-        && light_count > 0
+/// Whether the shading pass shades this frame's image: in a lighting mode that uses Voxel ReSTIR, for a view
+/// that shows light (or the reservoirs themselves), with or without lights to sample. The primary pass then never
+/// shades, and its pipeline holds no shading code: software Vulkan runs code under a mask whether a lane takes it
+/// or not, so a branch on the light count cost every pixel the whole next-event estimation.
+pub fn shades(settings: &RenderSettings) -> bool {
+    settings.lighting.uses_restir() && (settings.debug.is_lit() || settings.debug == DebugView::Reservoir)
+}
+
+/// Whether the sampling passes (light tiles, candidates and temporal reuse, spatial reuse) run this frame: where
+/// the shading pass shades and there is something to sample.
+pub fn samples(settings: &RenderSettings, light_count: u32) -> bool {
+    shades(settings) && light_count > 0
+}
+
+/// Which of the passes a view's frame dispatches.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RestirPasses {
+    /// The shading pass shades the image (`shades`).
+    pub shades: bool,
+    /// The sampling passes run (`samples`).
+    pub samples: bool,
+    /// The candidates read light tiles, so the tiles' pass runs with the sampling passes.
+    pub tiles: bool,
+}
+
+impl RestirPasses {
+    /// Whether `pass` is dispatched: the shading pass whenever ReSTIR shades, the light tiles only when the
+    /// candidates read them, the other passes when there is something to sample.
+    pub fn dispatches(&self, pass: &VoxelPass) -> bool {
+        match pass.dispatch {
+            Dispatch::LightTiles => self.samples && self.tiles,
+            _ if pass.name == SHADE_PASS => self.shades,
+            _ => self.samples,
+        }
+    }
 }
 
 /// Whether last frame's reservoirs are this frame's temporal history: last frame ran the passes too, and the
@@ -102,10 +129,8 @@ pub struct RestirView {
     reservoirs_temporal: Buffer,
     reservoirs_final: Buffer,
     light_tiles: Buffer,
-    /// Whether this frame runs the passes (set in prepare, read by the frame; last frame's until then).
-    pub runs: bool,
-    /// Whether this frame's candidates read light tiles, so the tiles' pass runs.
-    pub tiles: bool,
+    /// The passes this frame dispatches (set in prepare, read by the frame; last frame's until then).
+    pub passes: RestirPasses,
 }
 
 impl RestirView {
@@ -122,17 +147,14 @@ impl RestirView {
             reservoirs_temporal: buffer("glowbrick_reservoirs_temporal", pixels * RESERVOIR_BYTES),
             reservoirs_final: buffer("glowbrick_reservoirs_final", pixels * RESERVOIR_BYTES),
             light_tiles: buffer("glowbrick_light_tiles", u64::from(TILE_THREADS) * TILE_LIGHT_BYTES),
-            runs: false,
-            tiles: false,
+            passes: RestirPasses::default(),
         }
     }
 
-    /// Starts this frame: whether the passes run (the tiles' pass with them when `tiles`), and whether last
-    /// frame's reservoirs are its history.
-    pub fn begin_frame(&mut self, runs: bool, tiles: bool, lights_changed: bool) -> bool {
-        let history = history_is_valid(self.runs, runs, lights_changed);
-        self.runs = runs;
-        self.tiles = tiles;
+    /// Starts this frame with its passes, and says whether last frame's reservoirs are its history.
+    pub fn begin_frame(&mut self, passes: RestirPasses, lights_changed: bool) -> bool {
+        let history = history_is_valid(self.passes.samples, passes.samples, lights_changed);
+        self.passes = passes;
         history
     }
 
@@ -160,16 +182,27 @@ mod tests {
         assert!(!history_is_valid(true, true, true), "the light pool changed");
     }
 
-    /// No lights, an unlit debug view or a mode without ReSTIR skip the passes.
+    /// No lights skip the sampling passes but not the shading; an unlit debug view or a mode without ReSTIR
+    /// skip all of them. With lights and tiles on every pass runs.
     #[test]
-    fn the_passes_run_only_where_they_have_lights_to_sample() {
+    fn the_sampling_passes_run_only_where_they_have_lights_to_sample() {
         let settings = |pairs: &[&str]| {
             RenderSettings::default().with_pairs(&pairs.iter().map(|p| p.to_string()).collect::<Vec<_>>()).unwrap()
         };
-        assert!(runs(&settings(&[]), 1));
-        assert!(!runs(&settings(&[]), 0));
-        assert!(!runs(&settings(&["debug=normal"]), 1));
-        assert!(runs(&settings(&["debug=reservoir"]), 1));
-        assert!(!runs(&settings(&["lighting=sun"]), 1));
+        assert!(samples(&settings(&[]), 1));
+        assert!(!samples(&settings(&[]), 0));
+        assert!(shades(&settings(&[])));
+        assert!(!shades(&settings(&["debug=normal"])) && !samples(&settings(&["debug=normal"]), 1));
+        assert!(shades(&settings(&["debug=reservoir"])) && samples(&settings(&["debug=reservoir"]), 1));
+        assert!(!shades(&settings(&["lighting=sun"])) && !samples(&settings(&["lighting=sun"]), 1));
+        assert!(!shades(&settings(&["lighting=nee"])));
+        let view = |shades: bool, samples: bool, tiles: bool| RestirPasses { shades, samples, tiles };
+        let count = |v: &RestirPasses| PASSES.iter().filter(|p| v.dispatches(p)).count();
+        assert_eq!(count(&view(true, true, true)), 4);
+        assert_eq!(count(&view(true, true, false)), 3, "no tiles");
+        let shade_only = view(true, false, true);
+        assert_eq!(count(&shade_only), 1);
+        assert!(shade_only.dispatches(&PASSES[3]), "the shading pass shades a world without lights");
+        assert_eq!(count(&view(false, false, true)), 0);
     }
 }

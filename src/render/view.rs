@@ -260,7 +260,11 @@ pub fn prepare_view_resources(
     let settings = settings.map(|s| s.clone()).unwrap_or_default();
     let highlight = highlight.map(|h| *h).unwrap_or_default();
     let changes = SceneChanges::of(gpu_world.as_deref(), gpu_lights.as_deref(), objects.as_deref());
-    let run_restir = restir::runs(&settings, changes.light_count);
+    let restir_passes = restir::RestirPasses {
+        shades: restir::shades(&settings),
+        samples: restir::samples(&settings, changes.light_count),
+        tiles: settings.restir.light_tiles,
+    };
     let run_denoise = denoise::runs(&settings);
     for (entity, view, resources) in &mut views {
         let size = view.viewport.zw();
@@ -274,8 +278,7 @@ pub fn prepare_view_resources(
         let key = AccumulationKey { clip_from_world, settings: settings.clone(), highlight };
         let accumulate = settings.accumulate && !changes.anything;
         resources.view.begin_frame(key, accumulate, view.world_from_view.translation(), &mut params);
-        let tiles = settings.restir.light_tiles;
-        let restir_history = resources.restir.begin_frame(run_restir, tiles, changes.lights);
+        let restir_history = resources.restir.begin_frame(restir_passes, changes.lights);
         params.prev_camera[3] = if restir_history { 1.0 } else { 0.0 };
         params.denoise = resources.denoise.begin_frame(run_denoise, changes.world);
         queue.write_buffer(&resources.view.frame_params, 0, bytemuck::bytes_of(&params));

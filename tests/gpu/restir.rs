@@ -15,6 +15,7 @@ use crate::common;
 use bevy::math::{IVec3, UVec3};
 use glowbrick::headless::HeadlessRenderer;
 use glowbrick::image_io::LinearImage;
+use glowbrick::lights::daylight::Daylight;
 use glowbrick::reference::metrics::{Metrics, compare};
 use glowbrick::reference::{ReferenceOptions, render_reference};
 use glowbrick::world::events::EditRequest;
@@ -244,16 +245,20 @@ fn bare_floor() -> (VoxelWorld, u16, CameraView) {
     (world, lamp, top)
 }
 
-pub fn without_lights_no_restir_pass_runs() {
+/// Without lights only the shading pass runs (emission, the sun, the sky, the GI cache: here nothing, so black);
+/// the sampling passes wait for a light.
+pub fn without_lights_only_the_shading_pass_runs() {
     let (world, lamp, top) = bare_floor();
     let mut renderer = restir(&world, &top, &["lighting=restir"]);
     let image = renderer.render(4).unwrap();
     assert!(image.pixels.iter().all(|p| p[0] == 0.0), "no light, no sky in this mode: black");
     common::assert_passes_are_timed(&renderer);
-    for name in glowbrick::render::restir::RESTIR_PASS_NAMES {
+    let [sampling @ .., shade] = glowbrick::render::restir::RESTIR_PASS_NAMES;
+    for name in sampling {
         assert_eq!(renderer.gpu_pass_ms(name), None, "{name} ran in a world without lights");
     }
-    // With one lamp the same passes run and are timed.
+    assert!(renderer.gpu_pass_ms(shade).is_some(), "{shade} must shade a world without lights");
+    // With one lamp every pass runs and is timed.
     let place = Edit::Place { at: IVec3::new(8, 4, 8), material: lamp };
     renderer.app_mut().world_mut().write_message(EditRequest::player(place));
     let lit = renderer.render(4).unwrap();
@@ -261,6 +266,58 @@ pub fn without_lights_no_restir_pass_runs() {
     for name in glowbrick::render::restir::RESTIR_PASS_NAMES {
         assert!(renderer.gpu_pass_ms(name).is_some(), "{name} did not run with a light");
     }
+}
+
+/// Under ReSTIR the primary pass never shades (`restir::shades`): its pipeline holds no shading code, and a world
+/// without lights is shaded by ReSTIR's shading pass alone. With the room's lamp broken that pass must bring the
+/// sun and sky through the ceiling's window (the CPU reference's light); with the lamp placed again, the lamp's
+/// light on top. In one running renderer each frame matches a renderer started on that world, so a frame left
+/// unshaded (black) or shaded twice fails.
+pub fn the_shading_pass_lights_a_world_whose_lamps_are_broken() {
+    const W: u32 = 48;
+    const H: u32 = 32;
+    let world = load_scene("test-room").unwrap();
+    let view = world.view(Some("inside")).unwrap().clone();
+    let pairs = ["time=12", "gi=off"];
+    let lamp_voxels = [IVec3::new(24, 1, 24), IVec3::new(24, 2, 24)];
+    let lamp = world.palette.id_of("lamp").unwrap();
+    let mut lampless = world.clone();
+    for at in lamp_voxels {
+        lampless.apply(Edit::Break { at }).unwrap();
+    }
+    let keep = common::comparable_pixels(&lampless, &view, W, H);
+    let mean = |image: &LinearImage| common::masked(image, &keep).mean_luminance();
+    let fresh_mean = |world: &VoxelWorld| mean(&common::renderer_with(world, &view, W, H, &pairs).render(8).unwrap());
+    let (fresh_lit, fresh_dark) = (fresh_mean(&world), fresh_mean(&lampless));
+    let options = ReferenceOptions {
+        width: W,
+        height: H,
+        spp: 256,
+        daylight: Some(Daylight::at(12.0, true)),
+        ..Default::default()
+    };
+    let sunlit = mean(&render_reference(&lampless, &view, &options).unwrap().image);
+    eprintln!(
+        "fresh renderers: with the lamp {fresh_lit:.5}, without {fresh_dark:.5}; the CPU's sun and sky {sunlit:.5}"
+    );
+    assert!((fresh_dark - sunlit).abs() <= 0.1 * sunlit, "the lampless room: {fresh_dark} against {sunlit}");
+    assert!(fresh_lit > 1.2 * fresh_dark, "the lamp must light the room beyond the sun");
+
+    let mut renderer = common::renderer_with(&world, &view, W, H, &pairs);
+    renderer.render(8).unwrap();
+    let mut edit_and_render = |edits: [Edit; 2]| {
+        for edit in edits {
+            renderer.app_mut().world_mut().write_message(EditRequest::player(edit));
+        }
+        renderer.render(8).unwrap()
+    };
+    let dark = edit_and_render(lamp_voxels.map(|at| Edit::Break { at }));
+    assert_eq!(dark.non_finite_pixels(), 0);
+    let dark = mean(&dark);
+    let lit = mean(&edit_and_render(lamp_voxels.map(|at| Edit::Place { at, material: lamp })));
+    eprintln!("one renderer: lamp broken {dark:.5}, placed again {lit:.5}");
+    assert!((dark - fresh_dark).abs() <= 0.1 * fresh_dark, "lamp broken: {dark} against {fresh_dark}");
+    assert!((lit - fresh_lit).abs() <= 0.1 * fresh_lit, "lamp placed again: {lit} against {fresh_lit}");
 }
 
 /// The soak reads `debug=reservoir` (W, M, w_sum, reset flag). Where no ReSTIR pass runs (its lamps all broken) the

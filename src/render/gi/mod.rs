@@ -325,14 +325,9 @@ pub fn prepare_gi(
     // A frame whose GI passes are not compiled yet must not use up the first frame's restart or the warm-up. Nor
     // must one whose cameras cannot draw yet (their passes still compiling: frame::view_frame waits for them): the
     // cache would spend its warm-up on frames no camera drew, before any entry exists.
-    let light_count = gpu_lights.as_ref().map_or(0, |l| l.light_count);
     let ready = pipelines.is_some_and(|p| {
         p.gi_ready(&pipeline_cache)
-            && p.views_ready(
-                &pipeline_cache,
-                super::restir::runs(settings, light_count),
-                super::denoise::runs(settings),
-            )
+            && p.views_ready(&pipeline_cache, super::restir::shades(settings), super::denoise::runs(settings))
     });
     cache.compiling = settings.gi.enabled && !ready;
     cache.enabled = settings.gi.enabled && !cache.compiling;
