@@ -334,13 +334,15 @@ fn gi_touch_surface(point: vec3<f32>, face: u32, object: u32, level: u32) {
         return;
     }
     let voxel = vec3<i32>(floor(p.xyz - face_normal(face) * 0.5));
-    gi_touch(voxel, face, object, level, true);
     let b = bilinear(p.xyz, voxel, face, level);
     let index = object_index(object);
-    for (var i = 1u; i < 4u; i++) {
+    // The face itself, then its three interpolation neighbours that are surfaces. One loop and one call site:
+    // software Vulkan inlines every call and runs each copy under a mask, so a separate call for the face itself
+    // cost every pixel a second copy of the probe.
+    for (var i = 0u; i < 4u; i++) {
         let neighbour = voxel + select(vec3(0), b.step_u, (i & 1u) != 0u) + select(vec3(0), b.step_v, (i & 2u) != 0u);
         let surface = select(is_object_surface(index, neighbour, face), is_surface(neighbour, face), object == 0u);
-        if surface {
+        if i == 0u || surface {
             gi_touch(neighbour, face, object, level, true);
         }
     }
@@ -410,12 +412,15 @@ fn gi_incoming(point: vec3<f32>, face: u32, object: u32, level: u32) -> vec3<f32
         return vec3(0.0);
     }
     let voxel = vec3<i32>(floor(p.xyz - face_normal(face) * 0.5));
-    let own = filtered_or(voxel, face, object, level, vec3(0.0));
     let b = bilinear(p.xyz, voxel, face, level);
-    let u = filtered_or(voxel + b.step_u, face, object, level, own);
-    let v = filtered_or(voxel + b.step_v, face, object, level, own);
-    let uv = filtered_or(voxel + b.step_u + b.step_v, face, object, level, own);
-    return mix(mix(own, u, b.weight.x), mix(v, uv, b.weight.x), b.weight.y);
+    // The face's own value (0 without one), then the neighbours' along u, v and both (the face's own without
+    // one), in one loop with one lookup (one inlined copy of the probe, as in gi_touch_surface).
+    var values: array<vec3<f32>, 4>;
+    for (var i = 0u; i < 4u; i++) {
+        let neighbour = voxel + select(vec3(0), b.step_u, (i & 1u) != 0u) + select(vec3(0), b.step_v, (i & 2u) != 0u);
+        values[i] = filtered_or(neighbour, face, object, level, select(values[0], vec3(0.0), i == 0u));
+    }
+    return mix(mix(values[0], values[1], b.weight.x), mix(values[2], values[3], b.weight.x), b.weight.y);
 }
 
 // Direction i of K for an entry: a Hammersley point, Cranley-Patterson rotated per entry so neighbours do not
