@@ -294,6 +294,11 @@ fn bilinear(point: vec3<f32>, voxel: vec3<i32>, face: u32, level: u32) -> Biline
     return Bilinear(unit(t.x, select(size, -size, fu < 0.0)), unit(t.y, select(size, -size, fv < 0.0)), vec2(abs(fu), abs(fv)));
 }
 
+// Corner i of a bilinear footprint: 0 the face's own voxel, 1 the neighbour along u, 2 along v, 3 along both.
+fn bilinear_voxel(voxel: vec3<i32>, b: Bilinear, i: u32) -> vec3<i32> {
+    return voxel + select(vec3(0), b.step_u, (i & 1u) != 0u) + select(vec3(0), b.step_v, (i & 2u) != 0u);
+}
+
 // The level a camera reads a surface at, from its pixel footprint (voxels across one pixel there): the finest
 // whose cells are at least `gi.cell_pixels` pixels wide (up to MAX_LEVEL), so a far or low-resolution view keeps
 // few entries. (Until 2026-11-26 the coarsest at most 2 pixels wide, which `gi_cell=1` reproduces.) Moving
@@ -340,7 +345,7 @@ fn gi_touch_surface(point: vec3<f32>, face: u32, object: u32, level: u32) {
     // software Vulkan inlines every call and runs each copy under a mask, so a separate call for the face itself
     // cost every pixel a second copy of the probe.
     for (var i = 0u; i < 4u; i++) {
-        let neighbour = voxel + select(vec3(0), b.step_u, (i & 1u) != 0u) + select(vec3(0), b.step_v, (i & 2u) != 0u);
+        let neighbour = bilinear_voxel(voxel, b, i);
         let surface = select(is_object_surface(index, neighbour, face), is_surface(neighbour, face), object == 0u);
         if i == 0u || surface {
             gi_touch(neighbour, face, object, level, true);
@@ -417,7 +422,7 @@ fn gi_incoming(point: vec3<f32>, face: u32, object: u32, level: u32) -> vec3<f32
     // one), in one loop with one lookup (one inlined copy of the probe, as in gi_touch_surface).
     var values: array<vec3<f32>, 4>;
     for (var i = 0u; i < 4u; i++) {
-        let neighbour = voxel + select(vec3(0), b.step_u, (i & 1u) != 0u) + select(vec3(0), b.step_v, (i & 2u) != 0u);
+        let neighbour = bilinear_voxel(voxel, b, i);
         values[i] = filtered_or(neighbour, face, object, level, select(values[0], vec3(0.0), i == 0u));
     }
     return mix(mix(values[0], values[1], b.weight.x), mix(values[2], values[3], b.weight.x), b.weight.y);
