@@ -218,33 +218,46 @@ fn has_child(m: vec2<u32>, bit: u32) -> bool {
     return ((word >> (bit & 31u)) & 1u) != 0u;
 }
 
-// The coarsest empty cell below 4^3-child mask m that holds voxel v (children of edge 1 << child_shift, whose
-// walk level is child_shift), as (level, low corner): the 2^3 children reaching ahead of the ray's child on every
-// axis, else its aligned 2^3 group (one level up), else its child; level 0 when the child is occupied. A 2^3 box of
-// children at (x, y, z) is the bits 0, 1, 4, 5, 16, 17, 20, 21 moved by x + 4 y + 16 z.
+// The coarsest empty cell below 4^3-child mask m that holds voxel v (children of edge 1 << child_shift), as (low
+// corner, edge): the 3^3 children reaching ahead of the ray's child on every axis, else the 2^3 reaching ahead,
+// else its aligned 2^3 group, else its child; edge 0 when the child is occupied. A box need not be aligned or a
+// power of two: the ray leaves it as any cell, through voxel planes. A box of children at (x, y, z) is a fixed
+// pattern of bits moved by x + 4 y + 16 z.
 fn empty_child_cell(m: vec2<u32>, v: vec3<i32>, child_shift: u32, positive: vec3<bool>) -> vec4<i32> {
     let c = (v >> vec3(child_shift)) & vec3(3);
     let node = v & vec3(~((4 << child_shift) - 1));
+    let ahead3 = select(max(c - vec3(2), vec3(0)), min(c, vec3(1)), positive);
+    if !any_bits(m, BOX3, u32(ahead3.x + 4 * ahead3.y + 16 * ahead3.z)) {
+        return vec4(node + (ahead3 << vec3(child_shift)), 3 << child_shift);
+    }
     let ahead = select(max(c - vec3(1), vec3(0)), min(c, vec3(2)), positive);
-    if !any_bits(m, u32(ahead.x + 4 * ahead.y + 16 * ahead.z)) {
-        return vec4(node + (ahead << vec3(child_shift)), i32(child_shift) + 1);
+    if !any_bits(m, BOX2, u32(ahead.x + 4 * ahead.y + 16 * ahead.z)) {
+        return vec4(node + (ahead << vec3(child_shift)), 2 << child_shift);
     }
     // The aligned group, unless it is the box just tested.
     let aligned = c & vec3(2);
-    if any(aligned != ahead) && !any_bits(m, u32(aligned.x + 4 * aligned.y + 16 * aligned.z)) {
-        return vec4(v & vec3(~((2 << child_shift) - 1)), i32(child_shift) + 1);
+    if any(aligned != ahead) && !any_bits(m, BOX2, u32(aligned.x + 4 * aligned.y + 16 * aligned.z)) {
+        return vec4(v & vec3(~((2 << child_shift) - 1)), 2 << child_shift);
     }
     if !has_child(m, u32(c.x + 4 * (c.y + 4 * c.z))) {
-        return vec4(v & vec3(~((1 << child_shift) - 1)), i32(child_shift));
+        return vec4(v & vec3(~((1 << child_shift) - 1)), 1 << child_shift);
     }
     return vec4(v, 0);
 }
 
-// Whether any of the 2^3 children of m at child bit `base` (bits base + 0, 1, 4, 5, 16, 17, 20, 21) is occupied.
-fn any_bits(m: vec2<u32>, base: u32) -> bool {
-    let low = select(0u, 0x330033u << base, base < 32u);
-    let high = select(0x330033u >> (32u - base), 0x330033u << (base - 32u), base >= 32u);
-    return ((m.x & low) | (m.y & select(high, 0u, base == 0u))) != 0u;
+// The 2^3 children at (0|1, 0|1, 0|1): bits 0, 1, 4, 5, 16, 17, 20, 21. The 3^3 at (0..3)^3: rows of 0b111 at
+// bits 0, 4, 8 of layers 0, 16, 32 (a 64-bit pattern as its low and high words).
+const BOX2: vec2<u32> = vec2(0x330033u, 0u);
+const BOX3: vec2<u32> = vec2(0x07770777u, 0x0777u);
+
+// Whether any child of m in the box `pattern` moved up by `base` bits (0..=63) is occupied: the 64-bit shift on
+// two words (a shift by 32 or more is taken modulo 32 in WGSL, hence the selects).
+fn any_bits(m: vec2<u32>, pattern: vec2<u32>, base: u32) -> bool {
+    let s = base & 31u;
+    let carried = select(pattern.x >> (32u - s), 0u, s == 0u);
+    let low = select(pattern.x << s, 0u, base >= 32u);
+    let high = select((pattern.y << s) | carried, pattern.x << s, base >= 32u);
+    return ((m.x & low) | (m.y & high)) != 0u;
 }
 
 fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
@@ -252,10 +265,11 @@ fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
 }
 
 // traversal=occupancy: one move per step, as `trace_occupancy_counted` in src/world/traversal.rs: the ray is in
-// voxel v at t; the step finds the coarsest cell holding v that the masks prove empty (edge 1 << level: a region
-// (7), a 2^3 box of sectors, a sector, a box of bricks, a brick, a box of 2^3 cells, a 2^3 cell, a voxel; a box
-// reaches ahead of the ray's own child where it can) and leaves it through its nearest face. The masks of the region, sector and brick the ray is in stay in
-// registers and are loaded only when a move enters a new one, so every step does the same few bit tests.
+// voxel v at t; the step finds the coarsest cell holding v that the masks prove empty (a region, a box of
+// sectors, a sector, a box of bricks, a brick, a box of 2^3 cells, a 2^3 cell, a voxel; a box of 3^3 or 2^3
+// children reaches ahead of the ray's own child where it can) and leaves it through its nearest face. The masks of
+// the region, sector and brick the ray is in stay in registers and are loaded only when a move enters a new one,
+// so every step does the same few bit tests.
 fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
     let size = world_info.size;
     let entry = box_entry(origin, dir, vec3(0.0), vec3<f32>(size));
@@ -293,7 +307,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
             region_mask = occupancy[world_info.region_base + mask_index(v >> vec3(7u), world_info.regions)];
         }
         // The level of the coarsest empty cell holding v.
-        var cell = select(empty_child_cell(region_mask, v, 5u, positive), vec4(v & vec3(~127), 7),
+        var cell = select(empty_child_cell(region_mask, v, 5u, positive), vec4(v & vec3(~127), 128),
                           all(region_mask == vec2(0u)));
         if cell.w == 0 {
             if entered >= 5u {
@@ -323,9 +337,9 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
                 }
             }
         }
-        // Out of that cell through its nearest face (the same planes and products as `cross_t`).
-        let level = u32(cell.w);
-        let edge = 1 << level;
+        // Out of that cell (a voxel where every mask said occupied) through its nearest face (the same planes and
+        // products as `cross_t`).
+        let edge = max(cell.w, 1);
         let lo = cell.xyz;
         let planes = vec3<f32>(lo + far_side * edge);
         let t_max = select((planes - origin) * inv, vec3(INF), no_dir);
@@ -341,7 +355,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
             break;
         }
         entered = firstLeadingBit(u32(before ^ v[a]));
-        if level > 0u {
+        if edge > 1 {
             // v's other axes are the ray's only to the cell's precision: the voxel the ray is in at t, within the
             // cell's extent on every axis but a.
             let moved = v[a];

@@ -286,9 +286,9 @@ fn markdown(rows: &[RaysRow], config: &RaysConfig) -> String {
         );
     }
     s.push_str(
-        "\nSteps per ray of the occupancy traversal by the edge of the cell left (a hit counts as a voxel; 4, 16 \
-         and 64 are the derived levels, 2^3 boxes of a mask's children):\n\n\
-         | scene | kind | 1 | 2 | 4 | 8 (brick) | 16 | 32 (sector) | 64 | 128 (region) |\n\
+        "\nSteps per ray of the occupancy traversal by the edge of the cell left (a hit counts as a voxel; the \
+         derived levels are boxes of 2^3 or 3^3 of a mask's children, edge 4 or 6, 16 or 24, 64 or 96):\n\n\
+         | scene | kind | 1 | 2 | 4-6 | 8 (brick) | 16-24 | 32 (sector) | 64-96 | 128 (region) |\n\
          |---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {

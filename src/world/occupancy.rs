@@ -12,8 +12,9 @@
 //! | 0     | 1 (voxel) | its material                                                   |
 //!
 //! A ray holds the masks of the cells it is inside in registers, so a step through empty space below a region
-//! costs no memory load at all. Any 2^3 box of a mask's children is a cell too (of 64, 16 or 4 voxels: empty when
-//! its 8 bits are 0), so a ray walks eight levels (`WALK_LEVELS`), one shift apart, for the memory of five;
+//! costs no memory load at all. Any 2^3 or 3^3 box of a mask's children is a cell too (of 64 or 96, 16 or 24, 4 or
+//! 6 voxels: empty when its 8 or 27 bits are 0), so a ray walks eight levels (`WALK_LEVELS`; a box counts as the
+//! level above its children) for the memory of five;
 //! `world::traversal` and `shaders/lib/traversal.wgsl` walk it the same way. Every mask is 64 bits, child
 //! `(x & 3) + 4 (y & 3) + 16 (z & 3)` of the child coordinates; the GPU reads them as `vec2<u32>` (low word
 //! first). Memory: 8 bytes per brick (its cell mask) and per sector and region, i.e. under 1% of a
@@ -31,7 +32,7 @@ pub const LEVEL_SHIFTS: [i32; 5] = [0, 1, 3, 5, 7];
 /// The coarsest level.
 pub const TOP_LEVEL: usize = 4;
 /// The levels a ray walks (`world::traversal`): cells of edge `1 << level`, voxel (0) to region (7). Levels 2, 4
-/// and 6 are derived: a 2^3 box of a mask's children is empty when its 8 bits are 0.
+/// and 6 are derived: a 2^3 (or 3^3) box of a mask's children is empty when its 8 (27) bits are 0.
 pub const WALK_LEVELS: usize = 8;
 /// The region's level in the walk.
 pub const TOP_WALK_LEVEL: usize = WALK_LEVELS - 1;

@@ -185,9 +185,10 @@ pub fn trace_occupancy(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option
 /// `trace_occupancy`, telling `tally` its steps and loads.
 ///
 /// One move per loop step: the ray is in voxel `v` at `t`; the step finds the coarsest cell holding `v` that the
-/// masks prove empty (`WALK_LEVELS`: a region, a 2^3 box of sectors, a sector, a box of bricks, a brick, a box of
-/// 2^3 cells, a 2^3 cell, a voxel; a box is the 2^3 children of a mask reaching ahead of the ray's own child, else
-/// its aligned group; below a region every test is a bit test of a mask the ray holds) and leaves that cell
+/// masks prove empty (`WALK_LEVELS`: a region, a box of sectors, a sector, a box of bricks, a brick, a box of
+/// 2^3 cells, a 2^3 cell, a voxel; a box is the 3^3 or else the 2^3 children of a mask reaching ahead of the ray's
+/// own child, else its aligned 2^3 group; below a region every test is a bit test of a mask the ray holds) and
+/// leaves that cell
 /// through its nearest face. A mask is loaded only when the ray enters a new region, sector or
 /// pooled brick. Every face is a voxel boundary computed as in the plain DDA, and ties go to the first axis, so the
 /// hits are the DDA's save where a ray grazes an edge within rounding of `origin + dir * t`.
@@ -212,9 +213,9 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
             region_mask = occupancy.region(v);
         }
         // The level of the coarsest empty cell holding v.
-        let (level, lo) = 'empty: {
+        let (level, lo, edge) = 'empty: {
             if region_mask == 0 {
-                break 'empty (7, v & !127);
+                break 'empty (7, v & !127, 128);
             }
             if let Some(cell) = empty_child_cell(region_mask, v, SECTOR_SHIFT, positive) {
                 break 'empty cell;
@@ -256,11 +257,10 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
                 tally.step(0);
                 return Some(Hit { voxel: v, face: Face::entered(axis, positive[axis]), distance: t, material });
             }
-            (0, v)
+            (0, v, 1)
         };
         tally.step(level);
         // Out of that cell through the face the ray reaches first.
-        let edge = 1 << level;
         let mut t_max = Vec3::ZERO;
         for a in 0..3 {
             t_max[a] = cross_t(ray, inv, a, (lo[a] + if positive[a] { edge } else { 0 }) as f32);
@@ -289,27 +289,33 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
 }
 
 /// The coarsest empty cell below 4^3-child mask `m` that holds voxel `v` (children of edge `1 << child_shift`,
-/// whose walk level is `child_shift`), as its level and low corner: the 2^3 children reaching ahead of the ray's
-/// child on every axis, else its aligned 2^3 group (one level up), else its child; `None` when the child is
-/// occupied.
+/// whose walk level is `child_shift`), as its level, low corner and edge: the 3^3 children reaching ahead of the
+/// ray's child on every axis, else the 2^3 reaching ahead, else its aligned 2^3 group (each counted one level up),
+/// else its child; `None` when the child is occupied. A box need not be aligned, or a power of two: the ray leaves
+/// it as any cell, through voxel planes.
 #[inline]
-fn empty_child_cell(m: u64, v: IVec3, child_shift: i32, positive: [bool; 3]) -> Option<(usize, IVec3)> {
+fn empty_child_cell(m: u64, v: IVec3, child_shift: i32, positive: [bool; 3]) -> Option<(usize, IVec3, i32)> {
     let c = (v >> child_shift) & 3;
     let node = v & !((4 << child_shift) - 1);
-    let mut ahead = c;
+    let (mut ahead3, mut ahead) = (c, c);
     for a in 0..3 {
+        ahead3[a] = if positive[a] { c[a].min(1) } else { (c[a] - 2).max(0) };
         ahead[a] = if positive[a] { c[a].min(2) } else { (c[a] - 1).max(0) };
     }
+    let up = child_shift as usize + 1;
+    if m & box3_bits(ahead3) == 0 {
+        return Some((up, node + (ahead3 << child_shift), 3 << child_shift));
+    }
     if m & box_bits(ahead) == 0 {
-        return Some((child_shift as usize + 1, node + (ahead << child_shift)));
+        return Some((up, node + (ahead << child_shift), 2 << child_shift));
     }
     // The aligned group, unless it is the box just tested.
     let aligned = c & 2;
     if aligned != ahead && m & box_bits(aligned) == 0 {
-        return Some((child_shift as usize + 1, v & !((2 << child_shift) - 1)));
+        return Some((up, v & !((2 << child_shift) - 1), 2 << child_shift));
     }
     if !has_child(m, (c.x + 4 * (c.y + 4 * c.z)) as u32) {
-        return Some((child_shift as usize, v & !((1 << child_shift) - 1)));
+        return Some((child_shift as usize, v & !((1 << child_shift) - 1), 1 << child_shift));
     }
     None
 }
@@ -321,6 +327,14 @@ fn box_bits(corner: IVec3) -> u64 {
     // Children (0|1, 0|1, 0|1): bits 0, 1, 4, 5, 16, 17, 20, 21.
     const BOX: u64 = 0x0033_0033;
     BOX << (corner.x + 4 * corner.y + 16 * corner.z)
+}
+
+/// The bits of the 3^3 children whose lowest is `corner` (each coordinate 0..=1).
+#[inline]
+fn box3_bits(corner: IVec3) -> u64 {
+    // Children (0..3, 0..3, 0..3): rows of 0b111 at 0, 4, 8 in layers 0, 16, 32.
+    const BOX3: u64 = 0x0777_0777_0777;
+    BOX3 << (corner.x + 4 * corner.y + 16 * corner.z)
 }
 
 /// Finds the first solid voxel along `ray` within `max_distance`: the two-level DDA (bricks, skipping empty and
@@ -497,6 +511,20 @@ mod tests {
                 }
             }
             assert_eq!(box_bits(corner), expected, "{corner}");
+        }
+    }
+
+    #[test]
+    fn box3_bits_are_the_27_children_of_the_box() {
+        for corner in [IVec3::new(0, 0, 0), IVec3::new(1, 0, 1), IVec3::new(0, 1, 1), IVec3::new(1, 1, 1)] {
+            let mut expected = 0u64;
+            for bit in 0..64 {
+                let child = IVec3::new(bit & 3, (bit >> 2) & 3, bit >> 4);
+                if child.cmpge(corner).all() && child.cmple(corner + 2).all() {
+                    expected |= 1 << bit;
+                }
+            }
+            assert_eq!(box3_bits(corner), expected, "{corner}");
         }
     }
 }
