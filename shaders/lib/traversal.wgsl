@@ -247,6 +247,9 @@ fn empty_child_cell(m: vec2<u32>, v: vec3<i32>, child_shift: u32, positive: vec3
 
 // The 2^3 children at (0|1, 0|1, 0|1): bits 0, 1, 4, 5, 16, 17, 20, 21. The 3^3 at (0..3)^3: rows of 0b111 at
 // bits 0, 4, 8 of layers 0, 16, 32 (a 64-bit pattern as its low and high words).
+// No pool slot read yet for the brick the ray is in.
+const NO_SLOT: u32 = 0xffffffffu;
+
 const BOX2: vec2<u32> = vec2(0x330033u, 0u);
 const BOX3: vec2<u32> = vec2(0x07770777u, 0x0777u);
 
@@ -290,12 +293,14 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
     }
     let last = size - vec3(1);
     var v = clamp(vec3<i32>(floor(origin + dir * t)), vec3(0), last);
-    // The child masks of the region, sector and brick the ray is in, and the brick's pool slot; `entered`: the
-    // coarsest level whose cell the last move changed (a mask of that level or below is stale).
+    // The child masks of the region, sector and brick the ray is in, the brick's index and its pool slot once read
+    // (NO_SLOT before); `entered`: the coarsest level whose cell the last move changed (a mask of that level or
+    // below is stale).
     var region_mask = vec2(0u);
     var sector_mask = vec2(0u);
     var brick_mask = vec2(0u);
-    var slot = 0u;
+    var brick = 0u;
+    var slot = NO_SLOT;
     var entered = 7u;
     // Every step crosses at least one voxel boundary; the bound only stops a non-finite t. A constant: lavapipe's
     // primary pass took twice as long with the world's own size here (docs/bench/traversal.md).
@@ -317,22 +322,32 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
             cell = empty_child_cell(sector_mask, v, 3u, positive);
             if cell.w == 0 {
                 if entered >= 3u {
+                    // The brick's mask first: its top cell (homogeneous, or the pool slot) is read only where a
+                    // voxel must be.
                     trace_loads += 1u;
-                    let index = mask_index(v >> vec3(BRICK_SHIFT), world_info.bricks);
-                    let cell = top_cells[index];
-                    if cell != 0u && (cell & POOLED_FLAG) == 0u {
-                        return Hit(v, face_entered(axis, positive[axis]), t, cell, true, 0u);
-                    }
-                    trace_loads += 1u;
-                    slot = cell & ~POOLED_FLAG;
-                    brick_mask = occupancy[index];
+                    brick = mask_index(v >> vec3(BRICK_SHIFT), world_info.bricks);
+                    brick_mask = occupancy[brick];
+                    slot = NO_SLOT;
                 }
                 cell = empty_child_cell(brick_mask, v, 1u, positive);
                 if cell.w == 0 {
-                    trace_loads += 1u;
-                    let material = pooled_voxel(slot, v & vec3(BRICK_SIZE - 1));
-                    if material != 0u {
-                        return Hit(v, face_entered(axis, positive[axis]), t, material, true, 0u);
+                    if slot == NO_SLOT {
+                        trace_loads += 1u;
+                        let top = top_cells[brick];
+                        if top != 0u && (top & POOLED_FLAG) == 0u {
+                            return Hit(v, face_entered(axis, positive[axis]), t, top, true, 0u);
+                        }
+                        slot = select(NO_SLOT, top & ~POOLED_FLAG, top != 0u);
+                    }
+                    if slot == NO_SLOT {
+                        // An empty top cell under an occupied mask (never with masks kept current): an empty brick.
+                        cell = vec4(v & vec3(~(BRICK_SIZE - 1)), BRICK_SIZE);
+                    } else {
+                        trace_loads += 1u;
+                        let material = pooled_voxel(slot, v & vec3(BRICK_SIZE - 1));
+                        if material != 0u {
+                            return Hit(v, face_entered(axis, positive[axis]), t, material, true, 0u);
+                        }
                     }
                 }
             }

@@ -203,7 +203,8 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
     // The masks of the region, sector and pooled brick the ray is in, valid from the level at which they were
     // last loaded down; `entered`: the coarsest level whose cell the last move changed (7 before the first step).
     let (mut region_mask, mut sector_mask, mut brick_mask) = (0u64, 0u64, 0u64);
-    let mut slot = 0u32;
+    // The brick the ray is in and its pool slot, once read.
+    let (mut brick, mut slot) = (0usize, None::<u32>);
     let mut entered = TOP_WALK_LEVEL;
     // Every step crosses at least one voxel boundary.
     let max_steps = size.x + size.y + size.z + 8;
@@ -229,30 +230,39 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
                 break 'empty cell;
             }
             if entered >= 3 {
+                // The brick's mask first: its top cell (homogeneous, or the pool slot) is read only where the mask
+                // cannot tell (every cell solid) or a voxel must be read.
                 tally.load();
-                let index = grid.brick_index(v >> BRICK_SHIFT);
-                match BrickCell::decode(grid.top_cell(index)) {
-                    BrickCell::Homogeneous(material) => {
-                        tally.step(0);
-                        return Some(Hit {
-                            voxel: v,
-                            face: Face::entered(axis, positive[axis]),
-                            distance: t,
-                            material,
-                        });
-                    }
-                    BrickCell::Pooled(s) => slot = s,
-                    // The sector said otherwise; never with masks kept current.
-                    BrickCell::Empty => {}
-                }
-                tally.load();
-                brick_mask = occupancy.brick(index);
+                brick = grid.brick_index(v >> BRICK_SHIFT);
+                brick_mask = occupancy.brick(brick);
+                slot = None;
             }
             if let Some(cell) = empty_child_cell(brick_mask, v, CELL_SHIFT, positive) {
                 break 'empty cell;
             }
+            let s = match slot {
+                Some(s) => s,
+                None => {
+                    tally.load();
+                    match BrickCell::decode(grid.top_cell(brick)) {
+                        BrickCell::Homogeneous(material) => {
+                            tally.step(0);
+                            return Some(Hit {
+                                voxel: v,
+                                face: Face::entered(axis, positive[axis]),
+                                distance: t,
+                                material,
+                            });
+                        }
+                        BrickCell::Pooled(s) => s,
+                        // The mask said otherwise (never with masks kept current): leave it as the empty brick.
+                        BrickCell::Empty => break 'empty (3, v & !7, 8),
+                    }
+                }
+            };
+            slot = Some(s);
             tally.load();
-            let material = grid.pool()[slot as usize * BRICK_VOXELS + local_index(v & 7_i32)];
+            let material = grid.pool()[s as usize * BRICK_VOXELS + local_index(v & 7_i32)];
             if material != 0 {
                 tally.step(0);
                 return Some(Hit { voxel: v, face: Face::entered(axis, positive[axis]), distance: t, material });
