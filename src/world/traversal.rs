@@ -509,32 +509,24 @@ mod tests {
         }
     }
 
-    /// A box's bits are those of the 8 children from its corner to its corner + 1.
-    #[test]
-    fn box_bits_are_the_eight_children_of_the_box() {
-        for corner in [IVec3::new(0, 0, 0), IVec3::new(2, 0, 1), IVec3::new(1, 2, 2), IVec3::new(2, 2, 2)] {
-            let mut expected = 0u64;
-            for bit in 0..64 {
+    /// The bits of a 4^3 child mask whose children lie in the cube of `edge` children from `corner`.
+    fn children_in_cube(corner: IVec3, edge: i32) -> u64 {
+        (0..64)
+            .filter(|bit| {
                 let child = IVec3::new(bit & 3, (bit >> 2) & 3, bit >> 4);
-                if child.cmpge(corner).all() && child.cmple(corner + 1).all() {
-                    expected |= 1 << bit;
-                }
-            }
-            assert_eq!(box_bits(corner), expected, "{corner}");
-        }
+                child.cmpge(corner).all() && child.cmplt(corner + edge).all()
+            })
+            .fold(0, |m, bit| m | 1 << bit)
     }
 
+    /// A box's bits are those of the 8 (27) children from its corner to its corner + 1 (+ 2), wherever it lies.
     #[test]
-    fn box3_bits_are_the_27_children_of_the_box() {
+    fn box_bits_are_the_children_of_the_box() {
+        for corner in [IVec3::new(0, 0, 0), IVec3::new(2, 0, 1), IVec3::new(1, 2, 2), IVec3::new(2, 2, 2)] {
+            assert_eq!(box_bits(corner), children_in_cube(corner, 2), "{corner}");
+        }
         for corner in [IVec3::new(0, 0, 0), IVec3::new(1, 0, 1), IVec3::new(0, 1, 1), IVec3::new(1, 1, 1)] {
-            let mut expected = 0u64;
-            for bit in 0..64 {
-                let child = IVec3::new(bit & 3, (bit >> 2) & 3, bit >> 4);
-                if child.cmpge(corner).all() && child.cmple(corner + 2).all() {
-                    expected |= 1 << bit;
-                }
-            }
-            assert_eq!(box3_bits(corner), expected, "{corner}");
+            assert_eq!(box3_bits(corner), children_in_cube(corner, 3), "{corner}");
         }
     }
 }
