@@ -275,10 +275,13 @@ fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
 // so every step does the same few bit tests.
 fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
     let size = world_info.size;
-    let entry = box_entry(origin, dir, vec3(0.0), vec3<f32>(size));
+    // Nothing solid lies outside the occupied box: a ray starts where it enters it and misses where it leaves.
+    let box_lo = world_info.occupied_lo;
+    let box_hi = world_info.occupied_hi;
+    let entry = box_entry(origin, dir, vec3<f32>(box_lo), vec3<f32>(box_hi));
     let t_end = min(entry.y, max_distance);
     var t = max(entry.x, 0.0);
-    if !(t <= t_end) || all(dir == vec3(0.0)) {
+    if !(t <= t_end) || all(dir == vec3(0.0)) || any(box_hi <= box_lo) {
         return miss();
     }
     let inv = inverse_dir(dir);
@@ -292,7 +295,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
         axis = u32(box_entry(origin, dir, o, o + vec3(1.0)).z);
     }
     let last = size - vec3(1);
-    var v = clamp(vec3<i32>(floor(origin + dir * t)), vec3(0), last);
+    var v = clamp(vec3<i32>(floor(origin + dir * t)), box_lo, box_hi - vec3(1));
     // The child masks of the region, sector and brick the ray is in, the brick's index and its pool slot once read
     // (NO_SLOT before); `entered`: the coarsest level whose cell the last move changed (a mask of that level or
     // below is stale).
@@ -366,7 +369,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
         axis = a;
         let before = v[a];
         v[a] = select(lo[a] - 1, lo[a] + edge, positive[a]);
-        if v[a] < 0 || v[a] > last[a] {
+        if v[a] < box_lo[a] || v[a] >= box_hi[a] {
             break;
         }
         entered = firstLeadingBit(u32(before ^ v[a]));

@@ -16,6 +16,12 @@ struct WorldInfo {
     sector_base: u32,
     regions: vec3<i32>,
     region_base: u32,
+    // The voxels [occupied_lo, occupied_hi) that may hold a solid one: the occupancy walk starts where a ray
+    // enters them and misses where it leaves (empty when lo == hi).
+    occupied_lo: vec3<i32>,
+    _pad_lo: u32,
+    occupied_hi: vec3<i32>,
+    _pad_hi: u32,
 }
 
 struct Material {

@@ -27,6 +27,19 @@ pub struct WorldInfo {
     /// Region grid size (4^3 sectors each) and where the region masks start.
     pub regions: [i32; 3],
     pub region_base: u32,
+    /// The voxels `[occupied_lo, occupied_hi)` that may hold a solid one (`BrickGrid::occupied_box`): the
+    /// occupancy walk starts where a ray enters it and misses where it leaves.
+    pub occupied_lo: [i32; 3],
+    pub _pad_lo: u32,
+    pub occupied_hi: [i32; 3],
+    pub _pad_hi: u32,
+}
+
+impl WorldInfo {
+    /// This info with the occupied box `(lo, hi)`.
+    pub fn with_occupied(self, (lo, hi): (bevy::math::IVec3, bevy::math::IVec3)) -> Self {
+        WorldInfo { occupied_lo: lo.to_array(), occupied_hi: hi.to_array(), ..self }
+    }
 }
 
 /// One material (`Material` in `shaders/lib/world.wgsl`), indexed by voxel id (entry 0 is air).
@@ -216,7 +229,7 @@ pub const GI_EMPTY_WORK: [u32; GI_WORK_WORDS as usize] = {
 };
 
 // The shaders read these structs at exactly these sizes (WGSL alignment rules included).
-const _: () = assert!(size_of::<WorldInfo>() == 64);
+const _: () = assert!(size_of::<WorldInfo>() == 96);
 const _: () = assert!(size_of::<GpuMaterial>() == 32);
 const _: () = assert!(size_of::<GpuObject>() == 48);
 const _: () = assert!(size_of::<GpuLight>() == 32);

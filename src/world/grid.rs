@@ -155,6 +155,15 @@ impl BrickGrid {
         &self.occupancy
     }
 
+    /// The voxels `[lo, hi)` of the bricks that may hold a solid voxel (`Occupancy::occupied_bricks`), within the
+    /// world; an empty box (`lo == hi`) when none does.
+    pub fn occupied_box(&self) -> (IVec3, IVec3) {
+        match self.occupancy.occupied_bricks() {
+            Some((lo, hi)) => (lo * BRICK_SIZE, ((hi + 1) * BRICK_SIZE).min(self.size().as_ivec3())),
+            None => (IVec3::ZERO, IVec3::ZERO),
+        }
+    }
+
     /// The raw top cell of brick index `i`.
     #[inline]
     pub fn top_cell(&self, i: usize) -> u32 {

@@ -109,6 +109,10 @@ pub struct Occupancy {
     sector_base: usize,
     region_dims: UVec3,
     region_base: usize,
+    /// The box of bricks (lowest, highest) that held a solid voxel since the masks were made: a ray leaves the
+    /// world's solid part through it. It only grows (an edit that empties its edge leaves it as it was), so an
+    /// edit stays one brick's work; a world loaded again gets a tight one.
+    occupied: Option<(IVec3, IVec3)>,
 }
 
 impl Occupancy {
@@ -125,7 +129,13 @@ impl Occupancy {
             sector_base,
             region_dims,
             region_base,
+            occupied: None,
         }
+    }
+
+    /// The box of bricks (lowest, highest, inclusive) that may hold a solid voxel; `None` when none ever did.
+    pub fn occupied_bricks(&self) -> Option<(IVec3, IVec3)> {
+        self.occupied
     }
 
     /// The cell mask of brick index `i`.
@@ -177,6 +187,9 @@ impl Occupancy {
         }
         let was_empty = self.masks[i] == 0;
         self.masks[i] = mask;
+        if mask != 0 {
+            self.occupied = Some(self.occupied.map_or((b, b), |(lo, hi)| (lo.min(b), hi.max(b))));
+        }
         if was_empty == (mask == 0) {
             return;
         }

@@ -156,16 +156,21 @@ impl Tally for Counts {
 /// Where a ray enters the world: the clipped parameter range and the axis of the face it entered through, or
 /// `None` when it misses the world (or is not finite).
 fn enter_world(size: Vec3, ray: &Ray, max_distance: f32) -> Option<(f32, f32, usize)> {
+    enter_box(Vec3::ZERO, size, ray, max_distance)
+}
+
+/// Where a ray enters the box `[lo, hi]` (voxel planes), as `enter_world`.
+fn enter_box(lo: Vec3, hi: Vec3, ray: &Ray, max_distance: f32) -> Option<(f32, f32, usize)> {
     if ray.dir == Vec3::ZERO || !ray.origin.is_finite() || !ray.dir.is_finite() {
         return None;
     }
-    let (t_enter, t_exit, enter_axis) = box_entry(ray, Vec3::ZERO, size);
+    let (t_enter, t_exit, enter_axis) = box_entry(ray, lo, hi);
     let t_end = t_exit.min(max_distance);
     let t = t_enter.max(0.0);
     if t > t_end {
         return None;
     }
-    // The face through which the ray entered the current cell; a ray starting inside the world uses the axis of
+    // The face through which the ray entered the current cell; a ray starting inside the box uses the axis of
     // its voxel's entry, as `box_entry` reports for a box around the origin.
     let mut axis = enter_axis;
     if t_enter < 0.0 {
@@ -194,12 +199,17 @@ pub fn trace_occupancy(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option
 /// hits are the DDA's save where a ray grazes an edge within rounding of `origin + dir * t`.
 pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
     let size = grid.size().as_ivec3();
-    let (mut t, t_end, mut axis) = enter_world(size.as_vec3(), ray, max_distance)?;
+    // Nothing solid lies outside the occupied box: a ray starts where it enters it and misses where it leaves.
+    let (box_lo, box_hi) = grid.occupied_box();
+    if box_hi.cmple(box_lo).any() {
+        return None;
+    }
+    let (mut t, t_end, mut axis) = enter_box(box_lo.as_vec3(), box_hi.as_vec3(), ray, max_distance)?;
     let inv = inverse_dir(ray.dir);
     let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
     let occupancy = grid.occupancy();
     let last = size - IVec3::ONE;
-    let mut v = voxel_at(ray.at(t)).clamp(IVec3::ZERO, last);
+    let mut v = voxel_at(ray.at(t)).clamp(box_lo, box_hi - IVec3::ONE);
     // The masks of the region, sector and pooled brick the ray is in, valid from the level at which they were
     // last loaded down; `entered`: the coarsest level whose cell the last move changed (7 before the first step).
     let (mut region_mask, mut sector_mask, mut brick_mask) = (0u64, 0u64, 0u64);
@@ -283,7 +293,7 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
         axis = a;
         let before = v[a];
         v[a] = if positive[a] { lo[a] + edge } else { lo[a] - 1 };
-        if v[a] < 0 || v[a] > last[a] {
+        if v[a] < box_lo[a] || v[a] >= box_hi[a] {
             return None;
         }
         entered = (31 - ((before ^ v[a]) as u32).leading_zeros()) as usize;

@@ -141,7 +141,17 @@ fn twins() -> Vec<Twin> {
         twin!(
             "world_info",
             "WorldInfo",
-            WorldInfo { size, object_count, bricks, sectors, sector_base, regions, region_base }
+            WorldInfo {
+                size,
+                object_count,
+                bricks,
+                sectors,
+                sector_base,
+                regions,
+                region_base,
+                occupied_lo,
+                occupied_hi
+            }
         ),
         sized("top_cells", None, word, 1),
         sized("brick_pool", None, word, 1),

@@ -143,7 +143,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             the_light_hash_matches_the_cpu_light_index,
             the_spherical_rectangle_sampler_matches_the_cpu_reference,
         ],
-        world_after_edits: [gpu_world_follows_edits],
+        world_after_edits: [gpu_world_follows_edits, the_occupancy_walk_sees_a_pillar_built_above_the_occupied_box],
     ]
 }
 

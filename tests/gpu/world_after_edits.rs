@@ -14,8 +14,8 @@ use glowbrick::render::scene::world::GpuWorld;
 use glowbrick::render::scene::world::WorldUpload;
 use glowbrick::settings::RenderSettings;
 use glowbrick::world::events::EditRequest;
-use glowbrick::world::recipe::load_scene;
-use glowbrick::world::{Edit, VoxelWorld};
+use glowbrick::world::recipe::{generated_world, load_scene};
+use glowbrick::world::{Edit, VoxelWorld, camera_ray, trace, view_transform, world_from_clip};
 
 fn gpu_light_state(app: &mut App) -> (u32, bool) {
     let gpu = app.sub_app(RenderApp).world().resource::<GpuLights>();
@@ -72,4 +72,41 @@ pub fn gpu_world_follows_edits() {
     }
     renderer.render(1).unwrap();
     assert_eq!(gpu_light_state(renderer.app_mut()), (0, false));
+}
+
+/// The occupancy walk starts a camera ray where it enters the box of bricks that may hold a solid voxel. A pillar
+/// built up through the top of that box must reach the GPU with the edit's partial upload (the box in the world
+/// info), or the rays above the old box would pass over the pillar.
+pub fn the_occupancy_walk_sees_a_pillar_built_above_the_occupied_box() {
+    let world = generated_world(9, UVec3::new(64, 64, 64)).unwrap();
+    let view = world.overview();
+    let top_before = world.grid.occupied_box().1.y;
+    assert!(top_before <= 48, "the terrain should leave room above its box: top {top_before}");
+    let material = world.grid.get(IVec3::new(32, 0, 32));
+    assert_ne!(material, 0, "the ground under the pillar is solid");
+    let settings =
+        RenderSettings::default().with_pairs(&["debug=hit".to_string(), "traversal=occupancy".to_string()]).unwrap();
+    let options = HeadlessOptions { width: 96, height: 64, settings, ..Default::default() };
+    let mut renderer = common::renderer(world, &view, &options);
+    renderer.render(1).unwrap();
+    let pillar = Edit::FillBox { min: IVec3::new(28, 0, 28), max: IVec3::new(35, 63, 35), material };
+    renderer.app_mut().world_mut().write_message(EditRequest::player(pillar));
+    renderer.step();
+    let staged = renderer.app_mut().world().resource::<WorldUpload>().clone();
+    assert!(staged.full.is_none(), "the pillar travels as a partial upload");
+    let image = renderer.render(1).unwrap();
+    let world = renderer.app_mut().world().resource::<VoxelWorld>().clone();
+    assert_eq!(world.grid.occupied_box().1.y, 64, "the pillar grew the box to the world's top");
+    // The CPU's view of the pillar above the old box: the pixels a stale box would lose.
+    let transform = view_transform(&view);
+    let m = world_from_clip(&transform, view.fov_deg.to_radians(), 96, 64);
+    let above = (0..64 * 96)
+        .filter(|i| {
+            let ray = camera_ray(m, transform.translation, UVec2::new(i % 96, i / 96), 96, 64);
+            trace(&world.grid, &ray, f32::INFINITY).is_some_and(|h| h.voxel.y >= top_before)
+        })
+        .count();
+    assert!(above >= 50, "the view should show the pillar above the old box: {above} pixels");
+    let c = compare_hits(&world, &view, &image);
+    assert!(c.mismatches * 200 <= c.pixels, "{c:?}");
 }

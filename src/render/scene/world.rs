@@ -64,6 +64,8 @@ pub struct FullWorld {
     pub occupancy_bases: (usize, usize),
     pub sector_dims: UVec3,
     pub region_dims: UVec3,
+    /// The voxels `[lo, hi)` that may hold a solid one (`BrickGrid::occupied_box`).
+    pub occupied: (IVec3, IVec3),
     /// Pool voxels of all slots, padded with air to `pool_slots` slots.
     pub pool: Arc<Vec<Voxel>>,
     pub pool_slots: u32,
@@ -82,6 +84,8 @@ pub struct WorldUpload {
     pub bricks: Vec<(u32, Arc<[Voxel]>)>,
     /// The material table, when it changed.
     pub materials: Option<Arc<Vec<GpuMaterial>>>,
+    /// The box of voxels that may hold a solid one, when an edit may have grown it.
+    pub occupied: Option<(IVec3, IVec3)>,
 }
 
 impl WorldUpload {
@@ -142,6 +146,7 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
             occupancy_bases: grid.occupancy().bases(),
             sector_dims: grid.occupancy().sector_dims(),
             region_dims: grid.occupancy().region_dims(),
+            occupied: grid.occupied_box(),
             pool: Arc::new(pool),
             pool_slots,
         }));
@@ -160,6 +165,7 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
         }
         let all = grid.occupancy().masks();
         upload.occupancy = masks.into_iter().map(|i| (i as u32, all[i])).collect();
+        upload.occupied = Some(grid.occupied_box());
     }
     if replaced || state.palette.as_ref() != Some(&world.palette) {
         upload.materials = Some(Arc::new(gpu_materials(&world.palette)));
@@ -180,6 +186,8 @@ pub struct PendingUploads {
     materials: Staging<GpuMaterial>,
     /// Brick indices whose top cell changed after the latest full upload.
     edited: Vec<u32>,
+    /// The occupied box an edit after the latest full upload left.
+    occupied: Option<(IVec3, IVec3)>,
     /// Bytes of the uploads a later full upload did not supersede (`WorldUpload::bytes`).
     bytes: u64,
 }
@@ -193,6 +201,7 @@ impl PendingUploads {
             self.occupancy.whole(full.occupancy.clone());
             self.pool.whole(full.pool.clone());
             self.edited.clear();
+            self.occupied = None;
             self.bytes = 0;
         }
         for &(index, raw) in &upload.top_cells {
@@ -201,6 +210,9 @@ impl PendingUploads {
         }
         for &(index, mask) in &upload.occupancy {
             self.occupancy.range(index as u64, &[mask]);
+        }
+        if upload.occupied.is_some() {
+            self.occupied = upload.occupied;
         }
         for (slot, voxels) in &upload.bricks {
             self.pool.range(*slot as u64 * BRICK_VOXELS as u64, voxels);
@@ -343,7 +355,9 @@ fn world_info(full: &FullWorld, object_count: u32) -> WorldInfo {
         sector_base: full.occupancy_bases.0 as u32,
         regions: full.region_dims.as_ivec3().to_array(),
         region_base: full.occupancy_bases.1 as u32,
+        ..WorldInfo::default()
     }
+    .with_occupied(full.occupied)
 }
 
 /// Brick grid position of a brick index (x fastest).
@@ -391,7 +405,10 @@ fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &
     let info = batch.prepare_creation()?;
     let brick_dims = IVec3::from_array(info.bricks).as_uvec3();
     let device = binding.device;
-    let info = WorldInfo { object_count: binding.objects.count, ..info };
+    let mut info = WorldInfo { object_count: binding.objects.count, ..info };
+    if let Some(occupied) = batch.occupied {
+        info = info.with_occupied(occupied);
+    }
     let info_buffer = device.create_buffer_with_data(&BufferInitDescriptor {
         label: Some("glowbrick_world_info"),
         contents: bytemuck::bytes_of(&info),
@@ -430,6 +447,11 @@ fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &World
     if let Some(info) = batch.layout {
         gpu.brick_dims = IVec3::from_array(info.bricks).as_uvec3();
         gpu.info = WorldInfo { object_count: gpu.info.object_count, ..info };
+    }
+    if let Some(occupied) = batch.occupied {
+        gpu.info = gpu.info.with_occupied(occupied);
+    }
+    if batch.layout.is_some() || batch.occupied.is_some() {
         queue.write_buffer(&gpu.info_buffer, 0, bytemuck::bytes_of(&gpu.info));
     }
     let mut rebind = false;
