@@ -180,11 +180,10 @@ fn follow_settings(
     let key = PassKey::of(settings, traversal, objects);
     let generic = generic_fallback.map(|_| PassKey::generic(traversal));
     for key in std::iter::once(key).chain(generic) {
-        if !pipelines.sets.contains_key(&key) {
+        pipelines.sets.entry(key).or_insert_with(|| {
             let groups = [&world_layout.0, &lights_layout.0, &gi_layout.0];
-            let set = queue_passes(&cache, &shaders, &layouts, groups, &key);
-            pipelines.sets.insert(key, set);
-        }
+            queue_passes(&cache, &shaders, &layouts, groups, &key)
+        });
     }
     if pipelines.key != key {
         pipelines.key = key;
