@@ -245,11 +245,11 @@ fn empty_child_cell(m: vec2<u32>, v: vec3<i32>, child_shift: u32, positive: vec3
     return vec4(v, 0);
 }
 
-// The 2^3 children at (0|1, 0|1, 0|1): bits 0, 1, 4, 5, 16, 17, 20, 21. The 3^3 at (0..3)^3: rows of 0b111 at
-// bits 0, 4, 8 of layers 0, 16, 32 (a 64-bit pattern as its low and high words).
 // No pool slot read yet for the brick the ray is in.
 const NO_SLOT: u32 = 0xffffffffu;
 
+// The 2^3 children at (0|1, 0|1, 0|1): bits 0, 1, 4, 5, 16, 17, 20, 21. The 3^3 at (0..3)^3: rows of 0b111 at
+// bits 0, 4, 8 of layers 0, 16, 32 (a 64-bit pattern as its low and high words).
 const BOX2: vec2<u32> = vec2(0x330033u, 0u);
 const BOX3: vec2<u32> = vec2(0x07770777u, 0x0777u);
 

@@ -193,9 +193,9 @@ pub fn trace_occupancy(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option
 /// masks prove empty (`WALK_LEVELS`: a region, a box of sectors, a sector, a box of bricks, a brick, a box of
 /// 2^3 cells, a 2^3 cell, a voxel; a box is the 3^3 or else the 2^3 children of a mask reaching ahead of the ray's
 /// own child, else its aligned 2^3 group; below a region every test is a bit test of a mask the ray holds) and
-/// leaves that cell
-/// through its nearest face. A mask is loaded only when the ray enters a new region, sector or
-/// pooled brick. Every face is a voxel boundary computed as in the plain DDA, and ties go to the first axis, so the
+/// leaves that cell through its nearest face. A mask is loaded only when the ray enters a new region, sector or
+/// pooled brick; a brick's top cell only when a voxel of it must be read. Rays start and end in the box of
+/// occupied bricks (`BrickGrid::occupied_box`). Every face is a voxel boundary computed as in the plain DDA, and ties go to the first axis, so the
 /// hits are the DDA's save where a ray grazes an edge within rounding of `origin + dir * t`.
 pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
     let size = grid.size().as_ivec3();

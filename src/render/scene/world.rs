@@ -186,7 +186,7 @@ pub struct PendingUploads {
     materials: Staging<GpuMaterial>,
     /// Brick indices whose top cell changed after the latest full upload.
     edited: Vec<u32>,
-    /// The occupied box an edit after the latest full upload left.
+    /// The occupied box an edit left, when the batch holds no full upload (else it is in `layout`).
     occupied: Option<(IVec3, IVec3)>,
     /// Bytes of the uploads a later full upload did not supersede (`WorldUpload::bytes`).
     bytes: u64,
@@ -211,8 +211,11 @@ impl PendingUploads {
         for &(index, mask) in &upload.occupancy {
             self.occupancy.range(index as u64, &[mask]);
         }
-        if upload.occupied.is_some() {
-            self.occupied = upload.occupied;
+        if let Some(occupied) = upload.occupied {
+            match &mut self.layout {
+                Some(layout) => *layout = layout.with_occupied(occupied),
+                None => self.occupied = Some(occupied),
+            }
         }
         for (slot, voxels) in &upload.bricks {
             self.pool.range(*slot as u64 * BRICK_VOXELS as u64, voxels);
@@ -405,10 +408,7 @@ fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &
     let info = batch.prepare_creation()?;
     let brick_dims = IVec3::from_array(info.bricks).as_uvec3();
     let device = binding.device;
-    let mut info = WorldInfo { object_count: binding.objects.count, ..info };
-    if let Some(occupied) = batch.occupied {
-        info = info.with_occupied(occupied);
-    }
+    let info = WorldInfo { object_count: binding.objects.count, ..info };
     let info_buffer = device.create_buffer_with_data(&BufferInitDescriptor {
         label: Some("glowbrick_world_info"),
         contents: bytemuck::bytes_of(&info),
