@@ -173,6 +173,9 @@ impl LightPool {
                 pool.set(light.key, Some(light));
             }
         });
+        // Stale even without lights, so the first read builds the light bricks for this world's size: a pool
+        // whose last light was broken rebuilds them, and the two must be equal.
+        pool.alias_stale = true;
         pool
     }
 
