@@ -310,21 +310,27 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
     let max_steps = 3 * i32(MAX_WORLD_EDGE) + 8;
     for (var i = 0; i < max_steps; i++) {
         trace_steps += 1u;
-        if entered >= 7u {
-            trace_loads += 1u;
-            region_mask = occupancy[world_info.region_base + mask_index(v >> vec3(7u), world_info.regions)];
-        }
-        // The level of the coarsest empty cell holding v.
-        var cell = select(empty_child_cell(region_mask, v, 5u, positive), vec4(v & vec3(~127), 128),
+        // The level of the coarsest empty cell holding v (edge 0 while every mask says occupied). A mask's tests
+        // are skipped while the ray stays in the child it last proved occupied: a move out of a cell of a
+        // sector's size or more crosses a sector's face, so `entered` < 5 means the last step found the sector
+        // occupied; likewise for bricks.
+        var cell = vec4(v, 0);
+        if entered >= 5u {
+            if entered >= 7u {
+                trace_loads += 1u;
+                region_mask = occupancy[world_info.region_base + mask_index(v >> vec3(7u), world_info.regions)];
+            }
+            cell = select(empty_child_cell(region_mask, v, 5u, positive), vec4(v & vec3(~127), 128),
                           all(region_mask == vec2(0u)));
-        if cell.w == 0 {
-            if entered >= 5u {
+            if cell.w == 0 {
                 trace_loads += 1u;
                 sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(5u), world_info.sectors)];
             }
-            cell = empty_child_cell(sector_mask, v, 3u, positive);
-            if cell.w == 0 {
-                if entered >= 3u {
+        }
+        if cell.w == 0 {
+            if entered >= 3u {
+                cell = empty_child_cell(sector_mask, v, 3u, positive);
+                if cell.w == 0 {
                     // The brick's mask first: its top cell (homogeneous, or the pool slot) is read only where a
                     // voxel must be.
                     trace_loads += 1u;
@@ -332,6 +338,8 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
                     brick_mask = occupancy[brick];
                     slot = NO_SLOT;
                 }
+            }
+            if cell.w == 0 {
                 cell = empty_child_cell(brick_mask, v, 1u, positive);
                 if cell.w == 0 {
                     if slot == NO_SLOT {

@@ -8,7 +8,7 @@
 //! `(plane - origin) / dir` from the ray's own origin (never accumulated), so both sides round the same way; the
 //! hit face is the face the ray entered through; a ray starting inside a solid voxel hits it at `t = 0`.
 
-use super::grid::{BRICK_SIZE, BRICK_VOXELS, BrickCell, BrickGrid, Voxel, local_index};
+use super::grid::{BRICK_SIZE, BrickCell, BrickGrid, Voxel, local_index};
 use super::occupancy::{BRICK_SHIFT, CELL_SHIFT, SECTOR_SHIFT, TOP_WALK_LEVEL, WALK_LEVELS, has_child};
 use bevy::math::{IVec3, Vec3};
 
@@ -208,7 +208,6 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
     let inv = inverse_dir(ray.dir);
     let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
     let occupancy = grid.occupancy();
-    let last = size - IVec3::ONE;
     let mut v = voxel_at(ray.at(t)).clamp(box_lo, box_hi - IVec3::ONE);
     // The masks of the region, sector and pooled brick the ray is in, valid from the level at which they were
     // last loaded down; `entered`: the coarsest level whose cell the last move changed (7 before the first step).
@@ -218,28 +217,31 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
     let mut entered = TOP_WALK_LEVEL;
     // Every step crosses at least one voxel boundary.
     let max_steps = size.x + size.y + size.z + 8;
-    for _ in 0..max_steps {
-        if entered >= 7 {
-            tally.load();
-            region_mask = occupancy.region(v);
-        }
-        // The level of the coarsest empty cell holding v.
+    let bounds = CellExit { ray, inv, positive, t_end, box_lo, box_hi, last: size - IVec3::ONE };
+    'walk: for _ in 0..max_steps {
+        // The level of the coarsest empty cell holding v. A mask's tests are skipped while the ray stays in the
+        // child it last proved occupied: a move that left a cell of a sector's size or more crossed a sector's
+        // face (so `entered` < 5 means the last step found the sector occupied), and likewise for bricks.
         let (level, lo, edge) = 'empty: {
-            if region_mask == 0 {
-                break 'empty (7, v & !127, 128);
-            }
-            if let Some(cell) = empty_child_cell(region_mask, v, SECTOR_SHIFT, positive) {
-                break 'empty cell;
-            }
-            // A mask not loaded since the ray entered its cell: the steps since then left coarser empty cells.
             if entered >= 5 {
+                if entered >= 7 {
+                    tally.load();
+                    region_mask = occupancy.region(v);
+                }
+                if region_mask == 0 {
+                    break 'empty (7, v & !127, 128);
+                }
+                if let Some(cell) = empty_child_cell(region_mask, v, SECTOR_SHIFT, positive) {
+                    break 'empty cell;
+                }
+                // A mask not loaded since the ray entered its cell: the steps since then left coarser empty cells.
                 tally.load();
                 sector_mask = occupancy.sector(v);
             }
-            if let Some(cell) = empty_child_cell(sector_mask, v, BRICK_SHIFT, positive) {
-                break 'empty cell;
-            }
             if entered >= 3 {
+                if let Some(cell) = empty_child_cell(sector_mask, v, BRICK_SHIFT, positive) {
+                    break 'empty cell;
+                }
                 // The brick's mask first: its top cell (homogeneous, or the pool slot) is read only where the mask
                 // cannot tell (every cell solid) or a voxel must be read.
                 tally.load();
@@ -271,41 +273,69 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
                 }
             };
             slot = Some(s);
-            tally.load();
-            let material = grid.pool()[s as usize * BRICK_VOXELS + local_index(v & 7_i32)];
-            if material != 0 {
+            // Inside an occupied 2^3 cell the masks tell nothing more: a plain voxel DDA until the ray leaves it
+            // (at most 4 voxels), the moves the walk would make one loop step each, without its mask tests.
+            let voxels = grid.pool_brick(s);
+            loop {
+                tally.load();
+                let material = voxels[local_index(v & 7_i32)];
                 tally.step(0);
-                return Some(Hit { voxel: v, face: Face::entered(axis, positive[axis]), distance: t, material });
+                if material != 0 {
+                    return Some(Hit { voxel: v, face: Face::entered(axis, positive[axis]), distance: t, material });
+                }
+                let voxel = v;
+                (t, axis, entered) = bounds.leave(&mut v, voxel, 1)?;
+                if entered > 0 {
+                    continue 'walk;
+                }
             }
-            (0, v, 1)
         };
         tally.step(level);
-        // Out of that cell through the face the ray reaches first.
-        let mut t_max = Vec3::ZERO;
-        for a in 0..3 {
-            t_max[a] = cross_t(ray, inv, a, (lo[a] + if positive[a] { edge } else { 0 }) as f32);
-        }
-        let a = min_axis(t_max);
-        t = t_max[a];
-        if t > t_end {
-            return None;
-        }
-        axis = a;
-        let before = v[a];
-        v[a] = if positive[a] { lo[a] + edge } else { lo[a] - 1 };
-        if v[a] < box_lo[a] || v[a] >= box_hi[a] {
-            return None;
-        }
-        entered = (31 - ((before ^ v[a]) as u32).leading_zeros()) as usize;
-        if level > 0 {
-            // v's other axes are the ray's only to the cell's precision: the voxel the ray is in at t, within the
-            // cell's extent on every axis but a.
-            let moved = v[a];
-            v = voxel_at(ray.at(t)).clamp(lo, (lo + IVec3::splat(edge - 1)).min(last));
-            v[a] = moved;
-        }
+        (t, axis, entered) = bounds.leave(&mut v, lo, edge)?;
     }
     None
+}
+
+/// What a ray needs to leave a cell: its parameters, where it ends, and the box it walks in.
+struct CellExit<'a> {
+    ray: &'a Ray,
+    inv: Vec3,
+    positive: [bool; 3],
+    t_end: f32,
+    box_lo: IVec3,
+    box_hi: IVec3,
+    /// The world's last voxel.
+    last: IVec3,
+}
+
+impl CellExit<'_> {
+    /// Moves voxel `v` out of the cell `[lo, lo + edge)` through the face the ray reaches first. Returns the
+    /// parameter there, the axis crossed and the coarsest walk level whose cell `v` changed; `None` past `t_end`
+    /// or out of the box.
+    #[inline(always)]
+    fn leave(&self, v: &mut IVec3, lo: IVec3, edge: i32) -> Option<(f32, usize, usize)> {
+        let mut t_max = Vec3::ZERO;
+        for a in 0..3 {
+            t_max[a] = cross_t(self.ray, self.inv, a, (lo[a] + if self.positive[a] { edge } else { 0 }) as f32);
+        }
+        let a = min_axis(t_max);
+        let t = t_max[a];
+        if t > self.t_end {
+            return None;
+        }
+        let before = v[a];
+        let moved = if self.positive[a] { lo[a] + edge } else { lo[a] - 1 };
+        if moved < self.box_lo[a] || moved >= self.box_hi[a] {
+            return None;
+        }
+        if edge > 1 {
+            // v's other axes are the ray's only to the cell's precision: the voxel the ray is in at t, within the
+            // cell's extent on every axis but a.
+            *v = voxel_at(self.ray.at(t)).clamp(lo, (lo + IVec3::splat(edge - 1)).min(self.last));
+        }
+        v[a] = moved;
+        Some((t, a, (31 - ((before ^ moved) as u32).leading_zeros()) as usize))
+    }
 }
 
 /// The coarsest empty cell below 4^3-child mask `m` that holds voxel `v` (children of edge `1 << child_shift`,
@@ -313,7 +343,7 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
 /// ray's child on every axis, else the 2^3 reaching ahead, else its aligned 2^3 group (each counted one level up),
 /// else its child; `None` when the child is occupied. A box need not be aligned, or a power of two: the ray leaves
 /// it as any cell, through voxel planes.
-#[inline]
+#[inline(always)]
 fn empty_child_cell(m: u64, v: IVec3, child_shift: i32, positive: [bool; 3]) -> Option<(usize, IVec3, i32)> {
     let c = (v >> child_shift) & 3;
     let node = v & !((4 << child_shift) - 1);
@@ -342,7 +372,7 @@ fn empty_child_cell(m: u64, v: IVec3, child_shift: i32, positive: [bool; 3]) -> 
 
 /// The bits of a 4^3 child mask (child `x + 4 y + 16 z`) of the 2^3 children whose lowest is `corner` (each
 /// coordinate 0..=2).
-#[inline]
+#[inline(always)]
 fn box_bits(corner: IVec3) -> u64 {
     // Children (0|1, 0|1, 0|1): bits 0, 1, 4, 5, 16, 17, 20, 21.
     const BOX: u64 = 0x0033_0033;
@@ -350,7 +380,7 @@ fn box_bits(corner: IVec3) -> u64 {
 }
 
 /// The bits of the 3^3 children whose lowest is `corner` (each coordinate 0..=1).
-#[inline]
+#[inline(always)]
 fn box3_bits(corner: IVec3) -> u64 {
     // Children (0..3, 0..3, 0..3): rows of 0b111 at 0, 4, 8 in layers 0, 16, 32.
     const BOX3: u64 = 0x0777_0777_0777;
