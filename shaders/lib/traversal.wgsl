@@ -301,10 +301,16 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
     // below is stale).
     var region_mask = vec2(0u);
     var sector_mask = vec2(0u);
-    var brick_mask = vec2(0u);
-    var brick = 0u;
     var slot = NO_SLOT;
-    var entered = 7u;
+    // A ray that starts in an occupied brick (as one leaving a surface does) reads that brick's mask first: it
+    // needs its sector's and region's masks only once it leaves the brick (`*_unread` until then).
+    trace_loads += 1u;
+    var brick = mask_index(v >> vec3(BRICK_SHIFT), world_info.bricks);
+    var brick_mask = occupancy[brick];
+    let starts_in_brick = any(brick_mask != vec2(0u));
+    var region_unread = starts_in_brick;
+    var sector_unread = starts_in_brick;
+    var entered = select(7u, 2u, starts_in_brick);
     // Every step crosses at least one voxel boundary; the bound only stops a non-finite t. A constant: lavapipe's
     // primary pass took twice as long with the world's own size here (docs/bench/traversal.md).
     let max_steps = 3 * i32(MAX_WORLD_EDGE) + 8;
@@ -316,19 +322,26 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
         // occupied; likewise for bricks.
         var cell = vec4(v, 0);
         if entered >= 5u {
-            if entered >= 7u {
+            if entered >= 7u || region_unread {
                 trace_loads += 1u;
                 region_mask = occupancy[world_info.region_base + mask_index(v >> vec3(7u), world_info.regions)];
+                region_unread = false;
             }
             cell = select(empty_child_cell(region_mask, v, 5u, positive), vec4(v & vec3(~127), 128),
                           all(region_mask == vec2(0u)));
             if cell.w == 0 {
                 trace_loads += 1u;
                 sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(5u), world_info.sectors)];
+                sector_unread = false;
             }
         }
         if cell.w == 0 {
             if entered >= 3u {
+                if sector_unread {
+                    trace_loads += 1u;
+                    sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(5u), world_info.sectors)];
+                    sector_unread = false;
+                }
                 cell = empty_child_cell(sector_mask, v, 3u, positive);
                 if cell.w == 0 {
                     // The brick's mask first: its top cell (homogeneous, or the pool slot) is read only where a

@@ -34,6 +34,9 @@ pub const TOP_LEVEL: usize = 4;
 /// The levels a ray walks (`world::traversal`): cells of edge `1 << level`, voxel (0) to region (7). Levels 2, 4
 /// and 6 are derived: a 2^3 (or 3^3) box of a mask's children is empty when its 8 (27) bits are 0.
 pub const WALK_LEVELS: usize = 8;
+/// The walk level of a box of a brick's 2^3 cells: a ray new to a cell of this level or finer is still in its
+/// brick.
+pub const CELL_BOX_LEVEL: usize = 2;
 /// The region's level in the walk.
 pub const TOP_WALK_LEVEL: usize = WALK_LEVELS - 1;
 /// log2 of a brick's edge in voxels.

@@ -9,7 +9,7 @@
 //! hit face is the face the ray entered through; a ray starting inside a solid voxel hits it at `t = 0`.
 
 use super::grid::{BRICK_SIZE, BrickCell, BrickGrid, Voxel, local_index};
-use super::occupancy::{BRICK_SHIFT, CELL_SHIFT, SECTOR_SHIFT, TOP_WALK_LEVEL, WALK_LEVELS, has_child};
+use super::occupancy::{BRICK_SHIFT, CELL_BOX_LEVEL, CELL_SHIFT, SECTOR_SHIFT, TOP_WALK_LEVEL, WALK_LEVELS, has_child};
 use bevy::math::{IVec3, Vec3};
 
 /// Secondary rays start this far off the surface they leave (the GPU passes use the same, as
@@ -209,12 +209,19 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
     let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
     let occupancy = grid.occupancy();
     let mut v = voxel_at(ray.at(t)).clamp(box_lo, box_hi - IVec3::ONE);
-    // The masks of the region, sector and pooled brick the ray is in, valid from the level at which they were
-    // last loaded down; `entered`: the coarsest level whose cell the last move changed (7 before the first step).
-    let (mut region_mask, mut sector_mask, mut brick_mask) = (0u64, 0u64, 0u64);
-    // The brick the ray is in and its pool slot, once read.
-    let (mut brick, mut slot) = (0usize, None::<u32>);
-    let mut entered = TOP_WALK_LEVEL;
+    // The masks of the region and sector the ray is in, valid from the level at which they were last loaded down;
+    // `entered`: the coarsest walk level whose cell the last move changed (its masks and those below are stale).
+    let (mut region_mask, mut sector_mask) = (0u64, 0u64);
+    // The pool slot of the brick the ray is in, once read.
+    let mut slot = None::<u32>;
+    // A ray that starts in an occupied brick (as one leaving a surface does) reads that brick's mask first: it
+    // needs its sector's and region's masks only once it leaves the brick (`*_unread` until then).
+    tally.load();
+    let mut brick = grid.brick_index(v >> BRICK_SHIFT);
+    let mut brick_mask = occupancy.brick(brick);
+    let starts_in_brick = brick_mask != 0;
+    let (mut region_unread, mut sector_unread) = (starts_in_brick, starts_in_brick);
+    let mut entered = if starts_in_brick { CELL_BOX_LEVEL } else { TOP_WALK_LEVEL };
     // Every step crosses at least one voxel boundary.
     let max_steps = size.x + size.y + size.z + 8;
     let bounds = CellExit { ray, inv, positive, t_end, box_lo, box_hi, last: size - IVec3::ONE };
@@ -224,9 +231,10 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
         // face (so `entered` < 5 means the last step found the sector occupied), and likewise for bricks.
         let (level, lo, edge) = 'empty: {
             if entered >= 5 {
-                if entered >= 7 {
+                if entered >= 7 || region_unread {
                     tally.load();
                     region_mask = occupancy.region(v);
+                    region_unread = false;
                 }
                 if region_mask == 0 {
                     break 'empty (7, v & !127, 128);
@@ -237,8 +245,14 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
                 // A mask not loaded since the ray entered its cell: the steps since then left coarser empty cells.
                 tally.load();
                 sector_mask = occupancy.sector(v);
+                sector_unread = false;
             }
             if entered >= 3 {
+                if sector_unread {
+                    tally.load();
+                    sector_mask = occupancy.sector(v);
+                    sector_unread = false;
+                }
                 if let Some(cell) = empty_child_cell(sector_mask, v, BRICK_SHIFT, positive) {
                     break 'empty cell;
                 }
