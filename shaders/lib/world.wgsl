@@ -5,11 +5,12 @@
 
 // WorldInfo in src/render/gpu_types.rs.
 struct WorldInfo {
-    // World size in voxels, the number of moving objects, world size in bricks.
+    // World size in voxels, the number of moving objects, world size in bricks, where the pool slots' voxel masks
+    // start in `occupancy` (8 a slot: one per 4^3 quadrant of the brick).
     size: vec3<i32>,
     object_count: u32,
     bricks: vec3<i32>,
-    _pad: u32,
+    voxel_mask_base: u32,
     // Sector grid size (4^3 bricks) and region grid size (4^3 sectors), and where their masks start in
     // `occupancy`.
     sectors: vec3<i32>,

@@ -28,8 +28,9 @@ impl GenerateArgs {
         let (world, report) = generate_world(self.seed, self.size).map_err(|e| e.to_string())?;
         let seconds = start.elapsed().as_secs_f64();
         let grid = &world.grid;
-        let bytes =
-            grid.top_cells().len() * 4 + grid.pool_capacity() as usize * 1024 + grid.occupancy().masks().len() * 8;
+        let bytes = grid.top_cells().len() * 4
+            + grid.pool_capacity() as usize * 1024
+            + (grid.occupancy().masks().len() + grid.voxel_masks().len()) * 8;
         println!(
             "generated {}x{}x{} (seed {}) in {seconds:.2} s on {} threads: {} trees, {} houses, {} crystal voxels",
             self.size.x,

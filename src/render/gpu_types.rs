@@ -20,7 +20,8 @@ pub struct WorldInfo {
     pub object_count: u32,
     /// World size in bricks.
     pub bricks: [i32; 3],
-    pub _pad: u32,
+    /// Where the pool slots' voxel masks start in the occupancy buffer (`VOXEL_MASK_WORDS` a slot).
+    pub voxel_mask_base: u32,
     /// Sector grid size (4^3 bricks each) and where the sector masks start in the occupancy buffer.
     pub sectors: [i32; 3],
     pub sector_base: u32,

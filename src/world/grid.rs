@@ -5,7 +5,7 @@
 //! - `1..=0xFFFF`: homogeneous brick of that material id,
 //! - `POOLED_FLAG | slot`: the brick's 512 voxels live in pool slot `slot`.
 
-use super::occupancy::{self, Occupancy, SOLID_BRICK};
+use super::occupancy::{self, Occupancy, SOLID_BRICK, VOXEL_MASK_WORDS};
 use bevy::math::{IVec3, UVec3};
 use std::collections::BTreeSet;
 
@@ -62,6 +62,9 @@ pub struct BrickGrid {
     top: Vec<u32>,
     /// Dense bricks, `BRICK_VOXELS` voxels per slot, local index `x + 8 * (y + 8 * z)`.
     pool: Vec<Voxel>,
+    /// Per pool slot, which of its voxels are solid (`occupancy::voxel_word_bit`), `VOXEL_MASK_WORDS` words a
+    /// slot: a ray tests a voxel here and reads its material only when it is solid.
+    voxel_masks: Vec<u64>,
     /// Pool slots no brick uses.
     free_slots: Vec<u32>,
     /// Brick indices whose top cell or pooled voxels changed since the last `take_dirty`.
@@ -107,6 +110,7 @@ impl BrickGrid {
             bricks,
             top: vec![0; cells],
             pool: Vec::new(),
+            voxel_masks: Vec::new(),
             free_slots: Vec::new(),
             dirty: BTreeSet::new(),
             occupancy: Occupancy::new(bricks),
@@ -184,6 +188,17 @@ impl BrickGrid {
     pub fn pool_brick(&self, slot: u32) -> &[Voxel] {
         let start = slot as usize * BRICK_VOXELS;
         &self.pool[start..start + BRICK_VOXELS]
+    }
+
+    /// The voxel mask of pool slot `slot` (`occupancy::voxel_word_bit`).
+    pub fn voxel_mask(&self, slot: u32) -> &[u64] {
+        let start = slot as usize * VOXEL_MASK_WORDS;
+        &self.voxel_masks[start..start + VOXEL_MASK_WORDS]
+    }
+
+    /// Every slot's voxel mask (free ones too), for GPU upload.
+    pub fn voxel_masks(&self) -> &[u64] {
+        &self.voxel_masks
     }
 
     /// Number of pool slots allocated (used or free).
@@ -380,7 +395,12 @@ impl BrickGrid {
         let mask = match BrickCell::decode(self.top[index]) {
             BrickCell::Empty => 0,
             BrickCell::Homogeneous(_) => SOLID_BRICK,
-            BrickCell::Pooled(slot) => occupancy::brick_cells(self.pool_brick(slot)),
+            BrickCell::Pooled(slot) => {
+                let words = occupancy::brick_voxel_mask(self.pool_brick(slot));
+                let start = slot as usize * VOXEL_MASK_WORDS;
+                self.voxel_masks[start..start + VOXEL_MASK_WORDS].copy_from_slice(&words);
+                occupancy::brick_cells(self.pool_brick(slot))
+            }
         };
         let b = self.brick_coord(index as u32);
         self.occupancy.set_brick(index, b, mask);
@@ -392,6 +412,13 @@ impl BrickGrid {
         let BrickCell::Pooled(slot) = BrickCell::decode(self.top[index]) else {
             return self.update_occupancy(index);
         };
+        let (word, voxel_bit) = occupancy::voxel_word_bit(local);
+        let word = &mut self.voxel_masks[slot as usize * VOXEL_MASK_WORDS + word];
+        if self.pool[slot as usize * BRICK_VOXELS + local_index(local)] == AIR {
+            *word &= !(1 << voxel_bit);
+        } else {
+            *word |= 1 << voxel_bit;
+        }
         let old = self.occupancy.brick(index);
         let voxels = self.pool_brick(slot);
         let bit = 1u64 << occupancy::child_bit(local, 1);
@@ -413,11 +440,14 @@ impl BrickGrid {
             Some(slot) => slot,
             None => {
                 self.pool.resize(self.pool.len() + BRICK_VOXELS, AIR);
+                self.voxel_masks.resize(self.voxel_masks.len() + VOXEL_MASK_WORDS, 0);
                 self.pool_capacity() - 1
             }
         };
         let base = slot as usize * BRICK_VOXELS;
         self.pool[base..base + BRICK_VOXELS].fill(voxel);
+        let words = slot as usize * VOXEL_MASK_WORDS;
+        self.voxel_masks[words..words + VOXEL_MASK_WORDS].fill(if voxel == AIR { 0 } else { u64::MAX });
         self.top[index] = BrickCell::Pooled(slot).encode();
         slot
     }

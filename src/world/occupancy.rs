@@ -9,7 +9,7 @@
 //! | 3     | 32        | a bit of its region's mask (64 sectors)                        |
 //! | 2     | 8 (brick) | a bit of its sector's mask (64 bricks)                         |
 //! | 1     | 2         | a bit of its pooled brick's mask (64 cells of 2^3 voxels)      |
-//! | 0     | 1 (voxel) | its material                                                   |
+//! | 0     | 1 (voxel) | a bit of its pooled brick's voxel mask (8 words of 64 voxels)  |
 //!
 //! A ray holds the masks of the cells it is inside in registers, so a step through empty space below a region
 //! costs no memory load at all. Any 2^3 or 3^3 box of a mask's children is a cell too (of 64 or 96, 16 or 24, 4 or
@@ -18,7 +18,8 @@
 //! `world::traversal` and `shaders/lib/traversal.wgsl` walk it the same way. Every mask is 64 bits, child
 //! `(x & 3) + 4 (y & 3) + 16 (z & 3)` of the child coordinates; the GPU reads them as `vec2<u32>` (low word
 //! first). Memory: 8 bytes per brick (its cell mask) and per sector and region, i.e. under 1% of a
-//! pooled brick's 1 KiB.
+//! pooled brick's 1 KiB; and the voxel mask of each pooled brick (`BrickGrid::voxel_mask`, 64 bytes: 6%), which
+//! lets a ray read a material only where it hits.
 //!
 //! Kept current by `BrickGrid` on every change of a brick: one edit touches one brick mask, one sector mask and one
 //! region mask, whatever the world's size.
@@ -79,6 +80,31 @@ pub fn brick_cells(voxels: &[Voxel]) -> u64 {
 fn cell_of_local(i: usize) -> u32 {
     let (x, y, z) = (i & 7, (i >> 3) & 7, i >> 6);
     ((x >> 1) + 4 * ((y >> 1) + 4 * (z >> 1))) as u32
+}
+
+/// Words of a pooled brick's voxel mask: one per 4^3 quadrant of the brick.
+pub const VOXEL_MASK_WORDS: usize = 8;
+
+/// The voxel mask word (the brick's 4^3 quadrant, `x + 2 (y + 2 z)`) and bit (`x + 4 (y + 4 z)` inside it) of
+/// local voxel `local`: the layout of every other mask, one level down, so a ray holds its quadrant's word as it
+/// holds a brick's cells.
+#[inline]
+pub fn voxel_word_bit(local: IVec3) -> (usize, u32) {
+    let q = local >> 2_i32;
+    ((q.x + 2 * (q.y + 2 * q.z)) as usize, child_bit(local, 0))
+}
+
+/// The solid voxels of one pooled brick (`voxel_word_bit`).
+pub fn brick_voxel_mask(voxels: &[Voxel]) -> [u64; VOXEL_MASK_WORDS] {
+    let mut words = [0u64; VOXEL_MASK_WORDS];
+    for (i, &v) in voxels.iter().enumerate().take(BRICK_VOXELS) {
+        if v != 0 {
+            let local = IVec3::new(i as i32 & 7, (i as i32 >> 3) & 7, i as i32 >> 6);
+            let (word, bit) = voxel_word_bit(local);
+            words[word] |= 1 << bit;
+        }
+    }
+    words
 }
 
 /// Whether the 2^3 cell holding local voxel `local` of a pooled brick has a solid voxel.
@@ -235,6 +261,19 @@ mod tests {
         assert_eq!(brick_cells(&voxels), 1 << 19);
         assert!(cell_solid(&voxels, IVec3::new(6, 1, 2)));
         assert!(!cell_solid(&voxels, IVec3::new(5, 1, 2)));
+    }
+
+    #[test]
+    fn the_voxel_mask_has_the_bit_of_each_solid_voxel() {
+        let mut voxels = vec![0u16; BRICK_VOXELS];
+        assert_eq!(brick_voxel_mask(&voxels), [0; VOXEL_MASK_WORDS]);
+        // Voxel (7, 0, 3): quadrant (1, 0, 0) = word 1, place (3, 0, 3) = bit 3 + 48.
+        voxels[7 + 8 * 8 * 3] = 5;
+        let mut expected = [0; VOXEL_MASK_WORDS];
+        expected[1] = 1 << 51;
+        assert_eq!(brick_voxel_mask(&voxels), expected);
+        assert_eq!(voxel_word_bit(IVec3::new(7, 0, 3)), (1, 51));
+        assert_eq!(voxel_word_bit(IVec3::new(4, 5, 6)), (7, 4 * 1 + 16 * 2));
     }
 
     #[test]

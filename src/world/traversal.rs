@@ -1,7 +1,8 @@
 //! CPU ray traversal, two ways to the same hits (Amanatides & Woo DDAs): `trace`, over bricks then the voxels of
 //! pooled bricks, one load per step; and `trace_occupancy`, over the occupancy hierarchy of the brick grid
 //! (`world::occupancy`), leaving in one step the coarsest empty cell of 128 down to 2 voxels its masks prove empty,
-//! and reading voxels only inside occupied 2^3 cells. `shaders/lib/traversal.wgsl` mirrors both step for step (the `traversal` setting picks), so the GPU and
+//! testing voxels only inside occupied 2^3 cells, mostly through bits of a voxel mask.
+//! `shaders/lib/traversal.wgsl` mirrors both step for step (the `traversal` setting picks), so the GPU and
 //! CPU agree per pixel; keep them in sync.
 //!
 //! Conventions shared by both: `t` is distance along the unit direction; every boundary crossing is computed as
@@ -9,7 +10,9 @@
 //! hit face is the face the ray entered through; a ray starting inside a solid voxel hits it at `t = 0`.
 
 use super::grid::{BRICK_SIZE, BrickCell, BrickGrid, Voxel, local_index};
-use super::occupancy::{BRICK_SHIFT, CELL_BOX_LEVEL, CELL_SHIFT, SECTOR_SHIFT, TOP_WALK_LEVEL, WALK_LEVELS, has_child};
+use super::occupancy::{
+    BRICK_SHIFT, CELL_BOX_LEVEL, CELL_SHIFT, SECTOR_SHIFT, TOP_WALK_LEVEL, WALK_LEVELS, has_child, voxel_word_bit,
+};
 use bevy::math::{IVec3, Vec3};
 
 /// Secondary rays start this far off the surface they leave (the GPU passes use the same, as
@@ -194,9 +197,11 @@ pub fn trace_occupancy(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option
 /// 2^3 cells, a 2^3 cell, a voxel; a box is the 3^3 or else the 2^3 children of a mask reaching ahead of the ray's
 /// own child, else its aligned 2^3 group; below a region every test is a bit test of a mask the ray holds) and
 /// leaves that cell through its nearest face. A mask is loaded only when the ray enters a new region, sector or
-/// pooled brick; a brick's top cell only when a voxel of it must be read. Rays start and end in the box of
-/// occupied bricks (`BrickGrid::occupied_box`). Every face is a voxel boundary computed as in the plain DDA, and ties go to the first axis, so the
-/// hits are the DDA's save where a ray grazes an edge within rounding of `origin + dir * t`.
+/// pooled brick (a ray that starts in an occupied brick reads its brick's mask first and the coarser ones only when
+/// it leaves it); a brick's top cell only when a voxel of it must be tested; in each 4^3 quadrant of a brick, the
+/// first voxel tested, then the quadrant's word of the voxel mask, then a material only at the hit. Rays start and end in the box of occupied bricks
+/// (`BrickGrid::occupied_box`). Every face is a voxel boundary computed as in the plain DDA, and ties go to the
+/// first axis, so the hits are the DDA's save where a ray grazes an edge within rounding of `origin + dir * t`.
 pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
     let size = grid.size().as_ivec3();
     // Nothing solid lies outside the occupied box: a ray starts where it enters it and misses where it leaves.
@@ -212,8 +217,10 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
     // The masks of the region and sector the ray is in, valid from the level at which they were last loaded down;
     // `entered`: the coarsest walk level whose cell the last move changed (its masks and those below are stale).
     let (mut region_mask, mut sector_mask) = (0u64, 0u64);
-    // The pool slot of the brick the ray is in, once read.
+    // The pool slot of the brick the ray is in, once read; the word of its voxel mask the ray holds (its
+    // quadrant, `NO_QUADRANT` before one is read) and the quadrant whose first voxel it read.
     let mut slot = None::<u32>;
+    let (mut quadrant, mut quadrant_mask, mut probed) = (NO_QUADRANT, 0u64, NO_QUADRANT);
     // A ray that starts in an occupied brick (as one leaving a surface does) reads that brick's mask first: it
     // needs its sector's and region's masks only once it leaves the brick (`*_unread` until then).
     tally.load();
@@ -262,6 +269,7 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
                 brick = grid.brick_index(v >> BRICK_SHIFT);
                 brick_mask = occupancy.brick(brick);
                 slot = None;
+                (quadrant, probed) = (NO_QUADRANT, NO_QUADRANT);
             }
             if let Some(cell) = empty_child_cell(brick_mask, v, CELL_SHIFT, positive) {
                 break 'empty cell;
@@ -287,14 +295,38 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
                 }
             };
             slot = Some(s);
-            // Inside an occupied 2^3 cell the masks tell nothing more: a plain voxel DDA until the ray leaves it
-            // (at most 4 voxels), the moves the walk would make one loop step each, without its mask tests.
-            let voxels = grid.pool_brick(s);
+            // Inside an occupied 2^3 cell: a plain voxel DDA until the ray leaves the cell (at most 4 voxels), the
+            // moves the walk would make one loop step each. The first voxel tested in a 4^3 quadrant of the brick
+            // is read (often the hit); past it the quadrant's word of the voxel mask is loaded, so the voxels
+            // after it are bit tests and a material is read only at the hit.
+            let (voxel_mask, voxels) = (grid.voxel_mask(s), grid.pool_brick(s));
             loop {
-                tally.load();
-                let material = voxels[local_index(v & 7_i32)];
+                let local = v & 7_i32;
+                let (word, bit) = voxel_word_bit(local);
                 tally.step(0);
-                if material != 0 {
+                let solid = if word == quadrant {
+                    has_child(quadrant_mask, bit)
+                } else if word == probed {
+                    tally.load();
+                    (quadrant, quadrant_mask) = (word, voxel_mask[word]);
+                    has_child(quadrant_mask, bit)
+                } else {
+                    probed = word;
+                    tally.load();
+                    let material = voxels[local_index(local)];
+                    if material != 0 {
+                        return Some(Hit {
+                            voxel: v,
+                            face: Face::entered(axis, positive[axis]),
+                            distance: t,
+                            material,
+                        });
+                    }
+                    false
+                };
+                if solid {
+                    tally.load();
+                    let material = voxels[local_index(local)];
                     return Some(Hit { voxel: v, face: Face::entered(axis, positive[axis]), distance: t, material });
                 }
                 let voxel = v;
@@ -309,6 +341,9 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
     }
     None
 }
+
+/// No voxel mask word held yet (`occupancy::voxel_word_bit` gives 0..8).
+const NO_QUADRANT: usize = usize::MAX;
 
 /// What a ray needs to leave a cell: its parameters, where it ends, and the box it walks in.
 struct CellExit<'a> {

@@ -145,6 +145,7 @@ fn twins() -> Vec<Twin> {
                 size,
                 object_count,
                 bricks,
+                voxel_mask_base,
                 sectors,
                 sector_base,
                 regions,

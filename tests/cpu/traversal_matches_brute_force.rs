@@ -3,7 +3,7 @@
 
 use bevy::math::{IVec3, UVec3, Vec3};
 use glowbrick::world::grid::{BrickCell, BrickGrid};
-use glowbrick::world::occupancy::{SOLID_BRICK, brick_cells};
+use glowbrick::world::occupancy::{SOLID_BRICK, brick_cells, brick_voxel_mask};
 use glowbrick::world::terrain::hash_u32;
 use glowbrick::world::traversal::{
     Counts, Face, Ray, trace, trace_brute_force, trace_counted, trace_occupancy, trace_occupancy_counted,
@@ -238,7 +238,8 @@ fn occupancy_traversal_loads_fewer_words_than_the_plain_dda() {
     assert!(fast.steps * 5 < plain.steps * 2, "steps: occupancy {} plain {}", fast.steps, plain.steps);
 }
 
-/// After every kind of edit, each mask of the hierarchy is what a rebuild from the voxels gives.
+/// After every kind of edit, each mask of the hierarchy (a pooled brick's voxel mask too) is what a rebuild from the
+/// voxels gives.
 #[test]
 fn occupancy_masks_follow_every_kind_of_edit() {
     let mut rng = Rng(4242);
@@ -287,7 +288,11 @@ fn assert_masks_rebuilt(grid: &BrickGrid, round: usize) {
                 let expected = match grid.cell(b) {
                     BrickCell::Empty => 0,
                     BrickCell::Homogeneous(_) => SOLID_BRICK,
-                    BrickCell::Pooled(_) => brick_cells(&grid.brick_voxels(b)),
+                    BrickCell::Pooled(slot) => {
+                        let voxels = grid.brick_voxels(b);
+                        assert_eq!(grid.voxel_mask(slot), brick_voxel_mask(&voxels), "round {round} voxels of {b}");
+                        brick_cells(&voxels)
+                    }
                 };
                 assert_eq!(occupancy.brick(grid.brick_index(b)), expected, "round {round} brick {b}");
                 let bit = (b.x & 3) + 4 * ((b.y & 3) + 4 * (b.z & 3));

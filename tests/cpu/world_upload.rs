@@ -23,7 +23,7 @@ fn first_frame_is_full_then_only_dirty_bricks() {
     // Nothing changed: nothing to send.
     app.update();
     assert!(app.world().resource::<WorldUpload>().is_empty());
-    // One placed voxel in an empty brick: one top cell, one pooled brick and its masks.
+    // One placed voxel: one top cell, one pooled brick and its masks.
     app.world_mut().resource_mut::<VoxelWorld>().apply(Edit::Place { at: IVec3::new(9, 9, 9), material: 1 }).unwrap();
     app.update();
     let upload = app.world().resource::<WorldUpload>().clone();
@@ -32,9 +32,15 @@ fn first_frame_is_full_then_only_dirty_bricks() {
     assert_eq!(upload.top_cells.iter().map(|c| c.0).collect::<Vec<_>>(), vec![brick]);
     assert_eq!(upload.bricks.len(), 1);
     assert_eq!(upload.bricks[0].1[1 + 8 * (1 + 8)], 1, "the placed voxel is in the uploaded brick");
-    // The top cell, the brick's voxels, and the occupancy masks of the brick, its sector and its region.
-    assert_eq!(upload.occupancy.len(), 3);
-    assert_eq!(upload.bytes(), 4 + 1024 + 3 * 8);
+    // The top cell, the brick's voxels, and the occupancy masks of the brick, its sector and its region, then the
+    // 8 words of the brick's voxel mask, the grid's: the voxel's local (1, 1, 1) is bit 1 + 4 + 16 of its first
+    // quadrant.
+    assert_eq!(upload.occupancy.len(), 3 + 8);
+    assert_eq!(upload.bytes(), 4 + 1024 + 11 * 8);
+    let voxel_words: Vec<u64> = upload.occupancy[3..].iter().map(|&(_, w)| w).collect();
+    assert_eq!(voxel_words, app.world().resource::<VoxelWorld>().grid.voxel_mask(upload.bricks[0].0));
+    assert_ne!(voxel_words[0] & 1 << 21, 0, "the placed voxel is in the uploaded voxel mask");
+    assert_eq!(upload.occupancy[3].0 + 7, upload.occupancy[10].0, "a slot's words are consecutive");
     // A whole-brick fill uploads the top cell only (the brick is homogeneous, not pooled).
     app.world_mut()
         .resource_mut::<VoxelWorld>()

@@ -44,13 +44,14 @@ pub fn gpu_world_follows_edits() {
         renderer.app_mut().world_mut().write_message(EditRequest::player(edit));
     }
     // The frame that applies the edits uploads only the five dirty bricks (x + 4 * (y + 2 * z) = 8, 9, 10, 12,
-    // 13): their top cells, pooled voxels and occupancy masks, and the masks of the one sector and region above.
+    // 13): their top cells, pooled voxels, voxel masks and occupancy masks, and the masks of the one sector and
+    // region above.
     renderer.step();
     let staged = renderer.app_mut().world().resource::<WorldUpload>().clone();
     let uploaded = renderer.app_mut().sub_app(RenderApp).world().resource::<GpuWorld>().uploaded_bytes;
     assert!(staged.full.is_none() && staged.top_cells.len() == 5, "bricks touched: {:?}", staged.top_cells);
     assert_eq!(uploaded, staged.bytes());
-    assert!(uploaded <= 5 * (4 + 1024 + 8) + 2 * 8, "{uploaded} bytes for five bricks");
+    assert!(uploaded <= 5 * (4 + 1024 + 64 + 8) + 2 * 8, "{uploaded} bytes for five bricks");
     let image = renderer.render(1).unwrap();
     let world = renderer.app_mut().world().resource::<VoxelWorld>().clone();
     let c = compare_hits(&world, &view, &image);

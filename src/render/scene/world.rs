@@ -8,6 +8,7 @@ use super::objects::GpuObjects;
 use super::staging::{Fit, Staging, upload};
 use crate::render::gpu_types::{GpuMaterial, WorldInfo};
 use crate::world::grid::{BRICK_VOXELS, BrickCell, Voxel};
+use crate::world::occupancy::VOXEL_MASK_WORDS;
 use crate::world::{Palette, VoxelWorld};
 use bevy::prelude::*;
 use bevy::render::render_asset::RenderAssets;
@@ -58,10 +59,13 @@ pub struct FullWorld {
     pub size: UVec3,
     pub brick_dims: UVec3,
     pub top_cells: Arc<Vec<u32>>,
-    /// The occupancy masks (`world::occupancy`): bricks, then sectors, then regions.
+    /// The occupancy masks (`world::occupancy`): bricks, then sectors, then regions, then the voxel masks of
+    /// `pool_slots` pool slots (`VOXEL_MASK_WORDS` each).
     pub occupancy: Arc<Vec<u64>>,
-    /// Where the sector and region masks start in `occupancy`, and their grid sizes.
+    /// Where the sector masks, the region masks and the voxel masks start in `occupancy`, and the first two's grid
+    /// sizes.
     pub occupancy_bases: (usize, usize),
+    pub voxel_mask_base: usize,
     pub sector_dims: UVec3,
     pub region_dims: UVec3,
     /// The voxels `[lo, hi)` that may hold a solid one (`BrickGrid::occupied_box`).
@@ -138,12 +142,18 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
         let pool_slots = gpu_pool_slots(needed_slots);
         let mut pool = grid.pool().to_vec();
         pool.resize(pool_slots as usize * BRICK_VOXELS, 0);
+        let masks = grid.occupancy().masks();
+        let mut occupancy = Vec::with_capacity(masks.len() + pool_slots as usize * VOXEL_MASK_WORDS);
+        occupancy.extend_from_slice(masks);
+        occupancy.extend_from_slice(grid.voxel_masks());
+        occupancy.resize(masks.len() + pool_slots as usize * VOXEL_MASK_WORDS, 0);
         upload.full = Some(Arc::new(FullWorld {
             size: grid.size(),
             brick_dims: grid.brick_dims(),
             top_cells: Arc::new(grid.top_cells().to_vec()),
-            occupancy: Arc::new(grid.occupancy().masks().to_vec()),
+            occupancy: Arc::new(occupancy),
             occupancy_bases: grid.occupancy().bases(),
+            voxel_mask_base: grid.occupancy().masks().len(),
             sector_dims: grid.occupancy().sector_dims(),
             region_dims: grid.occupancy().region_dims(),
             occupied: grid.occupied_box(),
@@ -155,16 +165,20 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
     } else if !world.grid.dirty().is_empty() {
         let grid = &mut world.grid;
         let mut masks = std::collections::BTreeSet::new();
+        let mut voxel_masks = Vec::new();
+        let voxel_mask_base = grid.occupancy().masks().len();
         for index in grid.take_dirty() {
             let raw = grid.top_cells()[index as usize];
             upload.top_cells.push((index, raw));
             masks.extend(grid.occupancy().indices_of_brick(index as usize, grid.brick_coord(index)));
             if let BrickCell::Pooled(slot) = BrickCell::decode(raw) {
                 upload.bricks.push((slot, Arc::from(grid.pool_brick(slot))));
+                let first = voxel_mask_base + slot as usize * VOXEL_MASK_WORDS;
+                voxel_masks.extend(grid.voxel_mask(slot).iter().enumerate().map(|(k, &w)| ((first + k) as u32, w)));
             }
         }
         let all = grid.occupancy().masks();
-        upload.occupancy = masks.into_iter().map(|i| (i as u32, all[i])).collect();
+        upload.occupancy = masks.into_iter().map(|i| (i as u32, all[i])).chain(voxel_masks).collect();
         upload.occupied = Some(grid.occupied_box());
     }
     if replaced || state.palette.as_ref() != Some(&world.palette) {
@@ -353,7 +367,7 @@ fn world_info(full: &FullWorld, object_count: u32) -> WorldInfo {
         size: full.size.as_ivec3().to_array(),
         object_count,
         bricks: full.brick_dims.as_ivec3().to_array(),
-        _pad: 0,
+        voxel_mask_base: full.voxel_mask_base as u32,
         sectors: full.sector_dims.as_ivec3().to_array(),
         sector_base: full.occupancy_bases.0 as u32,
         regions: full.region_dims.as_ivec3().to_array(),
@@ -523,8 +537,18 @@ mod tests {
             let top_cells = self.top_cells.as_ref().expect("top cells");
             assert_eq!(top_cells.as_slice(), bytemuck::cast_slice::<u32, u8>(world.grid.top_cells()), "{order:?}");
             let occupancy = self.occupancy.as_ref().expect("occupancy");
-            let expected: &[u8] = bytemuck::cast_slice(world.grid.occupancy().masks());
-            assert_eq!(occupancy.as_slice(), expected, "occupancy after {order:?}");
+            let masks = world.grid.occupancy().masks();
+            let expected: &[u8] = bytemuck::cast_slice(masks);
+            assert_eq!(&occupancy[..expected.len()], expected, "occupancy after {order:?}");
+            // The voxel masks of the slots in use (a free slot's is never read).
+            for &raw in world.grid.top_cells() {
+                if let BrickCell::Pooled(slot) = BrickCell::decode(raw) {
+                    let first = (masks.len() + slot as usize * VOXEL_MASK_WORDS) * 8;
+                    let expected: &[u8] = bytemuck::cast_slice(world.grid.voxel_mask(slot));
+                    let held = &occupancy[first..first + expected.len()];
+                    assert_eq!(held, expected, "voxel mask of slot {slot} after {order:?}");
+                }
+            }
             let pool = self.pool.as_ref().expect("pool");
             let expected = voxel_bytes(world.grid.pool());
             assert_eq!(&pool[..expected.len()], expected, "pool after {order:?}");
