@@ -273,7 +273,8 @@ mod tests {
         expected[1] = 1 << 51;
         assert_eq!(brick_voxel_mask(&voxels), expected);
         assert_eq!(voxel_word_bit(IVec3::new(7, 0, 3)), (1, 51));
-        assert_eq!(voxel_word_bit(IVec3::new(4, 5, 6)), (7, 4 * 1 + 16 * 2));
+        // Voxel (4, 5, 6): quadrant (1, 1, 1) = word 7, place (0, 1, 2) = bit 4 + 32.
+        assert_eq!(voxel_word_bit(IVec3::new(4, 5, 6)), (7, 4 + 32));
     }
 
     #[test]
