@@ -178,10 +178,30 @@ impl Scene<'_> {
         rng: &mut Pcg,
         rays: &mut u64,
     ) -> Vec3 {
+        self.direct_sample_near(p, n, albedo, candidates, &self.neighbourhood(p, candidates), rng, rays)
+    }
+
+    /// The lights near `p` that `candidates` resampled candidates draw from (none for plain NEE): the same for
+    /// every sample at `p`, so a pixel's samples share one look-up.
+    pub fn neighbourhood(&self, p: Vec3, candidates: u32) -> Neighbourhood<'_> {
+        if candidates <= 1 { Neighbourhood::EMPTY } else { self.nearby.around(p) }
+    }
+
+    /// `direct_sample` with the lights near `p` already looked up (`neighbourhood`).
+    #[allow(clippy::too_many_arguments)]
+    fn direct_sample_near(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        albedo: [f32; 3],
+        candidates: u32,
+        around: &Neighbourhood,
+        rng: &mut Pcg,
+        rays: &mut u64,
+    ) -> Vec3 {
         let candidates = candidates.max(1);
         // One candidate is plain next-event estimation, the GPU's NEE: a light by power, a uniform point on a face.
         let plain = candidates == 1;
-        let around = if plain { Neighbourhood::EMPTY } else { self.nearby.around(p) };
         let mut chosen: Option<Candidate> = None;
         let mut weight_sum = 0.0f32;
         for _ in 0..candidates {
@@ -189,7 +209,7 @@ impl Scene<'_> {
             let r_column = rng.next_u32();
             let u = [rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32(), rng.next_f32()];
             let u_choose = rng.next_f32();
-            let Some((candidate, pdf)) = self.candidate(p, n, &around, !plain, r_column, u) else { continue };
+            let Some((candidate, pdf)) = self.candidate(p, n, around, !plain, r_column, u) else { continue };
             let weight = candidate.target / pdf;
             if !(weight.is_finite() && weight > 0.0) {
                 continue;
@@ -295,11 +315,29 @@ impl Scene<'_> {
 
     /// One path sample of the radiance leaving the camera hit `first` towards the camera.
     pub fn path_sample(&self, first: &SurfaceHit, options: &ReferenceOptions, rng: &mut Pcg, rays: &mut u64) -> Vec3 {
+        let around = self.neighbourhood(first.position, options.candidates);
+        self.path_sample_near(first, &around, options, rng, rays)
+    }
+
+    /// `path_sample` with the lights near the camera hit already looked up (`neighbourhood`).
+    pub fn path_sample_near(
+        &self,
+        first: &SurfaceHit,
+        first_around: &Neighbourhood,
+        options: &ReferenceOptions,
+        rng: &mut Pcg,
+        rays: &mut u64,
+    ) -> Vec3 {
         let mut radiance = first.emission;
         let mut throughput = Vec3::ONE;
         let (mut p, mut n, mut albedo) = (first.position, first.normal, first.albedo);
         for bounce in 0..=options.bounces {
-            radiance += throughput * self.direct_sample(p, n, albedo, options.candidates, rng, rays);
+            let direct = if bounce == 0 {
+                self.direct_sample_near(p, n, albedo, options.candidates, first_around, rng, rays)
+            } else {
+                self.direct_sample(p, n, albedo, options.candidates, rng, rays)
+            };
+            radiance += throughput * direct;
             if let Some(day) = &options.daylight {
                 radiance += throughput * self.disk_sample(day, p, n, albedo, rng, rays);
             }
@@ -412,9 +450,11 @@ pub fn render_reference(
                     // The full image's pixel index keys the random stream, so a lattice pixel draws its samples.
                     let at = full_pixel(x as u32, y as u32);
                     let pixel = at.y as u64 * w as u64 + at.x as u64;
+                    // The lights near the hit, looked up once for the batch's samples.
+                    let around = scene.neighbourhood(hit.position, options.candidates);
                     for s in done..done + batch {
                         let mut rng = Pcg::new(options.seed, pixel * 0x1_0000_0000 + s as u64);
-                        *acc += scene.path_sample(hit, options, &mut rng, &mut row_rays);
+                        *acc += scene.path_sample_near(hit, &around, options, &mut rng, &mut row_rays);
                     }
                 }
                 progress.advance(batch as u64);
