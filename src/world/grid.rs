@@ -399,15 +399,15 @@ impl BrickGrid {
                 let words = occupancy::brick_voxel_mask(self.pool_brick(slot));
                 let start = slot as usize * VOXEL_MASK_WORDS;
                 self.voxel_masks[start..start + VOXEL_MASK_WORDS].copy_from_slice(&words);
-                occupancy::brick_cells(self.pool_brick(slot))
+                occupancy::cells_of_voxel_mask(&words)
             }
         };
         let b = self.brick_coord(index as u32);
         self.occupancy.set_brick(index, b, mask);
     }
 
-    /// Updates brick `index`'s occupancy after one voxel (`local` inside it) changed: only that voxel's 2^3 cell
-    /// is looked at, so a voxel edit stays 8 reads whatever the brick holds.
+    /// Updates brick `index`'s occupancy after one voxel (`local` inside it) changed: one bit of its voxel mask,
+    /// then its cells from that mask, so a voxel edit stays a few words whatever the brick holds.
     fn update_cell_occupancy(&mut self, index: usize, local: IVec3) {
         let BrickCell::Pooled(slot) = BrickCell::decode(self.top[index]) else {
             return self.update_occupancy(index);
@@ -419,17 +419,7 @@ impl BrickGrid {
         } else {
             *word |= 1 << voxel_bit;
         }
-        let old = self.occupancy.brick(index);
-        let voxels = self.pool_brick(slot);
-        let bit = 1u64 << occupancy::child_bit(local, 1);
-        let mask = if old == SOLID_BRICK {
-            // A brick just expanded from a homogeneous one still carries that one's mask.
-            occupancy::brick_cells(voxels)
-        } else if occupancy::cell_solid(voxels, local) {
-            old | bit
-        } else {
-            old & !bit
-        };
+        let mask = occupancy::cells_of_voxel_mask(self.voxel_mask(slot));
         let b = self.brick_coord(index as u32);
         self.occupancy.set_brick(index, b, mask);
     }

@@ -107,13 +107,38 @@ pub fn brick_voxel_mask(voxels: &[Voxel]) -> [u64; VOXEL_MASK_WORDS] {
     words
 }
 
-/// Whether the 2^3 cell holding local voxel `local` of a pooled brick has a solid voxel.
-pub fn cell_solid(voxels: &[Voxel], local: IVec3) -> bool {
-    let base = local & !1;
-    (0..8).any(|k| {
-        let p = base + IVec3::new(k & 1, (k >> 1) & 1, k >> 2);
-        voxels[(p.x + BRICK_SIZE * (p.y + BRICK_SIZE * p.z)) as usize] != 0
-    })
+/// The 2^3 cells of a pooled brick (`brick_cells`) that hold a solid voxel of its voxel mask: each quadrant's word
+/// holds 2^3 of them, each a box of 2^3 places (`box_bits`).
+pub fn cells_of_voxel_mask(words: &[u64]) -> u64 {
+    let mut cells = 0u64;
+    for (q, &word) in words.iter().enumerate().take(VOXEL_MASK_WORDS) {
+        let quadrant = IVec3::new(q as i32 & 1, (q as i32 >> 1) & 1, q as i32 >> 2) * 2;
+        for c in 0..8 {
+            let cell = IVec3::new(c & 1, (c >> 1) & 1, c >> 2);
+            if word & box_bits(cell * 2) != 0 {
+                let at = quadrant + cell;
+                cells |= 1 << (at.x + 4 * (at.y + 4 * at.z));
+            }
+        }
+    }
+    cells
+}
+
+/// The bits of a 4^3 child mask (child `x + 4 y + 16 z`) of the 2^3 children whose lowest is `corner` (each
+/// coordinate 0..=2).
+#[inline(always)]
+pub fn box_bits(corner: IVec3) -> u64 {
+    // Children (0|1, 0|1, 0|1): bits 0, 1, 4, 5, 16, 17, 20, 21.
+    const BOX: u64 = 0x0033_0033;
+    BOX << (corner.x + 4 * corner.y + 16 * corner.z)
+}
+
+/// The bits of the 3^3 children whose lowest is `corner` (each coordinate 0..=1).
+#[inline(always)]
+pub fn box3_bits(corner: IVec3) -> u64 {
+    // Children (0..3, 0..3, 0..3): rows of 0b111 at 0, 4, 8 in layers 0, 16, 32.
+    const BOX3: u64 = 0x0777_0777_0777;
+    BOX3 << (corner.x + 4 * corner.y + 16 * corner.z)
 }
 
 /// Grid dimensions of `level` for a world of `bricks` bricks.
@@ -259,8 +284,11 @@ mod tests {
         // Voxel (7, 0, 3): cell (3, 0, 1) = bit 3 + 16.
         voxels[7 + 8 * 8 * 3] = 5;
         assert_eq!(brick_cells(&voxels), 1 << 19);
-        assert!(cell_solid(&voxels, IVec3::new(6, 1, 2)));
-        assert!(!cell_solid(&voxels, IVec3::new(5, 1, 2)));
+        // The same cell from the voxel mask: (6, 1, 2) shares it, (5, 1, 2) does not.
+        let cells = cells_of_voxel_mask(&brick_voxel_mask(&voxels));
+        assert_eq!(cells, brick_cells(&voxels));
+        assert!(has_child(cells, child_bit(IVec3::new(6, 1, 2), 1)));
+        assert!(!has_child(cells, child_bit(IVec3::new(5, 1, 2), 1)));
     }
 
     #[test]
@@ -275,6 +303,27 @@ mod tests {
         assert_eq!(voxel_word_bit(IVec3::new(7, 0, 3)), (1, 51));
         // Voxel (4, 5, 6): quadrant (1, 1, 1) = word 7, place (0, 1, 2) = bit 4 + 32.
         assert_eq!(voxel_word_bit(IVec3::new(4, 5, 6)), (7, 4 + 32));
+    }
+
+    /// The bits of a 4^3 child mask whose children lie in the cube of `edge` children from `corner`.
+    fn children_in_cube(corner: IVec3, edge: i32) -> u64 {
+        (0..64)
+            .filter(|bit| {
+                let child = IVec3::new(bit & 3, (bit >> 2) & 3, bit >> 4);
+                child.cmpge(corner).all() && child.cmplt(corner + edge).all()
+            })
+            .fold(0, |m, bit| m | 1 << bit)
+    }
+
+    /// A box's bits are those of the 8 (27) children from its corner to its corner + 1 (+ 2), wherever it lies.
+    #[test]
+    fn box_bits_are_the_children_of_the_box() {
+        for corner in [IVec3::new(0, 0, 0), IVec3::new(2, 0, 1), IVec3::new(1, 2, 2), IVec3::new(2, 2, 2)] {
+            assert_eq!(box_bits(corner), children_in_cube(corner, 2), "{corner}");
+        }
+        for corner in [IVec3::new(0, 0, 0), IVec3::new(1, 0, 1), IVec3::new(0, 1, 1), IVec3::new(1, 1, 1)] {
+            assert_eq!(box3_bits(corner), children_in_cube(corner, 3), "{corner}");
+        }
     }
 
     #[test]

@@ -9,9 +9,10 @@
 //! `(plane - origin) / dir` from the ray's own origin (never accumulated), so both sides round the same way; the
 //! hit face is the face the ray entered through; a ray starting inside a solid voxel hits it at `t = 0`.
 
-use super::grid::{BRICK_SIZE, BrickCell, BrickGrid, Voxel, local_index};
+use super::grid::{AIR, BRICK_SIZE, BrickCell, BrickGrid, Voxel, local_index};
 use super::occupancy::{
-    BRICK_SHIFT, CELL_BOX_LEVEL, CELL_SHIFT, SECTOR_SHIFT, TOP_WALK_LEVEL, WALK_LEVELS, has_child, voxel_word_bit,
+    BRICK_SHIFT, CELL_BOX_LEVEL, CELL_SHIFT, SECTOR_SHIFT, TOP_WALK_LEVEL, WALK_LEVELS, box_bits, box3_bits, has_child,
+    voxel_word_bit,
 };
 use bevy::math::{IVec3, Vec3};
 
@@ -199,8 +200,8 @@ pub fn trace_occupancy(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option
 /// leaves that cell through its nearest face. A mask is loaded only when the ray enters a new region, sector or
 /// pooled brick (a ray that starts in an occupied brick reads its brick's mask first and the coarser ones only when
 /// it leaves it); a brick's top cell only when a voxel of it must be tested; in each 4^3 quadrant of a brick, the
-/// first voxel tested, then the quadrant's word of the voxel mask, then a material only at the hit. Rays start and end in the box of occupied bricks
-/// (`BrickGrid::occupied_box`). Every face is a voxel boundary computed as in the plain DDA, and ties go to the
+/// first voxel tested, then the quadrant's word of the voxel mask, then a material only at the hit. Rays start
+/// and end in the box of occupied bricks (`BrickGrid::occupied_box`). Every face is a voxel boundary computed as in the plain DDA, and ties go to the
 /// first axis, so the hits are the DDA's save where a ray grazes an edge within rounding of `origin + dir * t`.
 pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
     let size = grid.size().as_ivec3();
@@ -304,29 +305,22 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
                 let local = v & 7_i32;
                 let (word, bit) = voxel_word_bit(local);
                 tally.step(0);
-                let solid = if word == quadrant {
-                    has_child(quadrant_mask, bit)
-                } else if word == probed {
-                    tally.load();
-                    (quadrant, quadrant_mask) = (word, voxel_mask[word]);
-                    has_child(quadrant_mask, bit)
+                let material = if word == quadrant || word == probed {
+                    if word != quadrant {
+                        tally.load();
+                        (quadrant, quadrant_mask) = (word, voxel_mask[word]);
+                    }
+                    let solid = has_child(quadrant_mask, bit);
+                    if solid {
+                        tally.load();
+                    }
+                    if solid { voxels[local_index(local)] } else { AIR }
                 } else {
                     probed = word;
                     tally.load();
-                    let material = voxels[local_index(local)];
-                    if material != 0 {
-                        return Some(Hit {
-                            voxel: v,
-                            face: Face::entered(axis, positive[axis]),
-                            distance: t,
-                            material,
-                        });
-                    }
-                    false
+                    voxels[local_index(local)]
                 };
-                if solid {
-                    tally.load();
-                    let material = voxels[local_index(local)];
+                if material != AIR {
                     return Some(Hit { voxel: v, face: Face::entered(axis, positive[axis]), distance: t, material });
                 }
                 let voxel = v;
@@ -417,23 +411,6 @@ fn empty_child_cell(m: u64, v: IVec3, child_shift: i32, positive: [bool; 3]) -> 
         return Some((child_shift as usize, v & !((1 << child_shift) - 1), 1 << child_shift));
     }
     None
-}
-
-/// The bits of a 4^3 child mask (child `x + 4 y + 16 z`) of the 2^3 children whose lowest is `corner` (each
-/// coordinate 0..=2).
-#[inline(always)]
-fn box_bits(corner: IVec3) -> u64 {
-    // Children (0|1, 0|1, 0|1): bits 0, 1, 4, 5, 16, 17, 20, 21.
-    const BOX: u64 = 0x0033_0033;
-    BOX << (corner.x + 4 * corner.y + 16 * corner.z)
-}
-
-/// The bits of the 3^3 children whose lowest is `corner` (each coordinate 0..=1).
-#[inline(always)]
-fn box3_bits(corner: IVec3) -> u64 {
-    // Children (0..3, 0..3, 0..3): rows of 0b111 at 0, 4, 8 in layers 0, 16, 32.
-    const BOX3: u64 = 0x0777_0777_0777;
-    BOX3 << (corner.x + 4 * corner.y + 16 * corner.z)
 }
 
 /// Finds the first solid voxel along `ray` within `max_distance`: the two-level DDA (bricks, skipping empty and
@@ -595,27 +572,6 @@ mod tests {
         for x in xs.into_iter().chain([f32::NAN, f32::INFINITY, f32::NEG_INFINITY]) {
             let p = Vec3::new(x, x + 0.5, -x);
             assert_eq!(voxel_at(p), p.floor().as_ivec3(), "{p}");
-        }
-    }
-
-    /// The bits of a 4^3 child mask whose children lie in the cube of `edge` children from `corner`.
-    fn children_in_cube(corner: IVec3, edge: i32) -> u64 {
-        (0..64)
-            .filter(|bit| {
-                let child = IVec3::new(bit & 3, (bit >> 2) & 3, bit >> 4);
-                child.cmpge(corner).all() && child.cmplt(corner + edge).all()
-            })
-            .fold(0, |m, bit| m | 1 << bit)
-    }
-
-    /// A box's bits are those of the 8 (27) children from its corner to its corner + 1 (+ 2), wherever it lies.
-    #[test]
-    fn box_bits_are_the_children_of_the_box() {
-        for corner in [IVec3::new(0, 0, 0), IVec3::new(2, 0, 1), IVec3::new(1, 2, 2), IVec3::new(2, 2, 2)] {
-            assert_eq!(box_bits(corner), children_in_cube(corner, 2), "{corner}");
-        }
-        for corner in [IVec3::new(0, 0, 0), IVec3::new(1, 0, 1), IVec3::new(0, 1, 1), IVec3::new(1, 1, 1)] {
-            assert_eq!(box3_bits(corner), children_in_cube(corner, 3), "{corner}");
         }
     }
 }

@@ -153,7 +153,7 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
             top_cells: Arc::new(grid.top_cells().to_vec()),
             occupancy: Arc::new(occupancy),
             occupancy_bases: grid.occupancy().bases(),
-            voxel_mask_base: grid.occupancy().masks().len(),
+            voxel_mask_base: masks.len(),
             sector_dims: grid.occupancy().sector_dims(),
             region_dims: grid.occupancy().region_dims(),
             occupied: grid.occupied_box(),
