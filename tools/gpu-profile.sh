@@ -5,7 +5,8 @@
 # default walk and GI cache (traversal=auto: the occupancy walk on a GPU), then with the plain DDA
 # (traversal=dda), then with the GI cache's cached static hits
 # (gi_cached_hits=on, seed 001's static/dynamic split), each in its own folder; SCENES picks cases by label
-# (default: all six). Commit what comes back under docs/bench/gpu-NAME/.
+# (default: all six). GPU_PROFILE_RUN_TIMEOUT (seconds, default none) bounds each of the three runs, so one that
+# hangs cannot take the others' device time. Commit what comes back under docs/bench/gpu-NAME/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out="${1:?usage: tools/gpu-profile.sh OUT [SIZES] [SCENES]}"
@@ -22,7 +23,7 @@ run() {
   local name="$1"
   shift
   local start=$SECONDS
-  "$pack/glowbrick" bench --frame --sizes "$sizes" "${scenes[@]}" "$@" --out "$out/$name" >"$out/$name.log" 2>&1 ||
+  timeout "${GPU_PROFILE_RUN_TIMEOUT:-0}" "$pack/glowbrick" bench --frame --sizes "$sizes" "${scenes[@]}" "$@" --out "$out/$name" >"$out/$name.log" 2>&1 ||
     echo "gpu-profile: $name failed (see $name.log)"
   echo "gpu-profile: $name in $((SECONDS - start)) s"
 }
