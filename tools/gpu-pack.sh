@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Packs what a lent GPU machine needs to run the benches into gpu-pack/ (ignored by git; pass it to the device
-# tool's `carry`): the stripped, xz-compressed release binary and Debian's Vulkan loader (the machine has the
+# tool's `carry`): the stripped, xz-compressed release binary and Debian's Vulkan loader and glvnd libraries (the machine has the
 # NVIDIA driver and its ICD but no loader, and no network). docs/bench/gpu-h200/README.md tells the rest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,8 +12,9 @@ strip -o gpu-pack/glowbrick "$target/release/glowbrick"
 xz -T0 gpu-pack/glowbrick
 (
   cd gpu-pack
-  apt-get download libvulkan1 >/dev/null
-  dpkg -x libvulkan1_*.deb vulkan
-  rm libvulkan1_*.deb
+  # The NVIDIA ICD (libGLX_nvidia) needs glvnd's GL libraries beside the loader.
+  apt-get download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2 >/dev/null
+  for deb in *.deb; do dpkg -x "$deb" vulkan; done
+  rm ./*.deb
 )
 du -sh gpu-pack

@@ -16,6 +16,9 @@ scenes=()
 pack="$PWD/gpu-pack"
 [ -x "$pack/glowbrick" ] || xz -dk "$pack/glowbrick.xz"
 export LD_LIBRARY_PATH="$pack/vulkan/usr/lib/x86_64-linux-gnu${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+# The loader does not look where the lent machine keeps the NVIDIA ICD.
+icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+[ -f "$icd" ] && export VK_DRIVER_FILES="${VK_DRIVER_FILES:-$icd}"
 export GLOWBRICK_ASSETS="$PWD/assets"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
 mkdir -p "$out"
