@@ -1,7 +1,7 @@
 // Voxel ReSTIR's shared pieces (seed 000, DESIGN.md "Voxel ReSTIR"): the reservoir, light samples in area
 // measure (a point on one face of a light's cube) or point measure (the cube's centre), the target function, the
-// visibility test and the resampling steps. The passes: initial.wgsl (candidates + temporal), spatial.wgsl,
-// shade.wgsl.
+// visibility test and the resampling steps. The passes: initial.wgsl (candidates), temporal.wgsl (their
+// visibility, temporal reuse), spatial.wgsl, shade.wgsl.
 #define_import_path glowbrick::restir::common
 
 #import glowbrick::world::{materials, voxel_at, albedo_at}
@@ -31,7 +31,7 @@ struct Reservoir {
     target_value: f32,
 }
 
-// Written by initial.wgsl (candidates + temporal), read by spatial.wgsl.
+// Written by initial.wgsl (candidates), then temporal.wgsl (visibility, temporal reuse); read by spatial.wgsl.
 @group(1) @binding(6) var<storage, read_write> reservoirs_temporal: array<Reservoir>;
 // Written by spatial.wgsl, read by shade.wgsl (which zeroes occluded samples) and next frame's temporal reuse.
 @group(1) @binding(7) var<storage, read_write> reservoirs_final: array<Reservoir>;

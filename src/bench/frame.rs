@@ -272,10 +272,11 @@ pub fn run_frame_bench(config: &FrameConfig, quick: bool, out: &Path) -> Result<
 }
 
 /// The pass groups of the report's time table: a prefix of the pass names and its column.
-const GROUPS: [(&str, &str); 11] = [
+const GROUPS: [(&str, &str); 12] = [
     ("glowbrick_primary", "primary"),
     ("glowbrick_restir_tiles", "ReSTIR tiles"),
     ("glowbrick_restir_initial", "ReSTIR initial"),
+    ("glowbrick_restir_temporal", "ReSTIR temporal"),
     ("glowbrick_restir_spatial", "ReSTIR spatial"),
     ("glowbrick_restir_shade", "ReSTIR shade"),
     ("glowbrick_gi_compact", "GI lists"),

@@ -346,14 +346,14 @@ pub fn view_frame(
     };
     // 1. G-buffer, GI cache entries touched; the image too unless ReSTIR shades it.
     recorder.dispatch(&primary::PRIMARY, primary_pipeline, size);
-    // 2-5. Voxel ReSTIR: the light tiles (when the candidates read them), candidates + temporal reuse, spatial
-    // reuse (when there are lights to sample), shading.
+    // 2-6. Voxel ReSTIR: the light tiles (when the candidates read them), candidates, their visibility and
+    // temporal reuse, spatial reuse (when there are lights to sample), shading.
     for (pass, pipeline) in restir::PASSES.iter().zip(restir.dispatched()) {
         if resources.restir.passes.dispatches(pass) {
             recorder.dispatch(pass, pipeline, size);
         }
     }
-    // 6-10. The denoiser: temporal accumulation, then the wavelet's iterations, the last writing the image.
+    // 7-11. The denoiser: temporal accumulation, then the wavelet's iterations, the last writing the image.
     for (pass, pipeline) in denoise::PASSES.iter().zip(denoise.dispatched()) {
         recorder.dispatch(pass, pipeline, size);
     }

@@ -265,7 +265,7 @@ pub enum GpuCounter {
     GiDirectTraced = 8,
     /// Brick-grid rays (walks of the world's DDA) the primary pass traced this frame.
     RaysPrimary = 9,
-    /// Brick-grid rays ReSTIR's candidates + temporal pass traced this frame.
+    /// Brick-grid rays ReSTIR's candidates' visibility and temporal pass (restir/temporal.wgsl) traced this frame.
     RaysRestirInitial = 10,
     /// Brick-grid rays ReSTIR's spatial pass traced this frame.
     RaysRestirSpatial = 11,

@@ -9,7 +9,7 @@ use bevy::prelude::*;
 use bevy::shader::Shader;
 
 /// Every shader file: its path under `shaders/` and its source. Libraries first (they only define imports).
-pub const SOURCES: [(&str, &str); 23] = [
+pub const SOURCES: [(&str, &str); 24] = [
     ("lib/constants.wgsl", include_str!("../../shaders/lib/constants.wgsl")),
     ("lib/random.wgsl", include_str!("../../shaders/lib/random.wgsl")),
     ("lib/guards.wgsl", include_str!("../../shaders/lib/guards.wgsl")),
@@ -25,6 +25,7 @@ pub const SOURCES: [(&str, &str); 23] = [
     ("primary.wgsl", include_str!("../../shaders/primary.wgsl")),
     ("restir/tiles.wgsl", include_str!("../../shaders/restir/tiles.wgsl")),
     ("restir/initial.wgsl", include_str!("../../shaders/restir/initial.wgsl")),
+    ("restir/temporal.wgsl", include_str!("../../shaders/restir/temporal.wgsl")),
     ("restir/spatial.wgsl", include_str!("../../shaders/restir/spatial.wgsl")),
     ("restir/shade.wgsl", include_str!("../../shaders/restir/shade.wgsl")),
     ("gi/compact.wgsl", include_str!("../../shaders/gi/compact.wgsl")),
