@@ -77,14 +77,14 @@ pub struct RaysRow {
     pub occupancy: Measure,
 }
 
-/// The rays of one kind.
-struct RaySet {
-    kind: &'static str,
-    rays: Vec<(Ray, f32)>,
+/// The rays of one kind, each with its largest distance.
+pub struct RaySet {
+    pub kind: &'static str,
+    pub rays: Vec<(Ray, f32)>,
 }
 
 /// The world of a case: `generated-WxHxD` is the default generator at that size.
-fn case_world(case: &RaysCase) -> Result<(VoxelWorld, CameraView), String> {
+pub fn case_world(case: &RaysCase) -> Result<(VoxelWorld, CameraView), String> {
     let world = match case.scene.strip_prefix("generated-") {
         Some(size) => {
             let dims: Vec<u32> = size.split('x').filter_map(|s| s.parse().ok()).collect();
@@ -102,7 +102,7 @@ fn case_world(case: &RaysCase) -> Result<(VoxelWorld, CameraView), String> {
 
 /// Primary rays through every pixel, and from each primary hit a shadow ray to a random emissive voxel (the sky
 /// direction in a world without one), a cosine diffuse ray and a sky ray.
-fn ray_sets(world: &VoxelWorld, view: &CameraView, config: &RaysConfig) -> Vec<RaySet> {
+pub fn ray_sets(world: &VoxelWorld, view: &CameraView, config: &RaysConfig) -> Vec<RaySet> {
     let (w, h) = (config.width, config.height);
     let transform = view_transform(view);
     let clip = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);

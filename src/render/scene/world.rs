@@ -362,7 +362,8 @@ struct GpuWorldBuffers<'a> {
     occupancy: &'a Buffer,
 }
 
-fn world_info(full: &FullWorld, object_count: u32) -> WorldInfo {
+/// The `WorldInfo` uniform of a full upload, for a world with `object_count` moving objects.
+pub fn world_info(full: &FullWorld, object_count: u32) -> WorldInfo {
     WorldInfo {
         size: full.size.as_ivec3().to_array(),
         object_count,
