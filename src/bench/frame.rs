@@ -30,12 +30,14 @@ pub struct FrameCase {
     pub settings: &'static [&'static str],
 }
 
+/// The night case is at 2:00, not midnight: the moon at 0:00 stands exactly where the noon sun does
+/// (`lights::daylight`), so its shadow rays and the frame's cost were noon's (the H200 profile, 2026-11-29).
 pub const CASES: [FrameCase; 6] = [
     FrameCase { label: "window-room", scene: "window-room", view: "inside", settings: &[] },
     FrameCase { label: "cornell", scene: "cornell", view: "front", settings: &[] },
     FrameCase { label: "apartments", scene: "apartments", view: "street", settings: &[] },
     FrameCase { label: "generated-noon", scene: "generated", view: "", settings: &["time=12"] },
-    FrameCase { label: "generated-night", scene: "generated", view: "", settings: &["time=0"] },
+    FrameCase { label: "generated-night", scene: "generated", view: "", settings: &["time=2"] },
     FrameCase { label: "thesis-letters", scene: "thesis-letters", view: "letters1", settings: &[] },
 ];
 
