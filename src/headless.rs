@@ -98,6 +98,9 @@ impl HeadlessRenderer {
         }
         app.finish();
         app.cleanup();
+        if let Some(limit) = crate::render::scene::world::max_binding(app.world()) {
+            crate::render::scene::world::fits_gpu(app.world().resource::<VoxelWorld>(), limit)?;
+        }
         // A saved world shows its moving objects where it was saved.
         if let Some(saved) = saved_objects {
             crate::dynamic::saved::spawn_saved(app.world_mut(), &saved)?;

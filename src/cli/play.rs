@@ -68,7 +68,8 @@ impl PlayArgs {
             world.views.insert(0, view);
         }
         let settings = self.settings.settings_over(base.with_world_time(&world))?;
-        can_open_a_window()?;
+        let gpu = can_open_a_window()?;
+        crate::render::scene::world::fits_gpu(&world, gpu.max_binding)?;
         crate::game::run_game(world, settings, save, model, None);
         Ok(())
     }
@@ -76,13 +77,13 @@ impl PlayArgs {
 
 /// The game needs an X11 display and a GPU adapter (software Vulkan will do); without either, say so and what
 /// to do, instead of the window system's or the renderer's panic.
-fn can_open_a_window() -> Result<(), String> {
+fn can_open_a_window() -> Result<crate::render::adapter::Adapter, String> {
     if cfg!(all(unix, not(target_os = "macos"))) && std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
         return Err("no display: DISPLAY is not set, and the game's window needs X11 (a desktop session, XWayland or \
                     `ssh -X`); `glowbrick render` works without one"
             .into());
     }
-    crate::render::adapter::probe_adapter().map(|_| ()).map_err(|why| {
+    crate::render::adapter::probe_adapter().map_err(|why| {
         format!(
             "no GPU adapter ({why}): install a Vulkan driver (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers` \
              gives software Vulkan)"

@@ -62,6 +62,7 @@ fn save_or_load(
     mut status: ResMut<StatusLine>,
     mut settings: Option<ResMut<crate::settings::RenderSettings>>,
     objects: Query<(Entity, &DynamicObject)>,
+    gpu: Option<Res<bevy::render::renderer::RenderDevice>>,
 ) {
     let Some(mut world) = world else { return };
     for action in actions.read() {
@@ -92,7 +93,15 @@ fn save_or_load(
             }
             SaveAction::Load => {
                 let start = std::time::Instant::now();
-                match load_path(&path.0) {
+                // A world this GPU cannot bind would stop the renderer: keep the one being played.
+                let fits = |loaded: VoxelWorld| match &gpu {
+                    Some(gpu) => {
+                        crate::render::scene::world::fits_gpu(&loaded, gpu.limits().max_storage_buffer_binding_size)
+                            .map(|()| loaded)
+                    }
+                    None => Ok(loaded),
+                };
+                match load_path(&path.0).map_err(|e| e.to_string()).and_then(fits) {
                     Ok(loaded) => {
                         if let (Some(view), Ok((mut transform, mut player, _))) =
                             (loaded.view(None), camera.single_mut())

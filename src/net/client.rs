@@ -101,6 +101,7 @@ fn take_world_and_edits(
     world: Option<ResMut<VoxelWorld>>,
     mut applied: MessageWriter<EditApplied>,
     renet: Option<ResMut<bevy_replicon_renet::RenetClient>>,
+    gpu: Option<Res<bevy::render::renderer::RenderDevice>>,
 ) {
     let client = &mut *client;
     let mut renet = renet;
@@ -131,6 +132,17 @@ fn take_world_and_edits(
                 apply_done(&mut world, done, client.me, None);
                 client.seq = done.seq;
             }
+        }
+        // A world this GPU cannot bind would stop the renderer: leave with the reason instead.
+        if let Some(Err(e)) =
+            gpu.map(|gpu| crate::render::scene::world::fits_gpu(&world, gpu.limits().max_storage_buffer_binding_size))
+        {
+            error!("{e}");
+            client.error = Some(e);
+            if let Some(renet) = renet.as_mut() {
+                renet.disconnect();
+            }
+            return;
         }
         client.loaded = true;
         let objects = world.objects.clone().unwrap_or_default();

@@ -6,8 +6,14 @@
 use bevy::render::renderer::initialize_renderer;
 use bevy::render::settings::WgpuSettings;
 
-/// The adapter's name and backend, or why there is none.
-pub fn probe_adapter() -> Result<String, String> {
+/// The adapter Bevy will render with: its name and backend, and the largest storage buffer it binds.
+pub struct Adapter {
+    pub name: String,
+    pub max_binding: u64,
+}
+
+/// The adapter, or why there is none.
+pub fn probe_adapter() -> Result<Adapter, String> {
     let settings = WgpuSettings::default();
     let Some(backends) = settings.backends else { return Err("no wgpu backend enabled".into()) };
     let hook = std::panic::take_hook();
@@ -17,7 +23,10 @@ pub fn probe_adapter() -> Result<String, String> {
     }));
     std::panic::set_hook(hook);
     match found {
-        Ok(resources) => Ok(format!("{} ({:?})", resources.2.name, resources.2.backend)),
+        Ok(resources) => Ok(Adapter {
+            name: format!("{} ({:?})", resources.2.name, resources.2.backend),
+            max_binding: resources.0.limits().max_storage_buffer_binding_size,
+        }),
         Err(panic) => Err(panic
             .downcast_ref::<&str>()
             .map(|s| s.to_string())
@@ -28,5 +37,5 @@ pub fn probe_adapter() -> Result<String, String> {
 
 /// The adapter's name and backend for a report, or "an unknown adapter" when there is none.
 pub fn adapter_name() -> String {
-    probe_adapter().unwrap_or_else(|_| "an unknown adapter".into())
+    probe_adapter().map_or_else(|_| "an unknown adapter".into(), |adapter| adapter.name)
 }

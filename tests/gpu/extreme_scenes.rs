@@ -182,6 +182,38 @@ pub fn a_room_in_the_far_corner_of_the_largest_world() {
     check("far corner", world, &view([o - 24.0, 10.0, o - 24.0], [1.0, -0.4, 1.0]), 0.05, 0.032);
 }
 
+/// A world whose brick pool is past what this GPU binds in one buffer (lavapipe: 128 MiB) is refused with one
+/// clear error before the renderer starts, instead of wgpu's validation stopping it and the caller waiting for a
+/// frame that never comes; on a GPU that binds it, it renders. 512 x 256 x 512 voxels with one voxel in every
+/// brick: 131,072 stored bricks, a 192 MiB pool with the upload's headroom.
+pub fn a_world_past_the_gpu_binding_limit_is_refused_with_a_clear_error() {
+    let (palette, white, _) = palette_with(&[]);
+    let mut world = VoxelWorld::new(UVec3::new(512, 256, 512), palette);
+    for z in (0..512).step_by(8) {
+        for y in (0..256).step_by(8) {
+            for x in (0..512).step_by(8) {
+                world.grid.set(IVec3::new(x, y, z), white).unwrap();
+            }
+        }
+    }
+    let (name, bytes) = glowbrick::render::scene::world::largest_binding(&world);
+    assert_eq!(name, "brick pool");
+    assert!(bytes > 128 << 20, "the pool ({bytes} bytes) must pass wgpu's default binding limit");
+    let options = HeadlessOptions { width: 32, height: 16, ..Default::default() };
+    let limit = glowbrick::render::adapter::probe_adapter().expect("a GPU").max_binding;
+    match glowbrick::headless::HeadlessRenderer::new(world, &view([-8.0, 300.0, -8.0], [1.0, -0.5, 1.0]), &options) {
+        Err(e) => {
+            eprintln!("refused: {e}");
+            assert!(bytes > limit, "refused although the GPU binds {limit} bytes: {e}");
+            assert!(e.contains("too large for this GPU") && e.contains("brick pool"), "{e}");
+        }
+        Ok(mut renderer) => {
+            assert!(bytes <= limit, "accepted a {bytes}-byte pool on a GPU that binds {limit}");
+            assert!(renderer.render(1).is_ok(), "a world the GPU binds renders");
+        }
+    }
+}
+
 pub fn a_single_light_behind_a_one_voxel_hole() {
     let (palette, white, lamps) = palette_with(&[("lamp", 50.0)]);
     let mut world = VoxelWorld::new(UVec3::splat(24), palette);

@@ -122,6 +122,44 @@ pub fn gpu_pool_slots(needed: u32) -> u32 {
     (needed + needed / 2 + 64).max(64)
 }
 
+/// Bytes of the largest buffer a full upload of `world` binds, and its name: the brick pool with its headroom, the
+/// occupancy masks with the pool's voxel masks, or the top grid.
+pub fn largest_binding(world: &VoxelWorld) -> (&'static str, u64) {
+    let grid = &world.grid;
+    let slots = u64::from(gpu_pool_slots(grid.pool_capacity()));
+    let pool = slots * BRICK_VOXELS as u64 * size_of::<Voxel>() as u64;
+    let masks = (grid.occupancy().masks().len() as u64 + slots * VOXEL_MASK_WORDS as u64) * 8;
+    let top = grid.top_cells().len() as u64 * 4;
+    [("brick pool", pool), ("occupancy masks", masks), ("top grid", top)]
+        .into_iter()
+        .max_by_key(|&(_, bytes)| bytes)
+        .expect("three buffers")
+}
+
+/// Whether a GPU that binds at most `max_binding` bytes per storage buffer can hold `world`; the error says which
+/// buffer is too large and by how much. (Past the limit wgpu's validation stops the renderer, and the game with it.)
+pub fn fits_gpu(world: &VoxelWorld, max_binding: u64) -> Result<(), String> {
+    let (name, bytes) = largest_binding(world);
+    if bytes <= max_binding {
+        return Ok(());
+    }
+    let mb = |b: u64| b as f64 / (1u64 << 20) as f64;
+    Err(format!(
+        "this world is too large for this GPU: its {name} needs {:.0} MiB in one buffer and the GPU binds at most \
+         {:.0} MiB ({} stored bricks); try a smaller world or another GPU",
+        mb(bytes),
+        mb(max_binding),
+        world.grid.pool_capacity()
+    ))
+}
+
+/// The largest storage buffer the app's GPU binds, once the renderer has started.
+pub fn max_binding(app_world: &World) -> Option<u64> {
+    app_world
+        .get_resource::<bevy::render::renderer::RenderDevice>()
+        .map(|device| device.limits().max_storage_buffer_binding_size)
+}
+
 /// Stages this frame's upload from the world's dirty set (PostUpdate, after all edits).
 pub fn stage_world_upload(
     mut world: ResMut<VoxelWorld>,
