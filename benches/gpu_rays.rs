@@ -210,29 +210,23 @@ struct GpuHit {
     _pad: u32,
 }
 
-/// One walk on one ray set: its median seconds and its hits.
-fn run(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    walk: &Walk,
-    bind_group: &wgpu::BindGroup,
-    hits: &wgpu::Buffer,
-    rays: u32,
-) -> (f64, Vec<GpuHit>) {
-    let dispatch = || {
-        let mut encoder = device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&walk.pipeline);
-            pass.set_bind_group(0, bind_group, &[]);
-            pass.dispatch_workgroups(rays.div_ceil(64), 1, 1);
-        }
-        let start = Instant::now();
-        queue.submit([encoder.finish()]);
-        device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None }).expect("the GPU finishes");
-        start.elapsed().as_secs_f64()
-    };
-    let seconds = dispatch();
+/// Seconds of one dispatch of `walk` over the `rays` rays, until the GPU is done.
+fn dispatch(device: &wgpu::Device, queue: &wgpu::Queue, walk: &Walk, bind_group: &wgpu::BindGroup, rays: u32) -> f64 {
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&walk.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups(rays.div_ceil(64), 1, 1);
+    }
+    let start = Instant::now();
+    queue.submit([encoder.finish()]);
+    device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None }).expect("the GPU finishes");
+    start.elapsed().as_secs_f64()
+}
+
+/// The hits the last dispatch wrote.
+fn read_hits(device: &wgpu::Device, queue: &wgpu::Queue, hits: &wgpu::Buffer, rays: u32) -> Vec<GpuHit> {
     let bytes = u64::from(rays) * HIT_BYTES;
     let readback = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("gpu_rays_readback"),
@@ -247,7 +241,7 @@ fn run(
     device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None }).expect("the GPU finishes");
     let out = bytemuck::cast_slice(&readback.slice(..).get_mapped_range()).to_vec();
     readback.unmap();
-    (seconds, out)
+    out
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -342,17 +336,16 @@ fn bench() -> Result<(), String> {
                 set.rays.iter().map(|(ray, max)| traverse(&world.grid, ray, *max, &mut counts)).collect::<Vec<_>>()
             };
             let cpu_hits = [cpu(trace_counted), cpu(trace_occupancy_counted)];
+            // One untimed run of each walk first (pipelines and caches warm), whose hits are checked: a walk writes
+            // the same hits every run.
+            let last = walks.each_ref().map(|walk| {
+                dispatch(device, queue, walk, &bind_group, n as u32);
+                read_hits(device, queue, &hits, n as u32)
+            });
             let mut seconds = [Vec::new(), Vec::new()];
-            let mut last = [Vec::new(), Vec::new()];
-            // One untimed run each first: pipelines and caches warm.
-            for walk in &walks {
-                run(device, queue, walk, &bind_group, &hits, n as u32);
-            }
             for _ in 0..options.config.repeats {
                 for (w, walk) in walks.iter().enumerate() {
-                    let (s, out) = run(device, queue, walk, &bind_group, &hits, n as u32);
-                    seconds[w].push(s);
-                    last[w] = out;
+                    seconds[w].push(dispatch(device, queue, walk, &bind_group, n as u32));
                 }
             }
             let measure = |w: usize| {
@@ -437,8 +430,8 @@ fn markdown(adapter: &str, rows: &[Row], skipped: &[String], config: &RaysConfig
         config.width, config.height, config.repeats
     );
     s.push_str(
-        "| scene | kind | rays | DDA Mrays/s | occupancy Mrays/s | speed-up | DDA steps | occupancy steps | DDA loads | \
-         occupancy loads | unlike CPU (DDA, occupancy) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | kind | rays | DDA Mrays/s | occupancy Mrays/s | speed-up | DDA steps | occupancy steps | \
+         DDA loads | occupancy loads | unlike CPU (DDA, occupancy) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let [d, o] = r.walks;

@@ -98,8 +98,8 @@ impl HeadlessRenderer {
         }
         app.finish();
         app.cleanup();
-        if let Some(limit) = crate::render::scene::world::max_binding(app.world()) {
-            crate::render::scene::world::fits_gpu(app.world().resource::<VoxelWorld>(), limit)?;
+        if let Some(device) = app.world().get_resource::<RenderDevice>() {
+            crate::render::scene::world::fits_device(app.world().resource::<VoxelWorld>(), device)?;
         }
         // A saved world shows its moving objects where it was saved.
         if let Some(saved) = saved_objects {

@@ -95,10 +95,7 @@ fn save_or_load(
                 let start = std::time::Instant::now();
                 // A world this GPU cannot bind would stop the renderer: keep the one being played.
                 let fits = |loaded: VoxelWorld| match &gpu {
-                    Some(gpu) => {
-                        crate::render::scene::world::fits_gpu(&loaded, gpu.limits().max_storage_buffer_binding_size)
-                            .map(|()| loaded)
-                    }
+                    Some(gpu) => crate::render::scene::world::fits_device(&loaded, gpu).map(|()| loaded),
                     None => Ok(loaded),
                 };
                 match load_path(&path.0).map_err(|e| e.to_string()).and_then(fits) {

@@ -134,9 +134,7 @@ fn take_world_and_edits(
             }
         }
         // A world this GPU cannot bind would stop the renderer: leave with the reason instead.
-        if let Some(Err(e)) =
-            gpu.map(|gpu| crate::render::scene::world::fits_gpu(&world, gpu.limits().max_storage_buffer_binding_size))
-        {
+        if let Some(Err(e)) = gpu.map(|gpu| crate::render::scene::world::fits_device(&world, &gpu)) {
             error!("{e}");
             client.error = Some(e);
             if let Some(renet) = renet.as_mut() {

@@ -64,7 +64,8 @@ pub fn has_child(m: u64, bit: u32) -> bool {
     (m >> bit) & 1 != 0
 }
 
-/// The cells of 2^3 voxels of one pooled brick that hold a solid voxel (local index `x + 8 (y + 8 z)`).
+/// The cells of 2^3 voxels of one pooled brick that hold a solid voxel (local index `x + 8 (y + 8 z)`), straight
+/// from its voxels: the rebuild the tests hold `cells_of_voxel_mask` (what the grid keeps) against.
 pub fn brick_cells(voxels: &[Voxel]) -> u64 {
     let mut mask = 0u64;
     for (i, &v) in voxels.iter().enumerate().take(BRICK_VOXELS) {

@@ -2,8 +2,8 @@
 //! pooled bricks, one load per step; and `trace_occupancy`, over the occupancy hierarchy of the brick grid
 //! (`world::occupancy`), leaving in one step the coarsest empty cell of 128 down to 2 voxels its masks prove empty,
 //! testing voxels only inside occupied 2^3 cells, mostly through bits of a voxel mask.
-//! `shaders/lib/traversal.wgsl` mirrors both step for step (the `traversal` setting picks), so the GPU and
-//! CPU agree per pixel; keep them in sync.
+//! `shaders/lib/traversal.wgsl` mirrors both step for step (the `traversal` setting picks), so the GPU and CPU
+//! agree per pixel; keep them in sync.
 //!
 //! Conventions shared by both: `t` is distance along the unit direction; every boundary crossing is computed as
 //! `(plane - origin) / dir` from the ray's own origin (never accumulated), so both sides round the same way; the
@@ -201,8 +201,9 @@ pub fn trace_occupancy(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option
 /// pooled brick (a ray that starts in an occupied brick reads its brick's mask first and the coarser ones only when
 /// it leaves it); a brick's top cell only when a voxel of it must be tested; in each 4^3 quadrant of a brick, the
 /// first voxel tested, then the quadrant's word of the voxel mask, then a material only at the hit. Rays start
-/// and end in the box of occupied bricks (`BrickGrid::occupied_box`). Every face is a voxel boundary computed as in the plain DDA, and ties go to the
-/// first axis, so the hits are the DDA's save where a ray grazes an edge within rounding of `origin + dir * t`.
+/// and end in the box of occupied bricks (`BrickGrid::occupied_box`). Every face is a voxel boundary computed as
+/// in the plain DDA, and ties go to the first axis, so the hits are the DDA's save where a ray grazes an edge
+/// within rounding of `origin + dir * t`.
 pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
     let size = grid.size().as_ivec3();
     // Nothing solid lies outside the occupied box: a ray starts where it enters it and misses where it leaves.
@@ -310,11 +311,12 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
                         tally.load();
                         (quadrant, quadrant_mask) = (word, voxel_mask[word]);
                     }
-                    let solid = has_child(quadrant_mask, bit);
-                    if solid {
+                    if has_child(quadrant_mask, bit) {
                         tally.load();
+                        voxels[local_index(local)]
+                    } else {
+                        AIR
                     }
-                    if solid { voxels[local_index(local)] } else { AIR }
                 } else {
                     probed = word;
                     tally.load();

@@ -153,11 +153,9 @@ pub fn fits_gpu(world: &VoxelWorld, max_binding: u64) -> Result<(), String> {
     ))
 }
 
-/// The largest storage buffer the app's GPU binds, once the renderer has started.
-pub fn max_binding(app_world: &World) -> Option<u64> {
-    app_world
-        .get_resource::<bevy::render::renderer::RenderDevice>()
-        .map(|device| device.limits().max_storage_buffer_binding_size)
+/// `fits_gpu` for the renderer's device.
+pub fn fits_device(world: &VoxelWorld, device: &bevy::render::renderer::RenderDevice) -> Result<(), String> {
+    fits_gpu(world, device.limits().max_storage_buffer_binding_size)
 }
 
 /// Stages this frame's upload from the world's dirty set (PostUpdate, after all edits).
