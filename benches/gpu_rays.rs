@@ -102,7 +102,7 @@ fn options() -> Result<Options, String> {
     Ok(Options { config, cases, out })
 }
 
-/// The GPU's copy of one world: the buffers `trace` reads (group 0 bindings 0-3 and 7).
+/// The GPU's copy of one world: the buffers `trace` reads (group 0 bindings 0-3 and 7-10).
 struct GpuWorld {
     buffers: Vec<(u32, wgpu::Buffer)>,
 }
@@ -144,6 +144,10 @@ impl GpuWorld {
                 (2, storage("gpu_rays_pool", &pool)),
                 (3, storage("gpu_rays_materials", bytemuck::cast_slice(&materials[..]))),
                 (7, storage("gpu_rays_occupancy", bytemuck::cast_slice(&full.occupancy[..]))),
+                // The pool in one part (`world_info`'s shift): the other parts bind placeholders.
+                (8, storage("gpu_rays_pool_1", &[0; 4])),
+                (9, storage("gpu_rays_pool_2", &[0; 4])),
+                (10, storage("gpu_rays_pool_3", &[0; 4])),
             ],
         })
     }
@@ -170,6 +174,9 @@ fn layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             entry(2, read),
             entry(3, read),
             entry(7, read),
+            entry(8, read),
+            entry(9, read),
+            entry(10, read),
             entry(100, read),
             entry(101, wgpu::BufferBindingType::Storage { read_only: false }),
         ],

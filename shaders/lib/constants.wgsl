@@ -9,6 +9,8 @@ const BRICK_SIZE: i32 = #{BRICK_SIZE};
 const BRICK_SHIFT: u32 = #{BRICK_SHIFT}u;
 const BRICK_WORDS: u32 = #{BRICK_WORDS}u;
 const MAX_WORLD_EDGE: u32 = #{MAX_WORLD_EDGE}u;
+// The brick pool's part shift when it is one buffer (src/render/scene/world.rs).
+const ONE_POOL_PART: u32 = #{ONE_POOL_PART}u;
 
 // Secondary rays start RAY_OFFSET off their surface (src/world/traversal.rs; the CPU reference uses the same).
 const RAY_OFFSET_INVERSE: u32 = #{RAY_OFFSET_INVERSE}u;
@@ -121,3 +123,5 @@ const KEY_GI: u32 = #{KEY_GI}u;
 const KEY_GI_FLAGS: u32 = #{KEY_GI_FLAGS}u;
 // 0: the world has no moving objects this frame; 1: it has.
 const KEY_OBJECTS: u32 = #{KEY_OBJECTS}u;
+// 0: the world's brick pool is one buffer; 1: it is in parts (`pooled_voxel`).
+const KEY_POOL_PARTS: u32 = #{KEY_POOL_PARTS}u;

@@ -1,7 +1,8 @@
 // The brick grid on the GPU: bindings and voxel lookup. Mirrors src/world/grid.rs.
 #define_import_path glowbrick::world
 
-#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, BRICK_WORDS, KEY_OBJECTS}
+#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, BRICK_WORDS, KEY_OBJECTS, KEY_POOL_PARTS, KEY_GENERIC,
+                            ONE_POOL_PART}
 
 // WorldInfo in src/render/gpu_types.rs.
 struct WorldInfo {
@@ -20,7 +21,8 @@ struct WorldInfo {
     // The voxels [occupied_lo, occupied_hi) that may hold a solid one: the occupancy walk starts where a ray
     // enters them and misses where it leaves (empty when lo == hi).
     occupied_lo: vec3<i32>,
-    _pad_lo: u32,
+    // Pool slots per part of the brick pool, as a shift: slot s is slot s & (2^shift - 1) of part s >> shift.
+    pool_part_shift: u32,
     occupied_hi: vec3<i32>,
     _pad_hi: u32,
 }
@@ -35,7 +37,12 @@ struct Material {
 @group(0) @binding(0) var<uniform> world_info: WorldInfo;
 @group(0) @binding(1) var<storage, read> top_cells: array<u32>;
 // Pooled bricks, two u16 voxels per word, little-endian: voxel i of a slot is in word i / 2, low half when even.
+// In up to four parts (bindings 2, 8, 9, 10) of 2^pool_part_shift slots each, so a pool can be larger than the
+// GPU binds in one buffer (`pooled_voxel`); a world that fits in one binds small placeholders for the others.
 @group(0) @binding(2) var<storage, read> brick_pool: array<u32>;
+@group(0) @binding(8) var<storage, read> brick_pool_1: array<u32>;
+@group(0) @binding(9) var<storage, read> brick_pool_2: array<u32>;
+@group(0) @binding(10) var<storage, read> brick_pool_3: array<u32>;
 @group(0) @binding(3) var<storage, read> materials: array<Material>;
 // The occupancy masks (src/world/occupancy.rs), 64 bits each, low word first: per brick (by top-grid index) its
 // cells of 2^3 voxels that hold a solid voxel, then per sector its bricks that are not empty, then per region its
@@ -110,8 +117,32 @@ fn brick_cell(brick: vec3<i32>) -> u32 {
 // The voxel id inside a pooled brick slot.
 fn pooled_voxel(slot: u32, local: vec3<i32>) -> u32 {
     let index = u32(local.x + BRICK_SIZE * (local.y + BRICK_SIZE * local.z));
-    let word = brick_pool[slot * BRICK_WORDS + index / 2u];
+    var word = 0u;
+    if pool_in_parts() {
+        let shift = world_info.pool_part_shift;
+        word = pool_part_word(slot >> shift, (slot & ((1u << shift) - 1u)) * BRICK_WORDS + index / 2u);
+    } else {
+        word = brick_pool[slot * BRICK_WORDS + index / 2u];
+    }
     return (word >> (16u * (index & 1u))) & 0xFFFFu;
+}
+
+// Whether the pool is in parts (pipelines compiled for a world whose pool is one buffer hold no part's choice).
+fn pool_in_parts() -> bool {
+    if KEY_POOL_PARTS != KEY_GENERIC {
+        return KEY_POOL_PARTS == 1u;
+    }
+    return world_info.pool_part_shift != ONE_POOL_PART;
+}
+
+// Word `at` of pool part `part`.
+fn pool_part_word(part: u32, at: u32) -> u32 {
+    switch part {
+        case 0u: { return brick_pool[at]; }
+        case 1u: { return brick_pool_1[at]; }
+        case 2u: { return brick_pool_2[at]; }
+        default: { return brick_pool_3[at]; }
+    }
 }
 
 fn in_world(p: vec3<i32>) -> bool {

@@ -17,7 +17,7 @@ use super::gpu_types::shader_defs;
 use super::pass_key::PassKey;
 use super::scene::lights::{GpuLights, LightsLayout};
 use super::scene::objects::GpuObjects;
-use super::scene::world::{GpuWorld, WorldLayout};
+use super::scene::world::{GpuWorld, ONE_POOL_PART, WorldLayout};
 use super::shaders::GlowbrickShaders;
 use super::view::{ViewResources, view_layout};
 use super::{CameraFramesRendered, VoxelCamera, denoise, primary, restir};
@@ -170,14 +170,16 @@ fn follow_settings(
     lights_layout: Res<LightsLayout>,
     gi_layout: Res<gi::GiLayout>,
     objects: Option<Res<GpuObjects>>,
+    gpu_world: Option<Res<GpuWorld>>,
     generic_fallback: Option<Res<GenericFallback>>,
 ) {
     let (Some(mut pipelines), Some(layouts)) = (pipelines, layouts) else { return };
     let fallback = RenderSettings::default();
     let settings = settings.as_deref().unwrap_or(&fallback);
     let objects = objects.is_some_and(|o| o.count > 0);
+    let pool_parts = gpu_world.is_some_and(|w| w.info.pool_part_shift != ONE_POOL_PART);
     let traversal = settings.traversal.resolve(pipelines.cpu_adapter);
-    let key = PassKey::of(settings, traversal, objects);
+    let key = PassKey::of(settings, traversal, objects, pool_parts);
     let generic = generic_fallback.map(|_| PassKey::generic(traversal));
     for key in std::iter::once(key).chain(generic) {
         pipelines.sets.entry(key).or_insert_with(|| {
@@ -201,7 +203,7 @@ fn init_pipelines(
     let cpu_adapter = adapter.device_type == wgpu::DeviceType::Cpu;
     let no_view =
         device.create_bind_group("glowbrick_no_view", &pipeline_cache.get_bind_group_layout(&layouts.empty), &[]);
-    let key = PassKey::of(&RenderSettings::default(), Traversal::Auto.resolve(cpu_adapter), false);
+    let key = PassKey::of(&RenderSettings::default(), Traversal::Auto.resolve(cpu_adapter), false, false);
     commands.insert_resource(VoxelPipelines { sets: HashMap::new(), key, cpu_adapter, no_view });
     commands.insert_resource(layouts);
 }

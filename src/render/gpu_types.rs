@@ -31,7 +31,9 @@ pub struct WorldInfo {
     /// The voxels `[occupied_lo, occupied_hi)` that may hold a solid one (`BrickGrid::occupied_box`): the
     /// occupancy walk starts where a ray enters it and misses where it leaves.
     pub occupied_lo: [i32; 3],
-    pub _pad_lo: u32,
+    /// Pool slots per part of the brick pool, as a shift (`render::scene::world::pool_part_shift`): slot `s` is slot
+    /// `s & (2^shift - 1)` of part `s >> shift`. `ONE_POOL_PART` keeps every slot in the first.
+    pub pool_part_shift: u32,
     pub occupied_hi: [i32; 3],
     pub _pad_hi: u32,
 }
@@ -403,6 +405,8 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("BRICK_SHIFT", U32(brick_shift)),
         ("BRICK_WORDS", U32((BRICK_VOXELS / 2) as u32)),
         ("MAX_WORLD_EDGE", U32(MAX_WORLD_EDGE)),
+        // The pool's part shift of a pool in one buffer (src/render/scene/world.rs).
+        ("ONE_POOL_PART", U32(crate::render::scene::world::ONE_POOL_PART)),
         // Secondary rays start this far off their surface (the CPU reference uses the same).
         ("RAY_OFFSET_INVERSE", U32(RAY_OFFSET_INVERSE)),
         // A light slot's packed edge and exposed faces.

@@ -36,13 +36,16 @@ pub struct PassKey {
     /// 1 when the world holds moving objects this frame (`WorldInfo.object_count` above 0): without them every
     /// shadow and GI ray is the static walk alone.
     objects: u32,
+    /// 1 when the world's brick pool is split into parts (`render::scene::world::POOL_PARTS`): without parts a
+    /// voxel read is one load, without the part's choice (which costs software Vulkan a sixth of a frame).
+    pool_parts: u32,
 }
 
 impl PassKey {
     /// The key of a frame under `settings`, with `auto` already resolved to `traversal`, in a world with or
-    /// without moving objects. Each value is computed by the function that fills its uniform, so the two cannot
-    /// disagree.
-    pub fn of(settings: &RenderSettings, traversal: Traversal, objects: bool) -> Self {
+    /// without moving objects, whose pool is or is not in parts. Each value is computed by the function that fills
+    /// its uniform, so the two cannot disagree.
+    pub fn of(settings: &RenderSettings, traversal: Traversal, objects: bool, pool_parts: bool) -> Self {
         let scene = scene_lighting(settings, 0);
         PassKey {
             traversal,
@@ -54,6 +57,7 @@ impl PassKey {
             gi: settings.gi.enabled as u32,
             gi_flags: gi::setting_flags(&settings.gi),
             objects: objects as u32,
+            pool_parts: pool_parts as u32,
         }
     }
 
@@ -71,6 +75,7 @@ impl PassKey {
             gi: g,
             gi_flags: g,
             objects: g,
+            pool_parts: g,
         }
     }
 
@@ -85,6 +90,7 @@ impl PassKey {
             self.gi,
             self.gi_flags,
             self.objects,
+            self.pool_parts,
         ]);
         if self.traversal == Traversal::Occupancy {
             defs.push(ShaderDefVal::Bool("TRAVERSAL_OCCUPANCY".into(), true));
@@ -94,7 +100,7 @@ impl PassKey {
 }
 
 /// The defs' names, in `key_defs`' order (constants.wgsl declares each once).
-pub const KEY_NAMES: [&str; 8] = [
+pub const KEY_NAMES: [&str; 9] = [
     "KEY_LIGHTING",
     "KEY_SHADOWS",
     "KEY_POWER_PICK",
@@ -103,9 +109,10 @@ pub const KEY_NAMES: [&str; 8] = [
     "KEY_GI",
     "KEY_GI_FLAGS",
     "KEY_OBJECTS",
+    "KEY_POOL_PARTS",
 ];
 
-fn key_defs(values: [u32; 8]) -> Vec<ShaderDefVal> {
+fn key_defs(values: [u32; 9]) -> Vec<ShaderDefVal> {
     let mut defs = vec![ShaderDefVal::UInt("KEY_GENERIC".into(), KEY_GENERIC)];
     defs.extend(KEY_NAMES.iter().zip(values).map(|(name, value)| ShaderDefVal::UInt((*name).into(), value)));
     defs
@@ -129,7 +136,7 @@ mod tests {
     #[test]
     fn every_specialised_setting_is_in_the_key() {
         let base = RenderSettings::default();
-        let key = |s: &RenderSettings| PassKey::of(s, Traversal::Dda, false);
+        let key = |s: &RenderSettings| PassKey::of(s, Traversal::Dda, false, false);
         let defs = key(&base).shader_defs();
         assert_eq!(value(&defs, "KEY_LIGHTING"), Some(base.lighting as u32));
         assert_eq!(value(&defs, "KEY_DEBUG_VIEW"), Some(0));
@@ -158,9 +165,13 @@ mod tests {
         tuned.exposure *= 2.0;
         tuned.time = 20.0;
         assert_eq!(key(&tuned), key(&base));
-        assert_ne!(PassKey::of(&base, Traversal::Dda, true), key(&base));
-        assert_eq!(value(&PassKey::of(&base, Traversal::Dda, true).shader_defs(), "KEY_OBJECTS"), Some(1));
-        let walk = PassKey::of(&base, Traversal::Occupancy, false).shader_defs();
+        assert_ne!(PassKey::of(&base, Traversal::Dda, true, false), key(&base));
+        assert_eq!(value(&PassKey::of(&base, Traversal::Dda, true, false).shader_defs(), "KEY_OBJECTS"), Some(1));
+        let parts = PassKey::of(&base, Traversal::Dda, false, true);
+        assert_ne!(parts, key(&base));
+        assert_eq!(value(&parts.shader_defs(), "KEY_POOL_PARTS"), Some(1));
+        assert_eq!(value(&key(&base).shader_defs(), "KEY_POOL_PARTS"), Some(0));
+        let walk = PassKey::of(&base, Traversal::Occupancy, false, false).shader_defs();
         assert!(walk.iter().any(|d| matches!(d, ShaderDefVal::Bool(n, true) if n == "TRAVERSAL_OCCUPANCY")));
     }
 
@@ -169,6 +180,9 @@ mod tests {
         let defs = PassKey::generic(Traversal::Dda).shader_defs();
         assert_eq!(defs.len(), KEY_NAMES.len() + 1);
         assert!(KEY_NAMES.iter().all(|name| value(&defs, name) == Some(KEY_GENERIC)));
-        assert_ne!(PassKey::generic(Traversal::Dda), PassKey::of(&RenderSettings::default(), Traversal::Dda, false));
+        assert_ne!(
+            PassKey::generic(Traversal::Dda),
+            PassKey::of(&RenderSettings::default(), Traversal::Dda, false, false)
+        );
     }
 }

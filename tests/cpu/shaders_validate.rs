@@ -87,7 +87,9 @@ fn every_shader_validates_specialised_for_the_settings() {
     for (settings, traversal) in std::iter::once((&default, Traversal::Occupancy))
         .chain(std::iter::once(&default).chain(&others).map(|s| (s, Traversal::Dda)))
     {
-        let key = PassKey::of(settings, traversal, traversal == Traversal::Dda).shader_defs();
+        // Objects with the DDA, a pool in parts with the occupancy walk: every variant of the world's code.
+        let occupancy = traversal == Traversal::Occupancy;
+        let key = PassKey::of(settings, traversal, !occupancy, occupancy).shader_defs();
         let mut composer = compose::composer_with(&key);
         for &(path, source) in SOURCES.iter().filter(|(_, s)| !s.contains("#define_import_path")) {
             let module = compose::compose_keyed(&mut composer, path, source, &key);
@@ -151,11 +153,15 @@ fn twins() -> Vec<Twin> {
                 regions,
                 region_base,
                 occupied_lo,
+                pool_part_shift,
                 occupied_hi
             }
         ),
         sized("top_cells", None, word, 1),
         sized("brick_pool", None, word, 1),
+        sized("brick_pool_1", None, word, 1),
+        sized("brick_pool_2", None, word, 1),
+        sized("brick_pool_3", None, word, 1),
         twin!("materials", "Material", GpuMaterial { albedo, radiance }),
         twin!("objects", "Object", GpuObject { min, id, size, offset, previous_min }),
         sized("object_voxels", None, word, 1),

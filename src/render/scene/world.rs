@@ -5,7 +5,8 @@
 
 use super::counters::GpuCountersBuffer;
 use super::objects::GpuObjects;
-use super::staging::{Fit, Staging, upload};
+use super::staging::{BufferOp, Fit, Staging, upload};
+use super::storage_buffer;
 use crate::render::gpu_types::{GpuMaterial, WorldInfo};
 use crate::world::grid::{BRICK_VOXELS, BrickCell, Voxel};
 use crate::world::occupancy::VOXEL_MASK_WORDS;
@@ -122,15 +123,32 @@ pub fn gpu_pool_slots(needed: u32) -> u32 {
     (needed + needed / 2 + 64).max(64)
 }
 
-/// Bytes of the largest buffer a full upload of `world` binds, and its name: the brick pool with its headroom, the
-/// occupancy masks with the pool's voxel masks, or the top grid.
-pub fn largest_binding(world: &VoxelWorld) -> (&'static str, u64) {
+/// Parts the brick pool may be split into (bindings 2, 8, 9 and 10 of group 0): a world's pool may be up to four
+/// times what the GPU binds in one buffer (the 2048-wide world's 425 MiB on software Vulkan's 128 MiB).
+pub const POOL_PARTS: usize = 4;
+
+/// The part shift that keeps every slot in the first part (`WorldInfo::pool_part_shift`).
+pub const ONE_POOL_PART: u32 = 31;
+
+/// Bytes of one pool slot on the GPU.
+const SLOT_BYTES: u64 = BRICK_VOXELS as u64 * size_of::<Voxel>() as u64;
+
+/// Slots per pool part on a GPU that binds at most `max_binding` bytes per buffer, as a shift: the largest power
+/// of two whose slots fit in one binding (a shift, so the shaders split a slot without a division).
+pub fn pool_part_shift(max_binding: u64) -> u32 {
+    (max_binding / SLOT_BYTES).max(1).ilog2().min(ONE_POOL_PART)
+}
+
+/// The binding a full upload of `world` needs, and the buffer that needs it: the occupancy masks with the pool's
+/// voxel masks, the top grid, or one part of the brick pool with its headroom (the smallest power of two of slots
+/// of which `POOL_PARTS` hold the pool).
+pub fn required_binding(world: &VoxelWorld) -> (&'static str, u64) {
     let grid = &world.grid;
     let slots = u64::from(gpu_pool_slots(grid.pool_capacity()));
-    let pool = slots * BRICK_VOXELS as u64 * size_of::<Voxel>() as u64;
+    let part = slots.div_ceil(POOL_PARTS as u64).next_power_of_two() * SLOT_BYTES;
     let masks = (grid.occupancy().masks().len() as u64 + slots * VOXEL_MASK_WORDS as u64) * 8;
     let top = grid.top_cells().len() as u64 * 4;
-    [("brick pool", pool), ("occupancy masks", masks), ("top grid", top)]
+    [("brick pool", part), ("occupancy masks", masks), ("top grid", top)]
         .into_iter()
         .max_by_key(|&(_, bytes)| bytes)
         .expect("three buffers")
@@ -139,15 +157,19 @@ pub fn largest_binding(world: &VoxelWorld) -> (&'static str, u64) {
 /// Whether a GPU that binds at most `max_binding` bytes per storage buffer can hold `world`; the error says which
 /// buffer is too large and by how much. (Past the limit wgpu's validation stops the renderer, and the game with it.)
 pub fn fits_gpu(world: &VoxelWorld, max_binding: u64) -> Result<(), String> {
-    let (name, bytes) = largest_binding(world);
+    let (name, bytes) = required_binding(world);
     if bytes <= max_binding {
         return Ok(());
     }
     let mb = |b: u64| b as f64 / (1u64 << 20) as f64;
+    let needs = if name == "brick pool" {
+        format!("{POOL_PARTS} buffers of {:.0} MiB", mb(bytes))
+    } else {
+        format!("{:.0} MiB in one buffer", mb(bytes))
+    };
     Err(format!(
-        "this world is too large for this GPU: its {name} needs {:.0} MiB in one buffer and the GPU binds at most \
-         {:.0} MiB ({} stored bricks); try a smaller world or another GPU",
-        mb(bytes),
+        "this world is too large for this GPU: its {name} needs {needs} and the GPU binds at most {:.0} MiB per \
+         buffer ({} stored bricks); try a smaller world or another GPU",
         mb(max_binding),
         world.grid.pool_capacity()
     ))
@@ -316,6 +338,10 @@ pub fn world_bind_group_layout() -> BindGroupLayoutDescriptor {
                 storage_buffer_sized(false, None),
                 // Occupancy masks (`world::occupancy`).
                 storage_buffer_read_only_sized(false, None),
+                // The brick pool's parts past the first (`POOL_PARTS`).
+                storage_buffer_read_only_sized(false, None),
+                storage_buffer_read_only_sized(false, None),
+                storage_buffer_read_only_sized(false, None),
             ),
         ),
     )
@@ -329,7 +355,10 @@ pub struct GpuWorld {
     pub info_buffer: Buffer,
     pub top_cells: Buffer,
     pub occupancy: Buffer,
-    pub brick_pool: Buffer,
+    /// The brick pool's parts: `pool_bytes` in parts of 2^`pool_part_shift` slots, the unused ones placeholders.
+    pub brick_pool: [Buffer; POOL_PARTS],
+    pub pool_bytes: u64,
+    pub pool_part_shift: u32,
     pub materials: Buffer,
     pub bind_group: BindGroup,
     /// Bytes written to GPU buffers last frame (0 when nothing changed).
@@ -378,12 +407,15 @@ impl WorldBinding<'_> {
             &BindGroupEntries::sequential((
                 gpu.info.as_entire_binding(),
                 gpu.top_cells.as_entire_binding(),
-                gpu.brick_pool.as_entire_binding(),
+                gpu.brick_pool[0].as_entire_binding(),
                 gpu.materials.as_entire_binding(),
                 self.objects.objects.as_entire_binding(),
                 self.objects.voxels.as_entire_binding(),
                 self.counters.as_entire_binding(),
                 gpu.occupancy.as_entire_binding(),
+                gpu.brick_pool[1].as_entire_binding(),
+                gpu.brick_pool[2].as_entire_binding(),
+                gpu.brick_pool[3].as_entire_binding(),
             )),
         )
     }
@@ -393,7 +425,7 @@ impl WorldBinding<'_> {
 struct GpuWorldBuffers<'a> {
     info: &'a Buffer,
     top_cells: &'a Buffer,
-    brick_pool: &'a Buffer,
+    brick_pool: &'a [Buffer; POOL_PARTS],
     materials: &'a Buffer,
     occupancy: &'a Buffer,
 }
@@ -409,6 +441,7 @@ pub fn world_info(full: &FullWorld, object_count: u32) -> WorldInfo {
         sector_base: full.occupancy_bases.0 as u32,
         regions: full.region_dims.as_ivec3().to_array(),
         region_base: full.occupancy_bases.1 as u32,
+        pool_part_shift: ONE_POOL_PART,
         ..WorldInfo::default()
     }
     .with_occupied(full.occupied)
@@ -459,7 +492,9 @@ fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &
     let info = batch.prepare_creation()?;
     let brick_dims = IVec3::from_array(info.bricks).as_uvec3();
     let device = binding.device;
-    let info = WorldInfo { object_count: binding.objects.count, ..info };
+    let max_binding = device.limits().max_storage_buffer_binding_size;
+    let (brick_pool, pool_bytes, pool_part_shift) = upload_pool(&mut batch.pool, None, max_binding, device, queue)?;
+    let info = WorldInfo { object_count: binding.objects.count, pool_part_shift, ..info };
     let info_buffer = device.create_buffer_with_data(&BufferInitDescriptor {
         label: Some("glowbrick_world_info"),
         contents: bytemuck::bytes_of(&info),
@@ -467,7 +502,6 @@ fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &
     });
     let top_cells = upload(&mut batch.top_cells, None, Fit::Exact, TOP_CELLS_LABEL, device, queue)?;
     let occupancy = upload(&mut batch.occupancy, None, Fit::Exact, OCCUPANCY_LABEL, device, queue)?;
-    let brick_pool = upload(&mut batch.pool, None, Fit::Exact, BRICK_POOL_LABEL, device, queue)?;
     let materials = upload(&mut batch.materials, None, Fit::AtLeast, MATERIALS_LABEL, device, queue)?;
     let bind_group = binding.bind(&GpuWorldBuffers {
         info: &info_buffer,
@@ -482,6 +516,8 @@ fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &
         top_cells,
         occupancy,
         brick_pool,
+        pool_bytes,
+        pool_part_shift,
         materials,
         bind_group,
         uploaded_bytes: batch.bytes,
@@ -497,7 +533,7 @@ fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &World
     gpu.replaced = batch.layout.is_some();
     if let Some(info) = batch.layout {
         gpu.brick_dims = IVec3::from_array(info.bricks).as_uvec3();
-        gpu.info = WorldInfo { object_count: gpu.info.object_count, ..info };
+        gpu.info = WorldInfo { object_count: gpu.info.object_count, pool_part_shift: gpu.pool_part_shift, ..info };
     }
     if let Some(occupied) = batch.occupied {
         gpu.info = gpu.info.with_occupied(occupied);
@@ -516,9 +552,15 @@ fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &World
         gpu.occupancy = buffer;
         rebind = true;
     }
-    if let Some(buffer) = upload(&mut batch.pool, Some(&gpu.brick_pool), Fit::Exact, BRICK_POOL_LABEL, device, queue) {
-        gpu.brick_pool = buffer;
+    let current = Some(CurrentPool { parts: &gpu.brick_pool, bytes: gpu.pool_bytes, shift: gpu.pool_part_shift });
+    let max_binding = device.limits().max_storage_buffer_binding_size;
+    if let Some((parts, bytes, shift)) = upload_pool(&mut batch.pool, current, max_binding, device, queue) {
+        (gpu.brick_pool, gpu.pool_bytes, gpu.pool_part_shift) = (parts, bytes, shift);
         rebind = true;
+        if gpu.info.pool_part_shift != shift {
+            gpu.info.pool_part_shift = shift;
+            queue.write_buffer(&gpu.info_buffer, 0, bytemuck::bytes_of(&gpu.info));
+        }
     }
     if let Some(buffer) =
         upload(&mut batch.materials, Some(&gpu.materials), Fit::AtLeast, MATERIALS_LABEL, device, queue)
@@ -539,12 +581,111 @@ fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &World
     gpu.uploaded_bytes = batch.bytes;
 }
 
+/// The pool's parts on the GPU: the buffers, the bytes they hold and the part shift they were made for.
+struct CurrentPool<'a> {
+    parts: &'a [Buffer; POOL_PARTS],
+    bytes: u64,
+    shift: u32,
+}
+
+/// The part shift of a `total`-byte pool on a GPU that binds `max_binding` bytes: one part when it fits in one
+/// binding, else parts as large as a binding holds.
+fn pool_shift_for(total: u64, max_binding: u64) -> u32 {
+    if total <= max_binding { ONE_POOL_PART } else { pool_part_shift(max_binding) }
+}
+
+/// Writes what `pool` holds into the pool's parts (`current`), or into new ones when its size changed; returns the
+/// new parts, their bytes and their part shift. Slot writes never straddle two parts.
+fn upload_pool(
+    pool: &mut Staging<Voxel>,
+    current: Option<CurrentPool>,
+    max_binding: u64,
+    device: &RenderDevice,
+    queue: &RenderQueue,
+) -> Option<([Buffer; POOL_PARTS], u64, u32)> {
+    let mut created: Option<([Buffer; POOL_PARTS], u64, u32)> = None;
+    for op in pool.ops(current.as_ref().map(|c| c.bytes), Fit::Exact) {
+        match op {
+            BufferOp::Create(bytes) => {
+                let total = bytes.len() as u64;
+                let shift = pool_shift_for(total, max_binding);
+                let parts = std::array::from_fn(|part| {
+                    let range = part_range(part, total, SLOT_BYTES << shift);
+                    // An unused part binds a placeholder (a binding may not be empty).
+                    let contents = if range.is_empty() { &[0u8; 4][..] } else { &bytes[range] };
+                    storage_buffer(device, BRICK_POOL_LABEL, contents)
+                });
+                created = Some((parts, total, shift));
+            }
+            BufferOp::Write { offset, bytes } => {
+                let target = match (&created, &current) {
+                    (Some((parts, _, shift)), _) => (parts, *shift),
+                    (None, Some(c)) => (c.parts, c.shift),
+                    (None, None) => continue,
+                };
+                for (part, at, within) in split_write(offset, bytes.len() as u64, SLOT_BYTES << target.1) {
+                    queue.write_buffer(&target.0[part], at, &bytes[within]);
+                }
+            }
+        }
+    }
+    pool.clear();
+    created
+}
+
+/// The bytes of a `total`-byte pool that part `part` holds (empty past the pool's end).
+fn part_range(part: usize, total: u64, part_bytes: u64) -> std::ops::Range<usize> {
+    let start = (part as u64 * part_bytes).min(total);
+    let end = if part + 1 == POOL_PARTS { total } else { ((part as u64 + 1) * part_bytes).min(total) };
+    start as usize..end as usize
+}
+
+/// A write of `len` bytes at pool offset `offset`, as (part, offset in the part, bytes of the write).
+fn split_write(offset: u64, len: u64, part_bytes: u64) -> Vec<(usize, u64, std::ops::Range<usize>)> {
+    let mut pieces = Vec::new();
+    let mut done = 0;
+    while done < len {
+        let at = offset + done;
+        let part = ((at / part_bytes) as usize).min(POOL_PARTS - 1);
+        let part_start = part as u64 * part_bytes;
+        let room = if part + 1 == POOL_PARTS { len - done } else { part_start + part_bytes - at };
+        let n = room.min(len - done);
+        pieces.push((part, at - part_start, done as usize..(done + n) as usize));
+        done += n;
+    }
+    pieces
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::render::scene::staging::BufferOp;
     use crate::render::scene::staging::tests::{permutations, run};
     use crate::world::Edit;
+
+    /// Parts are the largest power of two of slots a binding holds; writes land in the part that holds their
+    /// bytes, split where they cross a part's end (a whole pool written in place), and the last part takes what
+    /// lies past the others.
+    #[test]
+    fn pool_parts_split_slots_and_writes() {
+        assert_eq!(pool_shift_for(128 << 20, 128 << 20), ONE_POOL_PART);
+        assert_eq!(pool_shift_for((128 << 20) + 1024, 128 << 20), 17);
+        assert_eq!(pool_part_shift(128 << 20), 17);
+        assert_eq!(pool_part_shift((128 << 20) - 1), 16);
+        assert_eq!(pool_part_shift(u32::MAX as u64), 21);
+        assert_eq!(pool_part_shift(u64::MAX), ONE_POOL_PART);
+        assert_eq!(pool_part_shift(1), 0);
+        let part = 4 * SLOT_BYTES;
+        assert_eq!(split_write(part - SLOT_BYTES, SLOT_BYTES, part), vec![(0, 3 * SLOT_BYTES, 0..1024)]);
+        assert_eq!(split_write(part, SLOT_BYTES, part), vec![(1, 0, 0..1024)]);
+        let whole = 2 * part + part / 2;
+        let (p, w) = (part as usize, whole as usize);
+        assert_eq!(split_write(0, whole, part), vec![(0, 0, 0..p), (1, 0, p..2 * p), (2, 0, 2 * p..w)]);
+        assert_eq!(split_write(5 * part, 8, part), vec![(3, 2 * part, 0..8)]);
+        let ranges: Vec<_> = (0..POOL_PARTS).map(|i| part_range(i, whole, part)).collect();
+        assert_eq!(ranges, vec![0..p, p..2 * p, 2 * p..w, w..w]);
+        assert_eq!(part_range(3, 6 * part, part), 3 * p..6 * p);
+    }
 
     /// The GPU world's buffers as `prepare_gpu_world` leaves them, on the CPU.
     #[derive(Default)]
