@@ -16,7 +16,8 @@ mod compose;
 use bevy::render::renderer::initialize_renderer;
 use bevy::render::settings::{WgpuSettings, WgpuSettingsPriority};
 use glowbrick::bench::rays::{CASES, RaysCase, RaysConfig, case_world, ray_sets};
-use glowbrick::render::scene::world::{UploadState, stage_upload, world_info};
+use glowbrick::render::gpu_types::WorldInfo;
+use glowbrick::render::scene::world::{UploadState, fits_gpu, split_pool, stage_upload, world_info};
 use glowbrick::world::traversal::{Counts, trace_counted, trace_occupancy_counted};
 use std::borrow::Cow;
 use std::fmt::Write as _;
@@ -113,7 +114,12 @@ impl GpuWorld {
         let upload = stage_upload(world, &mut UploadState::default());
         let full = upload.full.expect("a first upload is a full one");
         let materials = upload.materials.expect("a first upload holds the materials");
-        let info = world_info(&full, 0);
+        let limit = device.limits().max_storage_buffer_binding_size;
+        fits_gpu(world, limit)?;
+        // The pool in as many parts as the renderer makes on this adapter.
+        let pool: &[u8] = bytemuck::cast_slice(&full.pool[..]);
+        let (parts, pool_part_shift) = split_pool(pool, limit);
+        let info = WorldInfo { pool_part_shift, ..world_info(&full, 0) };
         let storage = |label: &str, bytes: &[u8]| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -126,28 +132,16 @@ impl GpuWorld {
             contents: bytemuck::bytes_of(&info),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        // The pool holds u16 voxels, read as u32 words: pad to a whole word.
-        let mut pool: Vec<u8> = bytemuck::cast_slice(&full.pool[..]).to_vec();
-        pool.resize(pool.len().next_multiple_of(4).max(4), 0);
-        let limit = device.limits().max_storage_buffer_binding_size;
-        if pool.len() as u64 > limit {
-            return Err(format!(
-                "its pool of {} MB is past the adapter's binding limit of {} MB",
-                pool.len() >> 20,
-                limit >> 20
-            ));
-        }
         Ok(GpuWorld {
             buffers: vec![
                 (0, uniform),
                 (1, storage("gpu_rays_top_cells", bytemuck::cast_slice(&full.top_cells[..]))),
-                (2, storage("gpu_rays_pool", &pool)),
+                (2, storage("gpu_rays_pool", parts[0])),
                 (3, storage("gpu_rays_materials", bytemuck::cast_slice(&materials[..]))),
                 (7, storage("gpu_rays_occupancy", bytemuck::cast_slice(&full.occupancy[..]))),
-                // The pool in one part (`world_info`'s shift): the other parts bind placeholders.
-                (8, storage("gpu_rays_pool_1", &[0; 4])),
-                (9, storage("gpu_rays_pool_2", &[0; 4])),
-                (10, storage("gpu_rays_pool_3", &[0; 4])),
+                (8, storage("gpu_rays_pool_1", parts[1])),
+                (9, storage("gpu_rays_pool_2", parts[2])),
+                (10, storage("gpu_rays_pool_3", parts[3])),
             ],
         })
     }

@@ -607,15 +607,9 @@ fn upload_pool(
     for op in pool.ops(current.as_ref().map(|c| c.bytes), Fit::Exact) {
         match op {
             BufferOp::Create(bytes) => {
-                let total = bytes.len() as u64;
-                let shift = pool_shift_for(total, max_binding);
-                let parts = std::array::from_fn(|part| {
-                    let range = part_range(part, total, SLOT_BYTES << shift);
-                    // An unused part binds a placeholder (a binding may not be empty).
-                    let contents = if range.is_empty() { &[0u8; 4][..] } else { &bytes[range] };
-                    storage_buffer(device, BRICK_POOL_LABEL, contents)
-                });
-                created = Some((parts, total, shift));
+                let (contents, shift) = split_pool(bytes, max_binding);
+                let parts = contents.map(|part| storage_buffer(device, BRICK_POOL_LABEL, part));
+                created = Some((parts, bytes.len() as u64, shift));
             }
             BufferOp::Write { offset, bytes } => {
                 let target = match (&created, &current) {
@@ -631,6 +625,18 @@ fn upload_pool(
     }
     pool.clear();
     created
+}
+
+/// A pool's bytes as the contents of its `POOL_PARTS` buffers on a GPU that binds `max_binding` bytes, and their
+/// part shift; an unused part holds a placeholder word (a binding may not be empty).
+pub fn split_pool(bytes: &[u8], max_binding: u64) -> ([&[u8]; POOL_PARTS], u32) {
+    let total = bytes.len() as u64;
+    let shift = pool_shift_for(total, max_binding);
+    let parts = std::array::from_fn(|part| {
+        let range = part_range(part, total, SLOT_BYTES << shift);
+        if range.is_empty() { &[0u8; 4][..] } else { &bytes[range] }
+    });
+    (parts, shift)
 }
 
 /// The bytes of a `total`-byte pool that part `part` holds (empty past the pool's end).
