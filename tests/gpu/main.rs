@@ -184,8 +184,8 @@ fn peak_memory_mib() -> Option<u64> {
 
 /// Tests run on one lavapipe thread, where workgroups then run in one order. The GI cache has a race between
 /// workgroups (2026-11-30, not found yet): with lavapipe's threads the white box's bias at frames 249-256 is
-/// -6.0% to -6.7% in about four runs of five and -15% to -17% in the fifth, the old binary as the new; on one
-/// thread it is -6.19% every time, at the same speed. The race is an open bug; this keeps the test about the
+/// -6.0% to -6.7% in most runs and -15% to -17% in about one of four, the old binary as the new; on one thread
+/// it is -6.19% every time, at the same speed. The race is an open bug; this keeps the test about the
 /// fast weight it checks (`docs/bench/gi.md`).
 const ONE_LAVAPIPE_THREAD: &[&str] = &["gi::a_settled_entry_whose_light_still_rises_catches_up_at_the_fast_weight"];
 
