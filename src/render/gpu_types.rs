@@ -12,7 +12,7 @@ use bevy::shader::ShaderDefVal;
 
 /// Group 0, binding 0 (`WorldInfo` in `shaders/lib/world.wgsl`): the world's size and the moving-object count
 /// every trace loops over.
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct WorldInfo {
     /// World size in voxels.
@@ -36,6 +36,13 @@ pub struct WorldInfo {
     pub pool_part_shift: u32,
     pub occupied_hi: [i32; 3],
     pub _pad_hi: u32,
+}
+
+/// All zero but the pool's part shift: a pool in one buffer (a shift of 0 would put every slot in a part of its own).
+impl Default for WorldInfo {
+    fn default() -> Self {
+        WorldInfo { pool_part_shift: crate::render::scene::world::ONE_POOL_PART, ..bytemuck::Zeroable::zeroed() }
+    }
 }
 
 impl WorldInfo {

@@ -441,7 +441,6 @@ pub fn world_info(full: &FullWorld, object_count: u32) -> WorldInfo {
         sector_base: full.occupancy_bases.0 as u32,
         regions: full.region_dims.as_ivec3().to_array(),
         region_base: full.occupancy_bases.1 as u32,
-        pool_part_shift: ONE_POOL_PART,
         ..WorldInfo::default()
     }
     .with_occupied(full.occupied)
@@ -674,6 +673,7 @@ mod tests {
     /// lies past the others.
     #[test]
     fn pool_parts_split_slots_and_writes() {
+        assert_eq!(WorldInfo::default().pool_part_shift, ONE_POOL_PART);
         assert_eq!(pool_shift_for(128 << 20, 128 << 20), ONE_POOL_PART);
         assert_eq!(pool_shift_for((128 << 20) + 1024, 128 << 20), 17);
         assert_eq!(pool_part_shift(128 << 20), 17);
