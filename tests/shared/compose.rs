@@ -4,7 +4,7 @@
 use bevy::shader::ShaderDefVal;
 use glowbrick::render::gpu_types::shader_defs;
 use glowbrick::render::pass_key::PassKey;
-use glowbrick::render::shaders::SOURCES;
+use glowbrick::render::shaders::{SOURCES, read_sources};
 use glowbrick::settings::Traversal;
 use naga::valid::Capabilities;
 use naga_oil::compose::{
@@ -67,10 +67,19 @@ pub fn composer_with(extra: &[ShaderDefVal]) -> Composer {
     let defs = defs_with(extra);
     let mut composer = Composer::default().with_capabilities(Capabilities::all());
     library(&mut composer, "bevy_render/view.wgsl", VIEW, &defs);
-    for (path, source) in SOURCES.iter().filter(|(_, s)| s.contains("#define_import_path")) {
+    for (path, source) in sources().iter().filter(|(_, s)| s.contains("#define_import_path")) {
         library(&mut composer, path, source, &defs);
     }
     composer
+}
+
+/// The shaders built in, or those of the folder `GLOWBRICK_SHADERS` names (as the game reads them): a shader
+/// experiment runs in a bench without rebuilding it.
+fn sources() -> Vec<(&'static str, String)> {
+    match std::env::var_os("GLOWBRICK_SHADERS") {
+        Some(dir) => read_sources(std::path::Path::new(&dir)).unwrap_or_else(|e| panic!("GLOWBRICK_SHADERS: {e}")),
+        None => SOURCES.iter().map(|&(path, source)| (path, source.to_string())).collect(),
+    }
 }
 
 /// A pass composed as a pipeline of `key` compiles it (`composer` from `composer_with` the same defs).
