@@ -33,10 +33,11 @@ fn direct_at(point: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<functio
     return vec3(0.0);
 }
 
-// A point of the entry's cell: `u` in the unit square across the cell in the inserting face's plane picks a
-// voxel's face and the spot on it (at level 0 the entry's own face). Where the picked voxel's face is not a
-// surface, the same spot on the inserting face: what a coarse entry's value stands for is its cell's average.
-// The point lies inside its face by a hair: one exactly on a neighbour's plane could start a ray in that voxel.
+// A point of the entry's cell: `u` in the unit square across the cell picks a column of its voxels along the
+// face's normal and the spot on a face (at level 0 the entry's own face): the column's first face of the entry's
+// orientation seen from outside, so what a coarse entry's value stands for is its cell's average over what rays
+// arriving there meet, whichever face inserted it. Where the column holds none, the same spot on the inserting
+// face. The point lies inside its face by a hair: one exactly on a neighbour's plane could start a ray in that voxel.
 struct CellPoint {
     voxel: vec3<i32>,
     point: vec3<f32>,
@@ -48,11 +49,21 @@ fn cell_point(e: GiEntry, u: vec2<f32>) -> CellPoint {
     let across = u * f32(size);
     var voxel = e.voxel;
     if e.level > 0u {
+        // Searched from the side the face looks toward. (The inserting face's own plane made the cell stand for
+        // whichever face won the insert, a race between workgroups: docs/bench/gi.md.)
+        let axis = e.face / 2u;
         var other = cell_of(e.voxel, e.level) << vec3(e.level);
-        other[e.face / 2u] = e.voxel[e.face / 2u];
         other[t.x] += i32(min(u32(across.x), size - 1u));
         other[t.y] += i32(min(u32(across.y), size - 1u));
-        voxel = select(e.voxel, other, is_surface(other, e.face));
+        let low = other[axis];
+        let outward = (e.face & 1u) == 0u;
+        for (var k = 0; k < i32(size); k++) {
+            other[axis] = select(low + k, low + i32(size) - 1 - k, outward);
+            if is_surface(other, e.face) {
+                voxel = other;
+                break;
+            }
+        }
     }
     let spot = fract(across) - vec2(0.5);
     var point = vec3<f32>(voxel) + vec3(0.5) + face_normal(e.face) * 0.5;

@@ -676,8 +676,10 @@ fn white_box() -> (VoxelWorld, CameraView) {
 /// A settled entry whose light is still rising catches up at the fast blend weight (update.wgsl,
 /// `blend_estimate`): in the white box the bounces arrive over hundreds of frames (each about 1 / alpha = 33
 /// frames behind the one before). The game's frame (96x64) in frames 249-256 against the 32-bounce reference
-/// (256 spp; its mean's own noise is under 0.5%). Measured: -6.6% with the fast weight, -11.3% at alpha alone
-/// (by hand, the shader before it); at frames 481-488, -3.4% and -6.1%.
+/// (256 spp; its mean's own noise is under 0.5%). Measured since coarse entries stand for their whole cell
+/// (2026-11-30, direct.wgsl `cell_point`): -8.6% with the fast weight on one lavapipe thread, -8.8% to -9.2% on
+/// two; -13.4% / -13.7% at alpha alone (the blend's weight set to alpha by hand through `GLOWBRICK_SHADERS`).
+/// (Before, the lamp's and the ceiling's faces raced for a coarse cell: -6.2% or -16%, docs/bench/gi.md.)
 pub fn a_settled_entry_whose_light_still_rises_catches_up_at_the_fast_weight() {
     let (world, view) = white_box();
     let truth = reference(&world, &view, 32, 256).mean_luminance();
@@ -686,5 +688,5 @@ pub fn a_settled_entry_whose_light_still_rises_catches_up_at_the_fast_weight() {
     set_accumulate(&mut r, true);
     let bias = r.render(8).unwrap().mean_luminance() / truth - 1.0;
     eprintln!("white box, frames 249-256: {:.2}% against the reference's mean {truth:.4}", 100.0 * bias);
-    assert!(bias > -0.09 && bias < 0.03, "the cache has caught up with the bounces: bias {bias}");
+    assert!(bias > -0.11 && bias < 0.03, "the cache has caught up with the bounces: bias {bias}");
 }

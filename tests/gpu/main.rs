@@ -182,13 +182,6 @@ fn peak_memory_mib() -> Option<u64> {
     Some(kib / 1024)
 }
 
-/// Tests run on one lavapipe thread, where workgroups then run in one order. The GI cache has a race between
-/// workgroups (2026-11-30, not found yet): with lavapipe's threads the white box's bias at frames 249-256 is
-/// -6.0% to -6.7% in most runs and -15% to -17% in about one of four, the old binary as the new; on one thread
-/// it is -6.19% every time, at the same speed. The race is an open bug; this keeps the test about the
-/// fast weight it checks (`docs/bench/gi.md`).
-const ONE_LAVAPIPE_THREAD: &[&str] = &["gi::a_settled_entry_whose_light_still_rises_catches_up_at_the_fast_weight"];
-
 /// The parent's side: run `name` in a child process of this binary, its output going straight to ours.
 fn run_in_child(name: &str) -> Result<(), Failed> {
     let exe = std::env::current_exe().map_err(|e| Failed::from(format!("cannot find the test binary: {e}")))?;
@@ -199,9 +192,6 @@ fn run_in_child(name: &str) -> Result<(), Failed> {
     // same speed (173 s / 168 s). Elsewhere the variable means nothing.
     if std::env::var_os("MALLOC_ARENA_MAX").is_none() {
         child.env("MALLOC_ARENA_MAX", "2");
-    }
-    if ONE_LAVAPIPE_THREAD.contains(&name) && std::env::var_os("LP_NUM_THREADS").is_none() {
-        child.env("LP_NUM_THREADS", "1");
     }
     let status = child.status().map_err(|e| Failed::from(format!("cannot start the test's process: {e}")))?;
     if status.success() { Ok(()) } else { Err(Failed::from(format!("the test's process ended with {status}"))) }
