@@ -169,6 +169,23 @@ fn next_slot(slot: u32) -> u32 {
 
 const NOT_FOUND: u32 = 0xFFFFFFFFu;
 
+// The filtered colour of an entry that holds no value yet (radiance is never negative).
+const NO_VALUE: f32 = -1.0;
+
+// The entry holds no value (its samples count 0, its filtered colour NO_VALUE until the filter pass writes one).
+// The update pass's rays tell an entry with a value by its colour, not its count: the update pass writes the
+// count of the entries it updates while its other threads read it, so the count's test depended on which
+// workgroup ran first; the colour is written only by the filter pass, a later dispatch.
+fn forget_value(slot: u32) {
+    gi_entries[slot].samples = 0u;
+    gi_filtered[slot] = vec4(vec3(NO_VALUE), 0.0);
+}
+
+// Whether the entry's filtered colour holds a value (see forget_value).
+fn has_filtered_value(slot: u32) -> bool {
+    return gi_filtered[slot].r >= 0.0;
+}
+
 fn probe_slot(cell: vec3<i32>, face: u32, object: u32, level: u32, i: u32) -> u32 {
     // Capacities are powers of two.
     return table_base(object) + ((key_hash(cell, face, object, level) + i) & (table_size(object) - 1u));
@@ -192,7 +209,7 @@ fn claim(slot: u32, expected: u32, checksum: u32, voxel: vec3<i32>, face: u32, o
             gi_entries[slot].object = object;
             gi_entries[slot].level = level;
             gi_entries[slot].traced_epoch = NEVER_TRACED;
-            gi_entries[slot].samples = 0u;
+            forget_value(slot);
             gi_entries[slot].last_used = gi.frame;
             gi_entries[slot].last_seen = select(0u, gi.frame, seen);
             gi_direct[slot] = vec4(0.0);

@@ -8,7 +8,7 @@
 #import glowbrick::counters::counters
 #import glowbrick::constants::{GI_RESTART, COUNT_GI_LIVE, COUNT_GI_EVICTED, COUNT_GI_UPDATED,
     COUNT_GI_FREED_TOTAL}
-#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_direct, gi_work, gi_list, used_within, is_live_key, next_slot,
+#import glowbrick::gi::cache::{gi, gi_keys, gi_entries, gi_direct, gi_work, gi_list, used_within, is_live_key, next_slot, forget_value,
     UPDATE_AGE, MAX_AGE, settled, settled_turn, LOST_FACE, FREED_KEY, EMPTY_KEY, WORK_STATIC, WORK_DYNAMIC, WORK_COUNT}
 
 var<workgroup> due_in_group: atomic<u32>;
@@ -40,7 +40,7 @@ fn age_entry(slot: u32) -> bool {
     if !used_within(e.last_used, MAX_AGE) || gone || lost_face {
         // A tombstone, not an empty slot: entries inserted further along the chain stay reachable.
         atomicStore(&gi_keys[slot], FREED_KEY);
-        gi_entries[slot].samples = 0u;
+        forget_value(slot);
         atomicAdd(&evicted_in_group, 1u);
         return false;
     }
@@ -51,7 +51,7 @@ fn age_entry(slot: u32) -> bool {
     // the old light: it has no value until it is due again, so the filter and the rays that find it skip it
     // rather than read the old light until it is freed.
     if !due && (gi.flags & GI_RESTART) != 0u && e.samples != 0u {
-        gi_entries[slot].samples = 0u;
+        forget_value(slot);
         gi_direct[slot] = vec4(0.0);
     }
     return due;

@@ -7,7 +7,7 @@
 
 #import glowbrick::traversal::{trace, box_entry, INF, count_rays_only}
 #import glowbrick::gi::cache::{gi_setting, gi, gi_entries, gi_rays, gi_edits, gi_direct, GiEntry, listed_slot, ray_direction,
-    ray_origin, slot_seed, world_exit, encode_hit, hit_face, hit_distance, is_surface, NEVER_TRACED, LOST_FACE, MISS_FACE, NOT_FOUND,
+    ray_origin, slot_seed, world_exit, encode_hit, hit_face, hit_distance, is_surface, forget_value, NEVER_TRACED, LOST_FACE, MISS_FACE, NOT_FOUND,
     WORK_STATIC}
 #import glowbrick::gi::direct::update_direct
 #import glowbrick::counters::counters
@@ -125,7 +125,7 @@ fn refresh_static_entry(id: vec3<u32>) {
     if gi_setting(GI_CACHE) {
         if refresh(slot, e, ray_origin(e.voxel, e.face, vec3(0.0))) > 0u {
             // What it blended so far saw the old world: start over, its direct light too (an edit reached it).
-            gi_entries[slot].samples = 0u;
+            forget_value(slot);
             gi_direct[slot] = vec4(0.0);
         }
     } else if e.traced_epoch != gi.epoch {

@@ -14,18 +14,19 @@
 #import glowbrick::constants::{RAY_OFFSET, LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, GI_QMC, COUNT_GI_BORROWED, COUNT_RAYS_GI,
     COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
 #import glowbrick::gi::cache::{gi_setting, gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_probe,
-    GiEntry, listed_slot, hit_level, used_within, settled_samples, sequence_step, slot_seed, world_exit, ray_direction, cosine_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
+    GiEntry, has_filtered_value, listed_slot, hit_level, used_within, settled_samples, sequence_step, slot_seed, world_exit, ray_direction, cosine_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
     WORK_STATIC, WORK_DYNAMIC}
 #import glowbrick::gi::direct::{direct_at, cell_point}
 
-// The indirect light a hit face's entry holds (last frame's filtered value), or `fallback` (the shooting entry's
-// own) where it has none yet or no room in a full table: counted as borrowed.
+// The indirect light a hit face's entry holds (its last filtered value), or `fallback` (the shooting entry's
+// own) where it has none yet or no room in a full table: counted as borrowed. (Told by its colour, which this pass
+// does not write: see cache.wgsl's forget_value.)
 // In the first iteration after a change of light there is none: the start from zero (GI_RESTART).
 fn incoming_at(slot: u32, fallback: vec3<f32>) -> vec3<f32> {
     if (gi.flags & GI_RESTART) != 0u && gi.iteration == 0u {
         return vec3(0.0);
     }
-    if slot != NOT_FOUND && gi_entries[slot].samples > 0u {
+    if slot != NOT_FOUND && has_filtered_value(slot) {
         return gi_filtered[slot].rgb;
     }
     borrowed++;
