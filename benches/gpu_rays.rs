@@ -12,13 +12,14 @@
 
 #[path = "../tests/shared/compose.rs"]
 mod compose;
+#[path = "../tests/shared/gpu_world.rs"]
+mod gpu_world;
 
 use bevy::render::renderer::initialize_renderer;
 use bevy::render::settings::{WgpuSettings, WgpuSettingsPriority};
 use glowbrick::bench::rays::{CASES, RaysCase, RaysConfig, case_world, ray_sets};
-use glowbrick::render::gpu_types::WorldInfo;
-use glowbrick::render::scene::world::{UploadState, fits_gpu, split_pool, stage_upload, world_info};
 use glowbrick::world::traversal::{Counts, trace_counted, trace_occupancy_counted};
+use gpu_world::{GpuWorld, world_layout};
 use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -103,78 +104,13 @@ fn options() -> Result<Options, String> {
     Ok(Options { config, cases, out })
 }
 
-/// The GPU's copy of one world: the buffers `trace` reads (group 0 bindings 0-3 and 7-10).
-struct GpuWorld {
-    buffers: Vec<(u32, wgpu::Buffer)>,
-}
-
-impl GpuWorld {
-    /// The world's buffers, or why the adapter cannot bind them.
-    fn new(device: &wgpu::Device, world: &mut glowbrick::world::VoxelWorld) -> Result<GpuWorld, String> {
-        let upload = stage_upload(world, &mut UploadState::default());
-        let full = upload.full.expect("a first upload is a full one");
-        let materials = upload.materials.expect("a first upload holds the materials");
-        let limit = device.limits().max_storage_buffer_binding_size;
-        fits_gpu(world, limit)?;
-        // The pool in as many parts as the renderer makes on this adapter.
-        let pool: &[u8] = bytemuck::cast_slice(&full.pool[..]);
-        let (parts, pool_part_shift) = split_pool(pool, limit);
-        let info = WorldInfo { pool_part_shift, ..world_info(&full, 0) };
-        let storage = |label: &str, bytes: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-        };
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("gpu_rays_world_info"),
-            contents: bytemuck::bytes_of(&info),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        Ok(GpuWorld {
-            buffers: vec![
-                (0, uniform),
-                (1, storage("gpu_rays_top_cells", bytemuck::cast_slice(&full.top_cells[..]))),
-                (2, storage("gpu_rays_pool", parts[0])),
-                (3, storage("gpu_rays_materials", bytemuck::cast_slice(&materials[..]))),
-                (7, storage("gpu_rays_occupancy", bytemuck::cast_slice(&full.occupancy[..]))),
-                (8, storage("gpu_rays_pool_1", parts[1])),
-                (9, storage("gpu_rays_pool_2", parts[2])),
-                (10, storage("gpu_rays_pool_3", parts[3])),
-            ],
-        })
-    }
-}
-
 /// One walk's pipeline.
 struct Walk {
     pipeline: wgpu::ComputePipeline,
 }
 
 fn layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
-        count: None,
-    };
-    let read = wgpu::BufferBindingType::Storage { read_only: true };
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("gpu_rays"),
-        entries: &[
-            entry(0, wgpu::BufferBindingType::Uniform),
-            entry(1, read),
-            entry(2, read),
-            entry(3, read),
-            entry(7, read),
-            entry(8, read),
-            entry(9, read),
-            entry(10, read),
-            entry(100, read),
-            entry(101, wgpu::BufferBindingType::Storage { read_only: false }),
-        ],
-    })
+    world_layout(device, "gpu_rays", &[(100, true), (101, false)])
 }
 
 fn walk(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, name: &'static str, flags: &[&str]) -> Walk {
@@ -311,14 +247,7 @@ fn bench() -> Result<(), String> {
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
-            let mut entries: Vec<wgpu::BindGroupEntry> = gpu_world
-                .buffers
-                .iter()
-                .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                    binding: *binding,
-                    resource: buffer.as_entire_binding(),
-                })
-                .collect();
+            let mut entries = gpu_world.entries();
             entries.push(wgpu::BindGroupEntry { binding: 100, resource: rays.as_entire_binding() });
             entries.push(wgpu::BindGroupEntry { binding: 101, resource: hits.as_entire_binding() });
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -29,6 +29,9 @@ mod denoise;
 mod detail;
 mod extreme_scenes;
 mod gi;
+mod gi_cell;
+#[path = "../shared/gpu_world.rs"]
+mod gpu_world;
 mod headless;
 mod nee_converges;
 mod objects;
@@ -85,6 +88,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             lights_embedded_in_the_surface_the_camera_sees,
             lamps_lying_on_a_floor,
         ],
+        gi_cell: [a_coarse_entry_samples_the_same_faces_whichever_face_inserted_it],
         gi: [
             a_fresh_cache_brings_in_the_bounces_during_its_warm_up,
             a_glowing_object_behind_a_wall_does_not_leak_through_it,
