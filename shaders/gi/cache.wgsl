@@ -169,7 +169,8 @@ fn next_slot(slot: u32) -> u32 {
 
 const NOT_FOUND: u32 = 0xFFFFFFFFu;
 
-// The filtered colour of an entry that holds no value yet (radiance is never negative).
+// The filtered colour of an entry that holds no value yet (radiance is never negative); the tables start with it
+// (src/render/gi/tables.rs).
 const NO_VALUE: f32 = -1.0;
 
 // The entry holds no value (its samples count 0, its filtered colour NO_VALUE until the filter pass writes one).

@@ -37,7 +37,9 @@ fn direct_at(point: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<functio
 // face's normal and the spot on a face (at level 0 the entry's own face): the column's first face of the entry's
 // orientation seen from outside, so what a coarse entry's value stands for is its cell's average over what rays
 // arriving there meet, whichever face inserted it. Where the column holds none, the same spot on the inserting
-// face. The point lies inside its face by a hair: one exactly on a neighbour's plane could start a ray in that voxel.
+// face (so a cell that faces cover only in part still leans, in those columns, toward whichever face inserted it;
+// as do the rays of gi_cached_hits=on, which start from the inserting face). The point lies inside its face by a
+// hair: one exactly on a neighbour's plane could start a ray in that voxel.
 struct CellPoint {
     voxel: vec3<i32>,
     point: vec3<f32>,
@@ -59,8 +61,12 @@ fn cell_point(e: GiEntry, u: vec2<f32>) -> CellPoint {
         let outward = (e.face & 1u) == 0u;
         for (var k = 0; k < i32(size); k++) {
             other[axis] = select(low + k, low + i32(size) - 1 - k, outward);
-            if is_surface(other, e.face) {
-                voxel = other;
+            // The first solid voxel ends the search: a face behind it is hidden (only the outermost one can be
+            // covered, from beyond the cell).
+            if voxel_at(other) != 0u {
+                if is_surface(other, e.face) {
+                    voxel = other;
+                }
                 break;
             }
         }

@@ -122,47 +122,79 @@ fn sampled_voxels(world: &mut VoxelWorld, queries: &[Query]) -> Vec<IVec3> {
     words.chunks(4).map(|w| IVec3::new(w[0], w[1], w[2])).collect()
 }
 
-/// The face index of -Y (0 +X, 1 -X, 2 +Y, 3 -Y, ...).
+/// The face indices of +Y and -Y (0 +X, 1 -X, 2 +Y, 3 -Y, ...).
+const UP: u32 = 2;
 const DOWN: u32 = 3;
 
-/// The white box's corner of trouble: a ceiling slab at y = 11 with a 2 x 2 block hanging under it at y = 10
-/// (x, z in 9..=10), so the downward faces of the coarse cells around it lie in two planes. Their entries,
-/// inserted by the block's underside or by the ceiling, sample the same voxels: the block where it hangs, the
-/// ceiling elsewhere; at levels 1 to 3, over every column of the cell.
+/// The white box's corner of trouble and a few columns around it. Under a ceiling slab at y = 11 a 2 x 2 block
+/// hangs at y = 10 (x, z in 9..=10), so the downward faces of the coarse cells around it lie in two planes; a lone
+/// voxel at (11, 8, 11) faces down below them; the ceiling has a hole at (14, 11, 14); a stack at (8, 7..=8, 11)
+/// is covered from below. Beside them, a floor (y 0..=2) with a bump at (19, 3, 19) faces up. The entries of a
+/// cell, inserted by any of its faces, sample the same voxels in each column: its outermost face seen from where
+/// the face looks (the lone voxel before the ceiling; the block where it hangs; the bump on the floor); where
+/// the column holds none that can be seen (the hole; the covered stack), the inserting face; at levels 1 to 3.
 pub fn a_coarse_entry_samples_the_same_faces_whichever_face_inserted_it() {
     let mut palette = Palette::new(vec![]);
     let white = palette.push(Material::solid("white", [0.9, 0.9, 0.9]));
     let mut world = VoxelWorld::new(UVec3::new(24, 16, 24), palette);
-    world.grid.fill_box(IVec3::new(0, 11, 0), IVec3::new(24, 12, 24), white).unwrap();
-    world.grid.fill_box(IVec3::new(9, 10, 9), IVec3::new(11, 11, 11), white).unwrap();
-    let hangs = |x: i32, z: i32| (9..=10).contains(&x) && (9..=10).contains(&z);
+    let mut fill = |lo: [i32; 3], hi: [i32; 3], id| world.grid.fill_box(IVec3::from(lo), IVec3::from(hi), id).unwrap();
+    fill([0, 11, 0], [24, 12, 24], white);
+    fill([9, 10, 9], [11, 11, 11], white);
+    fill([11, 8, 11], [12, 9, 12], white);
+    fill([14, 11, 14], [15, 12, 15], 0);
+    fill([8, 7, 11], [9, 9, 12], white);
+    fill([0, 0, 0], [24, 3, 24], white);
+    fill([19, 3, 19], [20, 4, 20], white);
+    // The voxel whose face each column of a cell shows (None: no face is seen there), by face and column.
+    let seen = |face: u32, x: i32, z: i32| -> Option<i32> {
+        if face == UP {
+            return Some(if (x, z) == (19, 19) { 3 } else { 2 });
+        }
+        match (x, z) {
+            (11, 11) => Some(8),
+            (14, 14) | (8, 11) => None,
+            _ if (9..=10).contains(&x) && (9..=10).contains(&z) => Some(10),
+            _ => Some(11),
+        }
+    };
+    let cases = [(DOWN, IVec3::new(9, 10, 9)), (UP, IVec3::new(19, 3, 19))];
     let mut queries = Vec::new();
     let mut expected = Vec::new();
-    for level in 1..=3u32 {
-        let size = 1i32 << level;
-        let cell_lo = (IVec3::new(9, 10, 9) >> level) << level;
-        // The block's underside and a ceiling face away from the block, both in the cell.
-        let ceiling = (cell_lo.x..cell_lo.x + size)
-            .flat_map(|x| (cell_lo.z..cell_lo.z + size).map(move |z| IVec3::new(x, 11, z)))
-            .find(|v| !hangs(v.x, v.z))
-            .expect("the cell holds ceiling beside the block");
-        for inserter in [IVec3::new(9, 10, 9), ceiling] {
-            for i in 0..size {
-                for j in 0..size {
-                    // Face -Y's in-plane axes are z then x (tangent_axes: (axis + 1) % 3, (axis + 2) % 3).
+    for (face, corner) in cases {
+        for level in 1..=3u32 {
+            let size = 1i32 << level;
+            let cell_lo = (corner >> level) << level;
+            let columns: Vec<(i32, i32)> =
+                (0..size).flat_map(|i| (0..size).map(move |j| (cell_lo.z + i, cell_lo.x + j))).collect();
+            let in_cell = |v: IVec3| (v.y >> level) << level == cell_lo.y;
+            // The cell's faces of this orientation: every one may insert its entry.
+            let faces: Vec<IVec3> = columns
+                .iter()
+                .filter_map(|&(z, x)| seen(face, x, z).map(|y| IVec3::new(x, y, z)))
+                .filter(|&v| in_cell(v))
+                .collect();
+            assert!(faces.len() >= 2, "the cell holds faces in two planes at least");
+            for &inserter in &faces {
+                for (k, &(z, x)) in columns.iter().enumerate() {
+                    // Face ±Y's in-plane axes are z then x (tangent_axes: (axis + 1) % 3, (axis + 2) % 3).
+                    let (i, j) = (k as i32 / size, k as i32 % size);
                     let u = [(i as f32 + 0.5) / size as f32, (j as f32 + 0.5) / size as f32];
-                    let (z, x) = (cell_lo.z + i, cell_lo.x + j);
-                    queries.push(Query { voxel: inserter.to_array(), face: DOWN, u, level, _pad: 0 });
-                    expected.push((level, inserter, IVec3::new(x, if hangs(x, z) { 10 } else { 11 }, z)));
+                    queries.push(Query { voxel: inserter.to_array(), face, u, level, _pad: 0 });
+                    let want = match seen(face, x, z).map(|y| IVec3::new(x, y, z)) {
+                        Some(v) if in_cell(v) => v,
+                        _ => inserter,
+                    };
+                    expected.push((face, level, inserter, want));
                 }
             }
         }
     }
     let sampled = sampled_voxels(&mut world, &queries);
-    let wrong: Vec<_> = expected.iter().zip(&sampled).filter(|((_, _, want), got)| want != *got).collect();
+    let wrong: Vec<_> = expected.iter().zip(&sampled).filter(|((.., want), got)| want != *got).collect();
     assert!(
         wrong.is_empty(),
-        "{} of {} points sample another face than the one rays meet there (level, inserting voxel, want; got): {:?}",
+        "{} of {} points sample another face than the one rays meet there (face, level, inserting voxel, want; \
+         got): {:?}",
         wrong.len(),
         sampled.len(),
         &wrong[..wrong.len().min(6)]

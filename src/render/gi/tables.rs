@@ -6,7 +6,7 @@ use crate::render::gpu_types::{
     GI_WORK_WORDS, GiEntry,
 };
 use crate::settings::GiSettings;
-use bevy::render::render_resource::{Buffer, BufferDescriptor, BufferUsages};
+use bevy::render::render_resource::{Buffer, BufferDescriptor, BufferInitDescriptor, BufferUsages};
 use bevy::render::renderer::RenderDevice;
 
 /// Entries in the moving objects' table (a power of two; the static world's is the `gi_table` setting).
@@ -105,7 +105,7 @@ impl Tables {
             keys: storage("glowbrick_gi_keys", n * GI_KEY_BYTES),
             entries: storage("glowbrick_gi_entries", n * size_of::<GiEntry>() as u64),
             irradiance: storage("glowbrick_gi_irradiance", n * GI_RADIANCE_BYTES),
-            filtered: storage("glowbrick_gi_filtered", n * GI_RADIANCE_BYTES),
+            filtered: no_values(device, n),
             rays: storage("glowbrick_gi_rays", n * shape.rays as u64 * RAY_BYTES),
             direct: storage("glowbrick_gi_direct", n * GI_RADIANCE_BYTES),
             work: buffer("glowbrick_gi_work", WORK_BYTES, BufferUsages::COPY_SRC),
@@ -118,6 +118,22 @@ impl Tables {
             }),
         }
     }
+}
+
+/// The filtered colour of an entry with no value yet: `NO_VALUE` of `shaders/gi/cache.wgsl` (radiance is never
+/// negative), which the update pass's rays test.
+const NO_VALUE: f32 = -1.0;
+
+/// The filtered radiance of `n` entries, none of which holds a value yet: every slot starts as `forget_value`
+/// leaves one (a zeroed buffer would read as black light to a ray that finds an entry before its claim's
+/// writes are seen).
+fn no_values(device: &RenderDevice, n: u64) -> Buffer {
+    let colours = vec![[NO_VALUE, NO_VALUE, NO_VALUE, 0.0f32]; (n * GI_RADIANCE_BYTES).max(16) as usize / 16];
+    device.create_buffer_with_data(&BufferInitDescriptor {
+        label: Some("glowbrick_gi_filtered"),
+        contents: bytemuck::cast_slice(&colours),
+        usage: BufferUsages::STORAGE | BufferUsages::COPY_DST,
+    })
 }
 
 /// The work buffer: per table three dispatch sizes and a count.
