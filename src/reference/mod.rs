@@ -245,9 +245,15 @@ impl Scene<'_> {
         u: [f32; 5],
     ) -> Option<(Candidate<'_>, f32)> {
         let near_share = if around.is_empty() { 0.0 } else { 0.5 };
-        let slot = if u[4] < near_share { around.pick(r_column)? } else { self.alias.sample(r_column, u[0])?.0 };
+        // A power pick's chance comes with it; a near pick looks it up.
+        let (slot, power_pdf) = if u[4] < near_share {
+            let slot = around.pick(r_column)?;
+            (slot, self.nearby.power_pdf(slot))
+        } else {
+            self.alias.sample(r_column, u[0])?
+        };
         let (Some(light), _) = self.pool.slot(slot)? else { return None };
-        let pick_pdf = (1.0 - near_share) * self.nearby.power_pdf(slot) + near_share * around.pdf(light.min);
+        let pick_pdf = (1.0 - near_share) * power_pdf + near_share * around.pdf(light.min);
         let point = sample_light_point(light, p, near_by_solid_angle, u[1], u[2], u[3])?;
         let to_light = point.position - p;
         let d2 = to_light.length_squared();

@@ -91,7 +91,7 @@ impl Neighbourhood<'_> {
 
     /// The chance `pick` draws the light with corner `min` (0 outside the neighbourhood).
     pub fn pdf(&self, min: IVec3) -> f32 {
-        let offset = cell_of(min.as_vec3()) - self.centre;
+        let offset = min.div_euclid(IVec3::splat(CELL)) - self.centre;
         if self.count == 0 || offset.abs().max_element() > 1 { 0.0 } else { 1.0 / self.count as f32 }
     }
 }
