@@ -12,6 +12,8 @@
 
 #[path = "../tests/shared/compose.rs"]
 mod compose;
+#[path = "../tests/shared/compute.rs"]
+mod compute;
 #[path = "../tests/shared/gpu_world.rs"]
 mod gpu_world;
 
@@ -20,7 +22,6 @@ use bevy::render::settings::{WgpuSettings, WgpuSettingsPriority};
 use glowbrick::bench::rays::{CASES, RaysCase, RaysConfig, case_world, ray_sets};
 use glowbrick::world::traversal::{Counts, trace_counted, trace_occupancy_counted};
 use gpu_world::{GpuWorld, world_layout};
-use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -115,24 +116,7 @@ fn layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
 
 fn walk(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, name: &'static str, flags: &[&str]) -> Walk {
     let module = compose::compose_with(&mut compose::composer(), "gpu_rays.wgsl", SHADER, flags);
-    let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(name),
-        source: wgpu::ShaderSource::Naga(Cow::Owned(module)),
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(name),
-        bind_group_layouts: &[Some(layout)],
-        immediate_size: 0,
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(name),
-        layout: Some(&pipeline_layout),
-        module: &shader,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    Walk { pipeline }
+    Walk { pipeline: compute::pipeline(device, name, module, Some(layout)) }
 }
 
 /// A hit read back: the voxel (when found), steps and loads.
@@ -150,12 +134,7 @@ struct GpuHit {
 /// Seconds of one dispatch of `walk` over the `rays` rays, until the GPU is done.
 fn dispatch(device: &wgpu::Device, queue: &wgpu::Queue, walk: &Walk, bind_group: &wgpu::BindGroup, rays: u32) -> f64 {
     let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&walk.pipeline);
-        pass.set_bind_group(0, bind_group, &[]);
-        pass.dispatch_workgroups(rays.div_ceil(64), 1, 1);
-    }
+    compute::record_dispatch(&mut encoder, &walk.pipeline, bind_group, rays);
     let start = Instant::now();
     queue.submit([encoder.finish()]);
     device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None }).expect("the GPU finishes");
@@ -164,21 +143,8 @@ fn dispatch(device: &wgpu::Device, queue: &wgpu::Queue, walk: &Walk, bind_group:
 
 /// The hits the last dispatch wrote.
 fn read_hits(device: &wgpu::Device, queue: &wgpu::Queue, hits: &wgpu::Buffer, rays: u32) -> Vec<GpuHit> {
-    let bytes = u64::from(rays) * HIT_BYTES;
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("gpu_rays_readback"),
-        size: bytes,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    encoder.copy_buffer_to_buffer(hits, 0, &readback, 0, bytes);
-    queue.submit([encoder.finish()]);
-    readback.slice(..).map_async(wgpu::MapMode::Read, |mapped| mapped.expect("readback maps"));
-    device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None }).expect("the GPU finishes");
-    let out = bytemuck::cast_slice(&readback.slice(..).get_mapped_range()).to_vec();
-    readback.unmap();
-    out
+    let bytes = compute::read_buffer(device, queue, hits, u64::from(rays) * HIT_BYTES);
+    bytes.chunks_exact(HIT_BYTES as usize).map(bytemuck::pod_read_unaligned).collect()
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

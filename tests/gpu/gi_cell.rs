@@ -3,14 +3,13 @@
 //! its points must not depend on which of the cell's faces inserted it (which face wins an insert is a race
 //! between workgroups: docs/bench/gi.md).
 
-use crate::compose;
 use crate::gpu_world::{GpuWorld, world_layout};
+use crate::{compose, compute};
 use bevy::math::{IVec3, UVec3};
 use bevy::render::renderer::initialize_renderer;
 use bevy::render::settings::WgpuSettings;
 use glowbrick::world::VoxelWorld;
 use glowbrick::world::palette::{Material, Palette};
-use std::borrow::Cow;
 use wgpu::util::DeviceExt;
 
 /// One query per thread: an entry (inserting voxel, face, level) and a point `u` across its cell; the answer is
@@ -64,23 +63,7 @@ fn sampled_voxels(world: &mut VoxelWorld, queries: &[Query]) -> Vec<IVec3> {
     let gpu_world = GpuWorld::new(device, world).expect("a small world fits");
     let layout = world_layout(device, "gi_cell", &[(100, true), (101, false)]);
     let module = compose::compose(&mut compose::composer(), "gi_cell.wgsl", SHADER);
-    let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("gi_cell"),
-        source: wgpu::ShaderSource::Naga(Cow::Owned(module)),
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("gi_cell"),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("gi_cell"),
-        layout: Some(&pipeline_layout),
-        module: &shader,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let pipeline = compute::pipeline(device, "gi_cell", module, Some(&layout));
     let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("gi_cell_queries"),
         contents: bytemuck::cast_slice(queries),
@@ -93,12 +76,6 @@ fn sampled_voxels(world: &mut VoxelWorld, queries: &[Query]) -> Vec<IVec3> {
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("gi_cell_readback"),
-        size: bytes,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
     let mut entries = gpu_world.entries();
     entries.push(wgpu::BindGroupEntry { binding: 100, resource: input.as_entire_binding() });
     entries.push(wgpu::BindGroupEntry { binding: 101, resource: output.as_entire_binding() });
@@ -107,19 +84,10 @@ fn sampled_voxels(world: &mut VoxelWorld, queries: &[Query]) -> Vec<IVec3> {
         layout: &layout,
         entries: &entries,
     });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups((queries.len() as u32).div_ceil(64), 1, 1);
-    }
-    encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, bytes);
-    queue.submit([encoder.finish()]);
-    readback.slice(..).map_async(wgpu::MapMode::Read, |mapped| mapped.expect("readback maps"));
-    device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None }).expect("the GPU finishes");
-    let words: Vec<i32> = bytemuck::cast_slice(&readback.slice(..).get_mapped_range()).to_vec();
-    words.chunks(4).map(|w| IVec3::new(w[0], w[1], w[2])).collect()
+    let answers = compute::run_and_read(device, queue, &pipeline, &bind_group, queries.len() as u32, &output, bytes);
+    // Each answer is a vec4<i32>: the voxel, then padding.
+    let words: Vec<i32> = answers.chunks_exact(4).map(bytemuck::pod_read_unaligned).collect();
+    words.chunks_exact(4).map(|w| IVec3::new(w[0], w[1], w[2])).collect()
 }
 
 /// The face indices of +Y and -Y (0 +X, 1 -X, 2 +Y, 3 -Y, ...).

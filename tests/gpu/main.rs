@@ -24,6 +24,8 @@ mod cli;
 mod common;
 #[path = "../shared/compose.rs"]
 mod compose;
+#[path = "../shared/compute.rs"]
+mod compute;
 mod daylight;
 mod denoise;
 mod detail;

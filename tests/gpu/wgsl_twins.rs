@@ -5,7 +5,7 @@
 //! Each test composes a small compute shader that imports the library function as the passes do, runs it once
 //! per input and reads the results back.
 
-use crate::compose;
+use crate::{compose, compute};
 use bevy::math::{IVec3, Vec3};
 use bevy::render::renderer::initialize_renderer;
 use bevy::render::settings::WgpuSettings;
@@ -13,7 +13,6 @@ use glowbrick::lights::index::light_hash;
 use glowbrick::reference::sampling::Pcg;
 use glowbrick::reference::spherical_rect::SphericalRect;
 use glowbrick::world::grid::BRICK_SIZE;
-use std::borrow::Cow;
 use wgpu::util::DeviceExt;
 
 /// Runs `source`'s `main` (workgroups of 64) once per input element: `input` at group 0 binding 100, the
@@ -25,18 +24,7 @@ fn run_compute(source: &str, input: &[u8], elements: u32, output_bytes: u64) -> 
     let backends = settings.backends.expect("a wgpu backend");
     let resources = bevy::tasks::block_on(initialize_renderer(backends, None, &settings));
     let (device, queue) = (resources.0.wgpu_device(), &resources.1);
-    let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("wgsl_twins"),
-        source: wgpu::ShaderSource::Naga(Cow::Owned(module)),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("wgsl_twins"),
-        layout: None,
-        module: &shader,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let pipeline = compute::pipeline(device, "wgsl_twins", module, None);
     let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("wgsl_twins_input"),
         contents: input,
@@ -48,12 +36,6 @@ fn run_compute(source: &str, input: &[u8], elements: u32, output_bytes: u64) -> 
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("wgsl_twins_readback"),
-        size: output_bytes,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
     let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("wgsl_twins"),
         layout: &pipeline.get_bind_group_layout(0),
@@ -62,20 +44,7 @@ fn run_compute(source: &str, input: &[u8], elements: u32, output_bytes: u64) -> 
             wgpu::BindGroupEntry { binding: 101, resource: output.as_entire_binding() },
         ],
     });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups(elements.div_ceil(64), 1, 1);
-    }
-    encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, output_bytes);
-    queue.submit([encoder.finish()]);
-    readback.slice(..).map_async(wgpu::MapMode::Read, |mapped| mapped.expect("readback maps"));
-    device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None }).expect("the GPU finishes");
-    let bytes = readback.slice(..).get_mapped_range().to_vec();
-    readback.unmap();
-    bytes
+    compute::run_and_read(device, queue, &pipeline, &bind_group, elements, &output, output_bytes)
 }
 
 fn words(bytes: &[u8]) -> impl Iterator<Item = u32> + '_ {
