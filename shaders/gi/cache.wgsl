@@ -7,7 +7,7 @@
 #import glowbrick::traversal::{face_normal, box_entry}
 #import glowbrick::random::pcg
 #import glowbrick::counters::counters
-#import glowbrick::constants::{KEY_GENERIC, KEY_GI, KEY_GI_FLAGS, RAY_OFFSET, COUNT_GI_INSERTED, COUNT_GI_FULL, GI_WORK_STATIC_WORD, GI_WORK_DYNAMIC_WORD,
+#import glowbrick::constants::{GI_NO_VALUE, KEY_GENERIC, KEY_GI, KEY_GI_FLAGS, RAY_OFFSET, COUNT_GI_INSERTED, COUNT_GI_FULL, GI_WORK_STATIC_WORD, GI_WORK_DYNAMIC_WORD,
     GI_WORK_COUNT_WORD}
 
 struct GiParams {
@@ -171,7 +171,7 @@ const NOT_FOUND: u32 = 0xFFFFFFFFu;
 
 // The filtered colour of an entry that holds no value yet (radiance is never negative); the tables start with it
 // (src/render/gi/tables.rs).
-const NO_VALUE: f32 = -1.0;
+const NO_VALUE: f32 = f32(GI_NO_VALUE);
 
 // The entry holds no value (its samples count 0, its filtered colour NO_VALUE until the filter pass writes one).
 // The update pass's rays tell an entry with a value by its colour, not its count: the update pass writes the

@@ -71,6 +71,8 @@ const GI_CACHE: u32 = #{GI_CACHE}u;
 const GI_RESTART: u32 = #{GI_RESTART}u;
 const GI_EDIT_RESTART: u32 = #{GI_EDIT_RESTART}u;
 const GI_QMC: u32 = #{GI_QMC}u;
+// The filtered colour of a GI entry with no value yet (shaders/gi/cache.wgsl's forget_value).
+const GI_NO_VALUE: i32 = #{GI_NO_VALUE};
 // Direct-light samples an entry starts over with after a change of light (gi/direct.wgsl).
 const GI_RESTART_SAMPLES: u32 = #{GI_RESTART_SAMPLES}u;
 // The GI work buffer (gi/cache.wgsl, gi_work), in words: where the static and the dynamic table's dispatch size

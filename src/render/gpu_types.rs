@@ -380,6 +380,9 @@ pub const GI_RESTART: u32 = 8;
 pub const GI_EDIT_RESTART: u32 = 16;
 /// `GiParams::flags`: fresh rays and direct-light points from each entry's low-discrepancy sequence (`gi_qmc`).
 pub const GI_QMC: u32 = 32;
+/// The filtered colour of a GI entry that holds no value yet (radiance is never negative): the tables start with
+/// it and `forget_value` (`shaders/gi/cache.wgsl`) writes it back. An integer, as the shared table holds them.
+pub const GI_NO_VALUE: i32 = -1;
 
 /// The G-buffer's packed hit: bit 0 hit, bits 1-3 face, bits 4-19 material, bits 20-31 the moving object's id.
 pub const GBUFFER_FACE_SHIFT: u32 = 1;
@@ -462,6 +465,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("GI_RESTART", U32(GI_RESTART)),
         ("GI_EDIT_RESTART", U32(GI_EDIT_RESTART)),
         ("GI_QMC", U32(GI_QMC)),
+        ("GI_NO_VALUE", I32(GI_NO_VALUE)),
         ("GI_RESTART_SAMPLES", U32(super::gi::RESTART_DIRECT_SAMPLES)),
         // The GI work buffer's words.
         ("GI_WORK_STATIC_WORD", U32(GI_WORK_STATIC_WORD)),

@@ -2,8 +2,8 @@
 //! objects') in one set of buffers, and the work buffer the compaction pass fills with this frame's dispatches.
 
 use crate::render::gpu_types::{
-    GI_EMPTY_WORK, GI_KEY_BYTES, GI_RADIANCE_BYTES, GI_RAY_BYTES, GI_WORK_DYNAMIC_WORD, GI_WORK_STATIC_WORD,
-    GI_WORK_WORDS, GiEntry,
+    GI_EMPTY_WORK, GI_KEY_BYTES, GI_NO_VALUE, GI_RADIANCE_BYTES, GI_RAY_BYTES, GI_WORK_DYNAMIC_WORD,
+    GI_WORK_STATIC_WORD, GI_WORK_WORDS, GiEntry,
 };
 use crate::settings::GiSettings;
 use bevy::render::render_resource::{Buffer, BufferDescriptor, BufferInitDescriptor, BufferUsages};
@@ -120,15 +120,12 @@ impl Tables {
     }
 }
 
-/// The filtered colour of an entry with no value yet: `NO_VALUE` of `shaders/gi/cache.wgsl` (radiance is never
-/// negative), which the update pass's rays test.
-const NO_VALUE: f32 = -1.0;
-
-/// The filtered radiance of `n` entries, none of which holds a value yet: every slot starts as `forget_value`
+/// The filtered radiance of `n` entries, none of which holds a value yet (`GI_NO_VALUE`): every slot starts as `forget_value`
 /// leaves one (a zeroed buffer would read as black light to a ray that finds an entry before its claim's
 /// writes are seen).
 fn no_values(device: &RenderDevice, n: u64) -> Buffer {
-    let colours = vec![[NO_VALUE, NO_VALUE, NO_VALUE, 0.0f32]; (n * GI_RADIANCE_BYTES).max(16) as usize / 16];
+    let none = GI_NO_VALUE as f32;
+    let colours = vec![[none, none, none, 0.0f32]; (n * GI_RADIANCE_BYTES).max(16) as usize / 16];
     device.create_buffer_with_data(&BufferInitDescriptor {
         label: Some("glowbrick_gi_filtered"),
         contents: bytemuck::cast_slice(&colours),
