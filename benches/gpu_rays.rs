@@ -25,7 +25,6 @@ use gpu_world::{GpuWorld, world_layout};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
-use wgpu::util::DeviceExt;
 
 /// One ray per thread: its hit and its own step and load counts.
 const SHADER: &str = "
@@ -111,7 +110,7 @@ struct Walk {
 }
 
 fn layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    world_layout(device, "gpu_rays", &[(100, true), (101, false)])
+    world_layout(device, "gpu_rays", &[(compute::INPUT_BINDING, true), (compute::OUTPUT_BINDING, false)])
 }
 
 fn walk(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, name: &'static str, flags: &[&str]) -> Walk {
@@ -202,25 +201,8 @@ fn bench() -> Result<(), String> {
                     [ray.origin.x, ray.origin.y, ray.origin.z, max, ray.dir.x, ray.dir.y, ray.dir.z, 0.0]
                 })
                 .collect();
-            let rays = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("gpu_rays_rays"),
-                contents: bytemuck::cast_slice(&packed),
-                usage: wgpu::BufferUsages::STORAGE,
-            });
-            let hits = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("gpu_rays_hits"),
-                size: n as u64 * HIT_BYTES,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            let mut entries = gpu_world.entries();
-            entries.push(wgpu::BindGroupEntry { binding: 100, resource: rays.as_entire_binding() });
-            entries.push(wgpu::BindGroupEntry { binding: 101, resource: hits.as_entire_binding() });
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("gpu_rays"),
-                layout: &layout,
-                entries: &entries,
-            });
+            let io = compute::Io::new(device, "gpu_rays", bytemuck::cast_slice(&packed), n as u64 * HIT_BYTES);
+            let bind_group = io.bind_group(device, "gpu_rays", &layout, gpu_world.entries());
             // The CPU walks' hits on the same rays, to check the GPU's.
             let cpu = |traverse: fn(
                 &glowbrick::world::BrickGrid,
@@ -236,7 +218,7 @@ fn bench() -> Result<(), String> {
             // the same hits every run.
             let last = walks.each_ref().map(|walk| {
                 dispatch(device, queue, walk, &bind_group, n as u32);
-                read_hits(device, queue, &hits, n as u32)
+                read_hits(device, queue, &io.output, n as u32)
             });
             let mut seconds = [Vec::new(), Vec::new()];
             for _ in 0..options.config.repeats {

@@ -10,7 +10,6 @@ use bevy::render::renderer::initialize_renderer;
 use bevy::render::settings::WgpuSettings;
 use glowbrick::world::VoxelWorld;
 use glowbrick::world::palette::{Material, Palette};
-use wgpu::util::DeviceExt;
 
 /// One query per thread: an entry (inserting voxel, face, level) and a point `u` across its cell; the answer is
 /// the voxel whose face `cell_point` samples there.
@@ -61,30 +60,12 @@ fn sampled_voxels(world: &mut VoxelWorld, queries: &[Query]) -> Vec<IVec3> {
     let resources = bevy::tasks::block_on(initialize_renderer(backends, None, &settings));
     let (device, queue) = (resources.0.wgpu_device(), &resources.1);
     let gpu_world = GpuWorld::new(device, world).expect("a small world fits");
-    let layout = world_layout(device, "gi_cell", &[(100, true), (101, false)]);
+    let layout = world_layout(device, "gi_cell", &[(compute::INPUT_BINDING, true), (compute::OUTPUT_BINDING, false)]);
     let module = compose::compose(&mut compose::composer(), "gi_cell.wgsl", SHADER);
     let pipeline = compute::pipeline(device, "gi_cell", module, Some(&layout));
-    let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("gi_cell_queries"),
-        contents: bytemuck::cast_slice(queries),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    let bytes = queries.len() as u64 * 16;
-    let output = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("gi_cell_answers"),
-        size: bytes,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let mut entries = gpu_world.entries();
-    entries.push(wgpu::BindGroupEntry { binding: 100, resource: input.as_entire_binding() });
-    entries.push(wgpu::BindGroupEntry { binding: 101, resource: output.as_entire_binding() });
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("gi_cell"),
-        layout: &layout,
-        entries: &entries,
-    });
-    let answers = compute::run_and_read(device, queue, &pipeline, &bind_group, queries.len() as u32, &output, bytes);
+    let io = compute::Io::new(device, "gi_cell", bytemuck::cast_slice(queries), queries.len() as u64 * 16);
+    let bind_group = io.bind_group(device, "gi_cell", &layout, gpu_world.entries());
+    let answers = compute::run_and_read(device, queue, &pipeline, &bind_group, queries.len() as u32, &io);
     // Each answer is a vec4<i32>: the voxel, then padding.
     let words: Vec<i32> = answers.chunks_exact(4).map(bytemuck::pod_read_unaligned).collect();
     words.chunks_exact(4).map(|w| IVec3::new(w[0], w[1], w[2])).collect()

@@ -13,7 +13,6 @@ use glowbrick::lights::index::light_hash;
 use glowbrick::reference::sampling::Pcg;
 use glowbrick::reference::spherical_rect::SphericalRect;
 use glowbrick::world::grid::BRICK_SIZE;
-use wgpu::util::DeviceExt;
 
 /// Runs `source`'s `main` (workgroups of 64) once per input element: `input` at group 0 binding 100, the
 /// results, `output_bytes` of them, from binding 101. The bindings lie past every binding the libraries declare,
@@ -25,26 +24,9 @@ fn run_compute(source: &str, input: &[u8], elements: u32, output_bytes: u64) -> 
     let resources = bevy::tasks::block_on(initialize_renderer(backends, None, &settings));
     let (device, queue) = (resources.0.wgpu_device(), &resources.1);
     let pipeline = compute::pipeline(device, "wgsl_twins", module, None);
-    let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("wgsl_twins_input"),
-        contents: input,
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    let output = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("wgsl_twins_output"),
-        size: output_bytes,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("wgsl_twins"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry { binding: 100, resource: input.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 101, resource: output.as_entire_binding() },
-        ],
-    });
-    compute::run_and_read(device, queue, &pipeline, &bind_group, elements, &output, output_bytes)
+    let io = compute::Io::new(device, "wgsl_twins", input, output_bytes);
+    let bind_group = io.bind_group(device, "wgsl_twins", &pipeline.get_bind_group_layout(0), Vec::new());
+    compute::run_and_read(device, queue, &pipeline, &bind_group, elements, &io)
 }
 
 fn words(bytes: &[u8]) -> impl Iterator<Item = u32> + '_ {
