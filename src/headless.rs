@@ -419,7 +419,7 @@ mod tests {
                 Ok((*t == 150).then_some(*t))
             },
             |_| None,
-            // A frame every tick, about 2 ms apart: far under the timeout even on a loaded machine.
+            // A frame every tick, a few milliseconds apart: far under the timeout even on a loaded machine.
             |t| *t,
             |t, timeout| format!("timed out after {timeout:?} at tick {t}"),
         );

@@ -1,9 +1,10 @@
 //! glowbrick: a voxel sandbox lit by Voxel ReSTIR direct lighting and a per-voxel-face GI cache.
 //!
-//! Layers, bottom up (a module imports only from its own layer and those below; `tests/` checks it):
-//! `colour`, `image_io` -> `world` (the brick grid, its files, traversal, camera math) -> `lights`, `dynamic`,
-//! `reference` (CPU only) -> `render`, `settings`, `core_plugin` -> `game` (the playable app), `headless`
-//! (rendering without a window) -> `bench`, `stress` -> `cli`.
+//! Layers, bottom up (a module imports only from its own layer and those below; `tests/cpu/layers.rs` checks it,
+//! and that this line and the README's agree with its table):
+//! `colour` / `image_io` / `progress` / `alloc_watch` -> `world` (the brick grid, its files, traversal, camera
+//! math) -> `lights` / `dynamic` / `reference` (CPU only) -> `render` / `settings` / `core_plugin` / `net` ->
+//! `game` (the playable app) / `headless` (rendering without a window) -> `bench` / `stress` -> `cli`.
 
 pub mod alloc_watch;
 pub mod bench;

@@ -29,8 +29,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         wavelet[index] = vec4(noisy[index].rgb, -1.0);
         return;
     }
-    // No firefly clamp: clipping a sample to 10x its brightest neighbour moved the test room's mean by -5.3% and
-    // did not lower the error (docs/bench/denoise.md); the wavelet's luminance weights already keep a lone
+    // No firefly clamp: clipping a sample to 10x its brightest neighbour darkened the test room's mean and did
+    // not lower the error (docs/bench/denoise.md); the wavelet's luminance weights already keep a lone
     // bright sample from smearing.
     let c = demodulated(index, s);
     // Last frame's history where the same surface was seen: same face axis and sign, same object, depth within

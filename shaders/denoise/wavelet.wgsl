@@ -59,9 +59,8 @@ fn filtered(pixel: vec2<u32>, step: i32, source: u32) -> vec4<f32> {
             let tap = wavelet[source + qi];
             // The pair's larger deviation, so a dark pixel with no variance of its own still gathers from a
             // bright neighbour that spreads: with each pixel's own, bright samples lost energy to neighbours that
-            // never took it (measured -5% on the test room's mean). Tried and not kept (docs/bench/denoise.md): the
-            // centre's variance smoothed over 3x3 as in SVGF (alone: -1.3% there; with a brighter tap's: +1.2%)
-            // and the pair's smaller one (the lamp-lit room kept three times the noise).
+            // never took it (the image darkened). Tried and not kept (docs/bench/denoise.md): the centre's
+            // variance smoothed over 3x3 as in SVGF, and the pair's smaller one (the lamp-lit room kept more noise).
             let sigma = SIGMA_LUMINANCE * sqrt(max(max(centre.a, tap.a), 0.0)) + 1e-4;
             let w = kernel(dx) * kernel(dy) * exp(-abs(luminance(tap.rgb) - l) / sigma - 0.5 * stretch);
             sum += w * tap.rgb;

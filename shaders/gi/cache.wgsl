@@ -319,7 +319,7 @@ fn bilinear_voxel(voxel: vec3<i32>, b: Bilinear, i: u32) -> vec3<i32> {
 
 // The level a camera reads a surface at, from its pixel footprint (voxels across one pixel there): the finest
 // whose cells are at least `gi.cell_pixels` pixels wide (up to MAX_LEVEL), so a far or low-resolution view keeps
-// few entries. (Until 2026-11-26 the coarsest at most 2 pixels wide, which `gi_cell=1` reproduces.) Moving
+// few entries. (`gi_cell=1` reproduces the older rule, the coarsest at most 2 pixels wide.) Moving
 // objects stay at 0.
 fn camera_level(voxels_per_pixel: f32, object: u32) -> u32 {
     let cells = voxels_per_pixel * gi.cell_pixels;

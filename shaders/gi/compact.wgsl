@@ -1,8 +1,8 @@
 // GI cache work lists, one thread per slot of both tables, first of the GI passes: ages each entry (frees one
 // unused for MAX_AGE frames, whose moving object is gone or whose face was lost; clears a tombstone that ends its
 // chain) and appends every entry due this frame to its table's list. The refresh, update and filter passes then
-// run one thread per listed entry by indirect dispatch, so their SIMD lanes all hold work (a live entry is 12-26%
-// of the slots, at hash-random places). Counts are summed per workgroup and added to memory once per workgroup.
+// run one thread per listed entry by indirect dispatch, so their SIMD lanes all hold work (live entries are a
+// minority of the slots, at hash-random places). Counts are summed per workgroup and added to memory once per workgroup.
 
 #import glowbrick::world::{object_index, object_count}
 #import glowbrick::counters::counters
@@ -35,7 +35,7 @@ fn age_entry(slot: u32) -> bool {
     // Only a moving object's entry looks its object up (a scan of the object list).
     let gone = e.object != 0u && object_index(e.object) == object_count();
     // A coarse entry whose inserting face went (marked by refresh.wgsl, which reads the grid: reading it here
-    // leaked host memory on lavapipe, about 0.5 MiB a frame, see docs/bench/stress.md).
+    // leaked host memory on lavapipe every frame, see docs/bench/stress.md).
     let lost_face = e.traced_epoch == LOST_FACE;
     if !used_within(e.last_used, MAX_AGE) || gone || lost_face {
         // A tombstone, not an empty slot: entries inserted further along the chain stay reachable.

@@ -109,8 +109,7 @@ fn update_direct(slot: u32, e: GiEntry) {
     let rotation = rotation2(slot_seed(slot) ^ 0x51ED270Bu);
     // After a change of light the points of the frames up to this one (the next frames continue the run), else
     // this frame's. One call site for both: the restart's samples in a loop of their own were inlined nine times,
-    // and lavapipe pays for code a dispatch holds whether its lanes run it or not (the refresh pass 26-35 ms ->
-    // 15-20 at 320x180, docs/bench/frame.md).
+    // and lavapipe pays for code a dispatch holds whether its lanes run it or not (docs/bench/why.md).
     let restart = (gi.flags & GI_RESTART) != 0u;
     let samples = select(1u, GI_RESTART_SAMPLES, restart);
     let first = select(sequence_step(gi.frame, e), gi.frame, restart);

@@ -3,5 +3,5 @@
 // run read them back.
 #define_import_path glowbrick::counters
 
-@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
 

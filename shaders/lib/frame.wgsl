@@ -48,13 +48,14 @@ struct FrameParams {
 // Per pixel: hit point (xyz) and the packed hit (w, see pack_surface); this frame's and last frame's.
 @group(1) @binding(4) var<storage, read_write> gbuffer: array<vec4<f32>>;
 @group(1) @binding(5) var<storage, read_write> prev_gbuffer: array<vec4<f32>>;
-// Bindings 6 and 7 are Voxel ReSTIR's reservoirs (restir/common.wgsl). The denoiser's (render::denoise): the
-// shading passes' noisy frame; per pixel two texels of history (demodulated colour and length, luminance
-// moments), this frame's and last frame's; the wavelet's two halves (colour and variance).
-@group(1) @binding(8) var<storage, read_write> noisy: array<vec4<f32>>;
-@group(1) @binding(9) var<storage, read_write> history: array<vec4<f32>>;
-@group(1) @binding(10) var<storage, read_write> prev_history: array<vec4<f32>>;
-@group(1) @binding(11) var<storage, read_write> wavelet: array<vec4<f32>>;
+// Voxel ReSTIR's part follows (restir/common.wgsl), then the denoiser's (render::denoise): the shading passes'
+// noisy frame; per pixel two texels of history (demodulated colour and length, luminance moments), this frame's
+// and last frame's; the wavelet's two halves (colour and variance). The numbers follow src/render/view.rs's
+// parts in order (tests/cpu/shaders_validate.rs checks them).
+@group(1) @binding(9) var<storage, read_write> noisy: array<vec4<f32>>;
+@group(1) @binding(10) var<storage, read_write> history: array<vec4<f32>>;
+@group(1) @binding(11) var<storage, read_write> prev_history: array<vec4<f32>>;
+@group(1) @binding(12) var<storage, read_write> wavelet: array<vec4<f32>>;
 
 fn luminance(c: vec3<f32>) -> f32 {
     return dot(c, vec3(0.2126, 0.7152, 0.0722));

@@ -104,7 +104,7 @@ fn min_axis(v: vec3<f32>) -> u32 {
 }
 
 // The first solid voxel along the ray (unit `dir`) within max_distance, by the walk the `traversal` setting picks:
-// a shader def of its own pipelines (both walks in one shader cost lavapipe 10-40% of a frame, either one run);
+// a shader def of its own pipelines (both walks in one shader cost lavapipe much of a frame, either one run);
 // both find the same voxel.
 fn trace(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
     rays_traced += 1u;

@@ -37,17 +37,17 @@ struct Material {
 @group(0) @binding(0) var<uniform> world_info: WorldInfo;
 @group(0) @binding(1) var<storage, read> top_cells: array<u32>;
 // Pooled bricks, two u16 voxels per word, little-endian: voxel i of a slot is in word i / 2, low half when even.
-// In up to four parts (bindings 2, 8, 9, 10) of 2^pool_part_shift slots each, so a pool can be larger than the
+// In up to four parts (bindings 2 to 5) of 2^pool_part_shift slots each, so a pool can be larger than the
 // GPU binds in one buffer (`pooled_voxel`); a world that fits in one binds small placeholders for the others.
 @group(0) @binding(2) var<storage, read> brick_pool: array<u32>;
-@group(0) @binding(8) var<storage, read> brick_pool_1: array<u32>;
-@group(0) @binding(9) var<storage, read> brick_pool_2: array<u32>;
-@group(0) @binding(10) var<storage, read> brick_pool_3: array<u32>;
-@group(0) @binding(3) var<storage, read> materials: array<Material>;
+@group(0) @binding(3) var<storage, read> brick_pool_1: array<u32>;
+@group(0) @binding(4) var<storage, read> brick_pool_2: array<u32>;
+@group(0) @binding(5) var<storage, read> brick_pool_3: array<u32>;
+@group(0) @binding(7) var<storage, read> materials: array<Material>;
 // The occupancy masks (src/world/occupancy.rs), 64 bits each, low word first: per brick (by top-grid index) its
 // cells of 2^3 voxels that hold a solid voxel, then per sector its bricks that are not empty, then per region its
-// sectors that are not empty. Binding 6 is the counters (shaders/lib/counters.wgsl).
-@group(0) @binding(7) var<storage, read> occupancy: array<vec2<u32>>;
+// sectors that are not empty. The counters are the last binding (shaders/lib/counters.wgsl).
+@group(0) @binding(6) var<storage, read> occupancy: array<vec2<u32>>;
 
 // A moving voxel object (src/dynamic): a small voxel grid translated to `min`, never rotated.
 struct Object {
@@ -62,8 +62,8 @@ struct Object {
     _pad: u32,
 }
 
-@group(0) @binding(4) var<storage, read> objects: array<Object>;
-@group(0) @binding(5) var<storage, read> object_voxels: array<u32>;
+@group(0) @binding(8) var<storage, read> objects: array<Object>;
+@group(0) @binding(9) var<storage, read> object_voxels: array<u32>;
 
 // Pipelines compiled for a world without moving objects (KEY_OBJECTS 0) hold none of their code: every
 // `trace_scene` is the static walk alone.

@@ -44,7 +44,7 @@ struct TileLight {
 }
 
 // LIGHT_TILES tiles of LIGHT_TILE_SIZE lights, written by tiles.wgsl, read by initial.wgsl's candidates.
-@group(1) @binding(12) var<storage, read_write> light_tiles: array<TileLight>;
+@group(1) @binding(8) var<storage, read_write> light_tiles: array<TileLight>;
 // No tile: the candidates pick from the alias table themselves (light_tiles=off).
 const NO_TILE: u32 = 0xffffffffu;
 
@@ -306,9 +306,9 @@ fn local_lights(x: Shading) -> LocalLights {
 }
 
 // The light tile a 4x4 block of pixels draws its candidates from this frame, or NO_TILE with light_tiles=off.
-// Blocks of 8x8 read a little faster still on lavapipe, but their 64 pixels drew 1,536 power picks from one
-// tile's 256 lights, and that correlation raised the thesis' letters1 one-frame relMSE by 6% (12 seeds); at 4x4
-// it is that of the alias table (docs/bench/why.md).
+// Blocks of 8x8 read a little faster still on lavapipe, but their 64 pixels drew all their power picks from one
+// tile's lights, and that correlation raised the one-frame error; at 4x4 it is that of the alias table
+// (docs/bench/why.md).
 fn pixel_tile(pixel: vec2<u32>) -> u32 {
     if !restir_flag(RESTIR_LIGHT_TILES) {
         return NO_TILE;

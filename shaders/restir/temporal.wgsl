@@ -1,6 +1,6 @@
 // Voxel ReSTIR pass 2: the visibility ray of the candidate pass 1 chose (initial.wgsl), then temporal reuse of
 // last frame's final reservoir at the reprojected pixel. Split from the candidates so that the traversal's
-// registers do not lower the occupancy of the candidates' kernel (docs/bench/gpu-h200/frame-2026-11-29.md).
+// registers do not lower the occupancy of the candidates' kernel (docs/bench/why.md).
 
 #import glowbrick::traversal::{count_rays}
 #import glowbrick::constants::COUNT_RAYS_RESTIR_INITIAL

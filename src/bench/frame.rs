@@ -9,9 +9,12 @@
 
 use super::load_bench_scene;
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::render::denoise::DENOISE_PASS_NAMES;
 use crate::render::frame::all_passes;
-use crate::render::gi::WARM_UP_FRAMES;
+use crate::render::gi::{DYNAMIC_GI_PASS_NAMES, GI_PASS_NAMES, WARM_UP_FRAMES};
 use crate::render::gpu_types::{COUNTERS, GpuCounter};
+use crate::render::primary::PRIMARY_PASS_NAME;
+use crate::render::restir::RESTIR_PASS_NAMES;
 use crate::settings::RenderSettings;
 use crate::world::recipe::generated_world;
 use crate::world::{CameraView, VoxelWorld};
@@ -31,7 +34,7 @@ pub struct FrameCase {
 }
 
 /// The night case is at 2:00, not midnight: the moon at 0:00 stands exactly where the noon sun does
-/// (`lights::daylight`), so its shadow rays and the frame's cost were noon's (the H200 profile, 2026-11-29).
+/// (`lights::daylight`), so its shadow rays and the frame's cost would be noon's (docs/bench/why.md).
 pub const CASES: [FrameCase; 6] = [
     FrameCase { label: "window-room", scene: "window-room", view: "inside", settings: &[] },
     FrameCase { label: "cornell", scene: "cornell", view: "front", settings: &[] },
@@ -158,8 +161,9 @@ impl FrameRow {
     }
 
     /// GPU ms of the passes whose names start with `prefix`, or None when none ran or were timed.
-    pub fn gpu_ms_of(&self, prefix: &str) -> Option<f64> {
-        let times: Vec<f64> = self.passes.iter().filter(|(n, _)| n.starts_with(prefix)).map(|(_, ms)| *ms).collect();
+    /// The GPU ms of the passes `names` together, if any of them ran.
+    pub fn gpu_ms_of(&self, names: &[&str]) -> Option<f64> {
+        let times: Vec<f64> = self.passes.iter().filter(|(n, _)| names.contains(n)).map(|(_, ms)| *ms).collect();
         (!times.is_empty()).then(|| times.iter().sum())
     }
 
@@ -273,20 +277,20 @@ pub fn run_frame_bench(config: &FrameConfig, quick: bool, out: &Path) -> Result<
     Ok(())
 }
 
-/// The pass groups of the report's time table: a prefix of the pass names and its column.
-const GROUPS: [(&str, &str); 12] = [
-    ("glowbrick_primary", "primary"),
-    ("glowbrick_restir_tiles", "ReSTIR tiles"),
-    ("glowbrick_restir_initial", "ReSTIR initial"),
-    ("glowbrick_restir_temporal", "ReSTIR temporal"),
-    ("glowbrick_restir_spatial", "ReSTIR spatial"),
-    ("glowbrick_restir_shade", "ReSTIR shade"),
-    ("glowbrick_gi_compact", "GI lists"),
-    ("glowbrick_gi_refresh", "GI refresh"),
-    ("glowbrick_gi_update", "GI update"),
-    ("glowbrick_gi_filter", "GI filter"),
-    ("glowbrick_gi_dynamic", "GI objects"),
-    ("glowbrick_denoise", "denoiser"),
+/// The pass groups of the report's time table: the passes (from the techniques' tables) and the column.
+const GROUPS: [(&[&str], &str); 12] = [
+    (&[PRIMARY_PASS_NAME], "primary"),
+    (&[RESTIR_PASS_NAMES[0]], "ReSTIR tiles"),
+    (&[RESTIR_PASS_NAMES[1]], "ReSTIR initial"),
+    (&[RESTIR_PASS_NAMES[2]], "ReSTIR temporal"),
+    (&[RESTIR_PASS_NAMES[3]], "ReSTIR spatial"),
+    (&[RESTIR_PASS_NAMES[4]], "ReSTIR shade"),
+    (&[GI_PASS_NAMES[0]], "GI lists"),
+    (&[GI_PASS_NAMES[1]], "GI refresh"),
+    (&[GI_PASS_NAMES[2]], "GI update"),
+    (&[GI_PASS_NAMES[3]], "GI filter"),
+    (&DYNAMIC_GI_PASS_NAMES, "GI objects"),
+    (&DENOISE_PASS_NAMES, "denoiser"),
 ];
 
 pub fn csv(rows: &[FrameRow]) -> String {
@@ -339,7 +343,7 @@ pub fn markdown(rows: &[FrameRow], config: &FrameConfig) -> String {
         "---|".repeat(GROUPS.len())
     );
     for r in rows {
-        let groups: Vec<String> = GROUPS.iter().map(|(prefix, _)| ms(r.gpu_ms_of(prefix))).collect();
+        let groups: Vec<String> = GROUPS.iter().map(|(names, _)| ms(r.gpu_ms_of(names))).collect();
         text += &format!(
             "| {} | {} | {}x{} | {} | {} | {:.1} |\n",
             r.case,

@@ -1,4 +1,4 @@
-//! `glowbrick bench`: run time against error, in seven modes, each in its own module with its own config and its
+//! `glowbrick bench`: run time against error, in eight modes, each in its own module with its own config and its
 //! report writer beside its measures:
 //!
 //! - `sweep`: every scene x render setting against a direct-light reference, the equal-time comparison
@@ -9,6 +9,7 @@
 //! - `denoise`: the denoiser (with `reaction` for a lamp switched off and on, `motion` for ghosting).
 //! - `frame`: the game's frame pass by pass, GPU time and ray / step counters, no reference.
 //! - `rays`: the CPU traversal's rays per second and steps / loads per ray, against the plain DDA.
+//! - `net`: one server and many clients over loopback: joining, the server's tick, edits per second, bytes.
 //!
 //! Every mode measures against CPU references from one `reference_cache::ReferenceCache`. What is shared by
 //! several modes lives here.

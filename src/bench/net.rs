@@ -88,6 +88,35 @@ pub fn run_net_bench(config: &NetBenchConfig, out: &Path) -> Result<String, Stri
 }
 
 fn run_one(world: &VoxelWorld, n: usize, config: &NetBenchConfig) -> Result<NetRow, String> {
+    let (mut server, mut clients, join_seconds) = join(world, n, config)?;
+    let world_bytes = server.world().resource::<ServerStats>().world_bytes_sent / n as u64;
+    let seq_before = server.world().resource::<ServerStats>().seq;
+    let mut run = edit_steadily(world, &mut server, &mut clients, config);
+    let applied = (server.world().resource::<ServerStats>().seq - seq_before) as f64 / run.seconds;
+    let identical = settle_and_compare(&mut server, &mut clients);
+    run.ticks.sort_by(f64::total_cmp);
+    run.latencies.sort_by(f64::total_cmp);
+    let mean = |v: &[f64]| if v.is_empty() { 0.0 } else { v.iter().sum::<f64>() / v.len() as f64 };
+    let pct = |v: &[f64], p: f64| v.get(((v.len() as f64 - 1.0) * p).round() as usize).copied().unwrap_or(0.0);
+    let edit_rate = config.edits_per_client as f64;
+    Ok(NetRow {
+        clients: n,
+        join_seconds,
+        world_bytes,
+        edits_applied_per_second: applied,
+        tick_ms_mean: mean(&run.ticks),
+        tick_ms_p95: pct(&run.ticks, 0.95),
+        // Everything the server sends each client (edits, player lists, acks) per edit it applied.
+        wire_bytes_per_edit_per_client: mean(&run.wire_rates) / n as f64 / applied.max(1e-9),
+        upload_bytes_per_edit: mean(&run.upload_rates) / edit_rate,
+        latency_ms_median: pct(&run.latencies, 0.5),
+        latency_ms_max: run.latencies.last().copied().unwrap_or(0.0),
+        identical,
+    })
+}
+
+/// A server on `world` and `n` clients that have all received it, and the seconds that took.
+fn join(world: &VoxelWorld, n: usize, config: &NetBenchConfig) -> Result<(App, Vec<App>, f64), String> {
     let rules = ServerRules { edits_per_second: config.edits_per_client * 4.0, ..Default::default() };
     let mut server = server_app(world.clone(), rules);
     let addr = transport::listen(&mut server, "127.0.0.1:0".parse().unwrap(), None, n)?;
@@ -105,28 +134,42 @@ fn run_one(world: &VoxelWorld, n: usize, config: &NetBenchConfig) -> Result<NetR
         server.update();
         clients.iter_mut().for_each(App::update);
     }
-    let join_seconds = start.elapsed().as_secs_f64();
-    let world_bytes = server.world().resource::<ServerStats>().world_bytes_sent / n as u64;
+    Ok((server, clients, start.elapsed().as_secs_f64()))
+}
 
-    // Steady editing: each client toggles voxels of its own column high above the ground (every edit changes a
-    // voxel); client 0's every fifth edit is a probe whose arrival at client 1 is timed.
+/// What the steady editing measured: server ticks and probe latencies (ms), the bytes per second the server
+/// sent all clients and client 0 uploaded (second half of the run), and the run's length.
+struct SteadyRun {
+    ticks: Vec<f64>,
+    latencies: Vec<f64>,
+    wire_rates: Vec<f64>,
+    upload_rates: Vec<f64>,
+    seconds: f64,
+}
+
+/// Steady editing: each client toggles voxels of its own column high above the ground (every edit changes a
+/// voxel); client 0's every fifth edit is a probe whose arrival at client 1 is timed.
+fn edit_steadily(world: &VoxelWorld, server: &mut App, clients: &mut [App], config: &NetBenchConfig) -> SteadyRun {
+    let n = clients.len();
     let size = world.grid.size().as_ivec3();
     let per_row = (size.x - 4) / 2;
     let column = |i: usize, k: u64| {
         let i = i as i32;
         IVec3::new(2 + (i % per_row) * 2, size.y - 2 - (k % 4) as i32, 2 + (i / per_row) * 2)
     };
-    let seq_before = server.world().resource::<ServerStats>().seq;
     let mut owed = vec![0.0f32; n];
     let mut sent = vec![0u64; n];
     let mut probes: Vec<(IVec3, u16, Instant)> = Vec::new();
-    let mut latencies = Vec::new();
-    let mut ticks = Vec::new();
+    let mut run = SteadyRun {
+        ticks: Vec::new(),
+        latencies: Vec::new(),
+        wire_rates: Vec::new(),
+        upload_rates: Vec::new(),
+        seconds: 0.0,
+    };
     let tick = Duration::from_secs_f64(1.0 / 60.0);
     let run_start = Instant::now();
     let mut last = Instant::now();
-    let mut upload_rates = Vec::new();
-    let mut wire_rates = Vec::new();
     while run_start.elapsed().as_secs_f32() < config.seconds {
         let frame = Instant::now();
         let dt = last.elapsed().as_secs_f32();
@@ -147,60 +190,39 @@ fn run_one(world: &VoxelWorld, n: usize, config: &NetBenchConfig) -> Result<NetR
         }
         let t = Instant::now();
         server.update();
-        ticks.push(t.elapsed().as_secs_f64() * 1e3);
+        run.ticks.push(t.elapsed().as_secs_f64() * 1e3);
         clients.iter_mut().for_each(App::update);
         if n > 1 {
             let grid = &clients[1].world().resource::<VoxelWorld>().grid;
             probes.retain(|(at, material, when)| {
                 let arrived = grid.get(*at) == *material;
                 if arrived {
-                    latencies.push(when.elapsed().as_secs_f64() * 1e3);
+                    run.latencies.push(when.elapsed().as_secs_f64() * 1e3);
                 }
                 !arrived && when.elapsed() < Duration::from_secs(5)
             });
         }
         if run_start.elapsed().as_secs_f32() > config.seconds * 0.5 {
             let renet = server.world().resource::<RenetServer>();
-            wire_rates.push(
-                renet
-                    .clients_id_iter()
-                    .filter_map(|id| renet.network_info(id).ok())
-                    .map(|i| i.bytes_sent_per_second)
-                    .sum::<f64>(),
-            );
-            upload_rates.push(clients[0].world().resource::<RenetClient>().network_info().bytes_sent_per_second);
+            let ids = renet.clients_id_iter();
+            run.wire_rates
+                .push(ids.filter_map(|id| renet.network_info(id).ok()).map(|i| i.bytes_sent_per_second).sum());
+            run.upload_rates.push(clients[0].world().resource::<RenetClient>().network_info().bytes_sent_per_second);
         }
         std::thread::sleep(tick.saturating_sub(frame.elapsed()));
     }
-    let seconds = run_start.elapsed().as_secs_f64();
-    let applied = (server.world().resource::<ServerStats>().seq - seq_before) as f64 / seconds;
-    // Let the last edits arrive, then compare every world with the server's.
+    run.seconds = run_start.elapsed().as_secs_f64();
+    run
+}
+
+/// Lets the last edits arrive, then whether every client's world is the server's.
+fn settle_and_compare(server: &mut App, clients: &mut [App]) -> bool {
     for _ in 0..120 {
         server.update();
         clients.iter_mut().for_each(App::update);
     }
     let target = crate::net::state_hash::voxels_hash(server.world().resource::<VoxelWorld>());
-    let identical =
-        clients.iter().all(|c| crate::net::state_hash::voxels_hash(c.world().resource::<VoxelWorld>()) == target);
-    ticks.sort_by(f64::total_cmp);
-    latencies.sort_by(f64::total_cmp);
-    let mean = |v: &[f64]| if v.is_empty() { 0.0 } else { v.iter().sum::<f64>() / v.len() as f64 };
-    let pct = |v: &[f64], p: f64| v.get(((v.len() as f64 - 1.0) * p).round() as usize).copied().unwrap_or(0.0);
-    let edit_rate = config.edits_per_client as f64;
-    Ok(NetRow {
-        clients: n,
-        join_seconds,
-        world_bytes,
-        edits_applied_per_second: applied,
-        tick_ms_mean: mean(&ticks),
-        tick_ms_p95: pct(&ticks, 0.95),
-        // Everything the server sends each client (edits, player lists, acks) per edit it applied.
-        wire_bytes_per_edit_per_client: mean(&wire_rates) / n as f64 / applied.max(1e-9),
-        upload_bytes_per_edit: mean(&upload_rates) / edit_rate,
-        latency_ms_median: pct(&latencies, 0.5),
-        latency_ms_max: latencies.last().copied().unwrap_or(0.0),
-        identical,
-    })
+    clients.iter().all(|c| crate::net::state_hash::voxels_hash(c.world().resource::<VoxelWorld>()) == target)
 }
 
 fn report(rows: &[NetRow], config: &NetBenchConfig, place: usize, fill: usize) -> String {

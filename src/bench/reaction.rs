@@ -186,7 +186,7 @@ pub(crate) fn reaction_markdown(reactions: &[Reaction], seeds: u32) -> String {
          on | restart ms | frame ms |\n|---|---|---|---|---|---|---|---|---|---|\n",
         2 * SETTLE_FRAMES,
         crate::render::gi::RESTART_ITERATIONS,
-        crate::render::gi::RESTART_DIRECT_SAMPLES
+        crate::render::gpu_types::GI_RESTART_DIRECT_SAMPLES
     );
     for r in reactions {
         text += &format!(

@@ -159,6 +159,32 @@ fn measure(
     Ok((frame_ms, passes, renderer.render_sequence(frames.max(1), |_, _| {})?))
 }
 
+/// Everything a sweep measured, over all scenes.
+#[derive(Default)]
+struct SweepResults {
+    rows: Vec<BenchRow>,
+    curves: Vec<CurvePoint>,
+    noise: Vec<(String, Metrics)>,
+    equal_time: Vec<EqualTimeRow>,
+}
+
+/// One scene of the sweep: its world, view, reference and the pixels the GPU's and the CPU's camera rays hit
+/// alike.
+struct SweepScene<'a> {
+    name: &'a str,
+    world: VoxelWorld,
+    view: CameraView,
+    reference: LinearImage,
+    keep: Vec<bool>,
+    config: &'a SweepConfig,
+    progress: &'a Progress,
+}
+
+/// The settings `config.only` keeps (all when empty).
+fn chosen_settings(config: &SweepConfig) -> impl Iterator<Item = &'static BenchSetting> + '_ {
+    SETTINGS.iter().filter(|s| config.only.is_empty() || config.only.iter().any(|o| o == s.name))
+}
+
 /// Runs every scene x setting and writes the three outputs to `out`.
 pub fn run_bench(scenes: &[String], config: &SweepConfig, out: &Path) -> Result<Vec<BenchRow>, String> {
     if let Some(unknown) = config.only.iter().find(|o| !SETTINGS.iter().any(|s| s.name == o.as_str())) {
@@ -170,108 +196,20 @@ pub fn run_bench(scenes: &[String], config: &SweepConfig, out: &Path) -> Result<
         load_bench_scene(name)?;
     }
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
-    let mut rows = Vec::new();
-    let mut curves: Vec<CurvePoint> = Vec::new();
-    let mut noise: Vec<(String, Metrics)> = Vec::new();
-    let mut equal_time: Vec<EqualTimeRow> = Vec::new();
-    let chosen = SETTINGS.iter().filter(|s| config.only.is_empty() || config.only.iter().any(|o| o == s.name)).count();
-    let progress = Progress::new("bench", (scenes.len() * chosen) as u64);
+    let mut results = SweepResults::default();
+    let progress = Progress::new("bench", (scenes.len() * chosen_settings(config).count()) as u64);
     let references = ReferenceCache::new(config.width, config.height, config.reference_spp);
     for name in scenes {
         let world = load_bench_scene(name)?;
         let view = config.camera.clone().or_else(|| world.view(None).cloned()).unwrap_or_else(|| world.overview());
         let reference = references.image(&world, &view, &Reference::direct())?;
-        noise.push((name.clone(), references.noise(&world, &view, &Reference::direct(), &reference)?));
-        let first = rows.len();
-        let mut strip = vec![reference.clone()];
-        let mut restir_expected = None;
+        results.noise.push((name.clone(), references.noise(&world, &view, &Reference::direct(), &reference)?));
         let keep = same_hit::same_hit_pixels(&world, &view, config.width, config.height)?;
-        for setting in SETTINGS.iter().filter(|s| config.only.is_empty() || config.only.iter().any(|o| o == s.name)) {
-            // The setting NEE is held to at equal time: its expected one-frame error over several frames.
-            let frames = if setting.name == EQUAL_TIME_TO { EQUAL_TIME_TRIALS } else { 1 };
-            let (frame_ms, passes, images) = measure(&world, &view, setting, config, frames)?;
-            if setting.name == EQUAL_TIME_TO {
-                restir_expected = Some(expected_errors(&images, &reference, &keep)?);
-            }
-            let image = images.into_iter().next().ok_or("no frame rendered")?;
-            let metrics = compare(&image, &reference)?;
-            let flip = flip(&image, Encoding::Linear, &reference, Encoding::Linear)?;
-            progress.println(&format!(
-                "bench: {name} {}: {frame_ms:.2} ms/frame, {metrics} flip={:.4}",
-                setting.name, flip.mean
-            ));
-            progress.advance(1);
-            if setting.name == "nee-power" {
-                strip.push(image);
-            } else if setting.name == EQUAL_TIME_TO {
-                strip.extend([image, flip.map]);
-            }
-            let gpu_ms = (!passes.is_empty()).then(|| passes.iter().map(|(_, ms)| ms).sum());
-            let setting = setting.name.to_string();
-            let flip = flip.mean;
-            rows.push(BenchRow { scene: name.clone(), setting, frames: 1, frame_ms, gpu_ms, passes, metrics, flip });
-        }
-        if strip.len() == 4 {
-            plot::write_strip(&strip, &out.join(format!("strip-{name}.png")))?;
-        }
-        let times: Vec<(String, f64)> = rows[first..].iter().map(|r| (r.setting.clone(), r.frame_ms)).collect();
-        let time_of = |setting: &str| times.iter().find(|(s, _)| s == setting).map(|&(_, ms)| ms);
-        if let (Some(nee_ms), Some(budget_ms)) = (time_of("nee-power"), time_of(EQUAL_TIME_TO)) {
-            let nee = measure_equal_time(&world, &view, config, &reference, nee_ms, budget_ms, &keep)?;
-            let frames = nee.frames;
-            progress.println(&format!(
-                "bench: {name} nee-equal-time ({frames} frames): {}; mean of {EQUAL_TIME_TRIALS}: {}",
-                nee.first, nee.expected
-            ));
-            rows.push(BenchRow {
-                scene: name.clone(),
-                setting: format!("nee-equal-time ({frames} frames)"),
-                frames,
-                frame_ms: nee_ms * frames as f64,
-                gpu_ms: None,
-                passes: Vec::new(),
-                metrics: nee.first,
-                flip: nee.flip,
-            });
-            if let Some((restir, restir_kept)) = restir_expected {
-                progress.println(&format!(
-                    "bench: {name} equal time over the {} pixels hit alike: NEE {}, ReSTIR {}",
-                    keep.iter().filter(|k| **k).count(),
-                    nee.expected_kept,
-                    restir_kept
-                ));
-                equal_time.push(EqualTimeRow {
-                    scene: name.clone(),
-                    nee_frames: frames,
-                    nee: nee.expected,
-                    restir,
-                    nee_kept: nee.expected_kept,
-                    restir_kept,
-                    left_out: keep.iter().filter(|k| !**k).count(),
-                });
-            }
-        }
-        for method in METHODS {
-            let Some(frame_ms) = time_of(method.setting) else { continue };
-            let pairs: Vec<String> =
-                std::iter::once(radius_pair(config)).chain(method.pairs.iter().map(|p| p.to_string())).collect();
-            let spec = CurveSpec {
-                name: method.name,
-                pairs: &pairs,
-                frame_ms,
-                size: (config.width, config.height),
-                frames: config.curve_frames,
-            };
-            let points = measure_curve(&world, &view, &spec, &reference, name)?;
-            progress.println(&format!(
-                "bench: {name} {} accumulated: relMSE {}",
-                method.name,
-                points.iter().map(|p| format!("{:.2e}@{}", p.metrics.relmse, p.frames)).collect::<Vec<_>>().join(" ")
-            ));
-            curves.extend(points);
-        }
+        let scene = SweepScene { name, world, view, reference, keep, config, progress: &progress };
+        scene.run(&mut results, out)?;
     }
     progress.finish();
+    let SweepResults { mut rows, curves, noise, equal_time } = results;
     for p in &curves {
         rows.push(BenchRow {
             scene: p.scene.clone(),
@@ -288,6 +226,123 @@ pub fn run_bench(scenes: &[String], config: &SweepConfig, out: &Path) -> Result<
     write_markdown(&rows, &curves, &noise, &equal_time, config, &out.join("report.md"))?;
     plot::write_plot(&rows, &curves, &out.join("plot.svg"))?;
     Ok(rows)
+}
+
+impl SweepScene<'_> {
+    /// The scene's settings, its equal-time row and its convergence curves, added to `results`.
+    fn run(&self, results: &mut SweepResults, out: &Path) -> Result<(), String> {
+        let first = results.rows.len();
+        let restir_expected = self.measure_settings(&mut results.rows, out)?;
+        let times: Vec<(String, f64)> = results.rows[first..].iter().map(|r| (r.setting.clone(), r.frame_ms)).collect();
+        let time_of = |setting: &str| times.iter().find(|(s, _)| s == setting).map(|&(_, ms)| ms);
+        if let (Some(nee_ms), Some(budget_ms)) = (time_of("nee-power"), time_of(EQUAL_TIME_TO)) {
+            self.equal_time(results, nee_ms, budget_ms, restir_expected)?;
+        }
+        for method in METHODS {
+            let Some(frame_ms) = time_of(method.setting) else { continue };
+            let config = self.config;
+            let pairs: Vec<String> =
+                std::iter::once(radius_pair(config)).chain(method.pairs.iter().map(|p| p.to_string())).collect();
+            let spec = CurveSpec {
+                name: method.name,
+                pairs: &pairs,
+                frame_ms,
+                size: (config.width, config.height),
+                frames: config.curve_frames,
+            };
+            let points = measure_curve(&self.world, &self.view, &spec, &self.reference, self.name)?;
+            self.progress.println(&format!(
+                "bench: {} {} accumulated: relMSE {}",
+                self.name,
+                method.name,
+                points.iter().map(|p| format!("{:.2e}@{}", p.metrics.relmse, p.frames)).collect::<Vec<_>>().join(" ")
+            ));
+            results.curves.extend(points);
+        }
+        Ok(())
+    }
+
+    /// One row per chosen setting, and the strip (reference | NEE | ReSTIR | FLIP); the expected errors of the
+    /// setting NEE is held to at equal time, when it ran.
+    fn measure_settings(&self, rows: &mut Vec<BenchRow>, out: &Path) -> Result<Option<(Metrics, Metrics)>, String> {
+        let (name, reference) = (self.name, &self.reference);
+        let mut strip = vec![reference.clone()];
+        let mut restir_expected = None;
+        for setting in chosen_settings(self.config) {
+            // The setting NEE is held to at equal time: its expected one-frame error over several frames.
+            let frames = if setting.name == EQUAL_TIME_TO { EQUAL_TIME_TRIALS } else { 1 };
+            let (frame_ms, passes, images) = measure(&self.world, &self.view, setting, self.config, frames)?;
+            if setting.name == EQUAL_TIME_TO {
+                restir_expected = Some(expected_errors(&images, reference, &self.keep)?);
+            }
+            let image = images.into_iter().next().ok_or("no frame rendered")?;
+            let metrics = compare(&image, reference)?;
+            let flip = flip(&image, Encoding::Linear, reference, Encoding::Linear)?;
+            self.progress.println(&format!(
+                "bench: {name} {}: {frame_ms:.2} ms/frame, {metrics} flip={:.4}",
+                setting.name, flip.mean
+            ));
+            self.progress.advance(1);
+            if setting.name == "nee-power" {
+                strip.push(image);
+            } else if setting.name == EQUAL_TIME_TO {
+                strip.extend([image, flip.map]);
+            }
+            let gpu_ms = (!passes.is_empty()).then(|| passes.iter().map(|(_, ms)| ms).sum());
+            let (scene, setting, flip) = (name.to_string(), setting.name.to_string(), flip.mean);
+            rows.push(BenchRow { scene, setting, frames: 1, frame_ms, gpu_ms, passes, metrics, flip });
+        }
+        if strip.len() == 4 {
+            plot::write_strip(&strip, &out.join(format!("strip-{name}.png")))?;
+        }
+        Ok(restir_expected)
+    }
+
+    /// NEE accumulated for the time one ReSTIR frame takes: its row, and the equal-time table's row when
+    /// ReSTIR's expected errors are known.
+    fn equal_time(
+        &self,
+        results: &mut SweepResults,
+        nee_ms: f64,
+        budget_ms: f64,
+        restir_expected: Option<(Metrics, Metrics)>,
+    ) -> Result<(), String> {
+        let name = self.name;
+        let nee =
+            measure_equal_time(&self.world, &self.view, self.config, &self.reference, nee_ms, budget_ms, &self.keep)?;
+        let frames = nee.frames;
+        self.progress.println(&format!(
+            "bench: {name} nee-equal-time ({frames} frames): {}; mean of {EQUAL_TIME_TRIALS}: {}",
+            nee.first, nee.expected
+        ));
+        results.rows.push(BenchRow {
+            scene: name.to_string(),
+            setting: format!("nee-equal-time ({frames} frames)"),
+            frames,
+            frame_ms: nee_ms * frames as f64,
+            gpu_ms: None,
+            passes: Vec::new(),
+            metrics: nee.first,
+            flip: nee.flip,
+        });
+        if let Some((restir, restir_kept)) = restir_expected {
+            let hit_alike = self.keep.iter().filter(|k| **k).count();
+            self.progress.println(&format!(
+                "bench: {name} equal time over the {hit_alike} pixels hit alike: NEE {}, ReSTIR {}",
+                nee.expected_kept, restir_kept
+            ));
+            results.equal_time.push(EqualTimeRow {
+                scene: name.to_string(),
+                nee_frames: frames,
+                nee: nee.expected,
+                restir,
+                nee_kept: nee.expected_kept,
+                restir_kept,
+                left_out: self.keep.len() - hit_alike,
+            });
+        }
+        Ok(())
+    }
 }
 
 fn gpu_text(ms: Option<f64>) -> String {

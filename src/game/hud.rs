@@ -204,8 +204,8 @@ fn update_hotbar(
 
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn update_texts(
-    // The real clock: the virtual one clamps each frame to 250 ms, so on a slow adapter the frame time read
-    // "250 ms" (4 fps) while frames took seconds.
+    // The real clock: the virtual one clamps each frame's delta (Bevy's `Time<Virtual>::max_delta`), so on a slow
+    // adapter the frame time read that clamp while frames took seconds.
     time: Res<Time<Real>>,
     mut smoothed_dt: Local<f32>,
     hotbar: Res<Hotbar>,

@@ -50,8 +50,8 @@ use std::time::{Duration, Instant};
 pub const ESTIMATOR_VERSION: u32 = 4;
 
 /// Diffuse bounces of the references the benches hold the GI cache to: it sums every bounce through its own
-/// entries, and 8 bounces miss 1.4% of the window room's light (3% over the pixels the tests compare). Russian
-/// roulette makes the deep bounces cheap: 32 cost about what 8 did without it.
+/// entries, and 8 bounces miss a measurable part of the window room's light (docs/bench/why.md). Russian
+/// roulette makes the deep bounces cheap.
 pub const REFERENCE_BOUNCES: u32 = 32;
 
 /// How to integrate.

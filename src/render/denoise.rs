@@ -5,12 +5,12 @@
 //! 1. `temporal` (`shaders/denoise/temporal.wgsl`): demodulate (lighting / albedo, emission set aside),
 //!    reproject last frame's history through the G-buffer (same face axis and sign, object and depth within
 //!    10%), blend (1 / history length, at least 0.1), luminance moments give the variance (a 3x3 estimate while
-//!    the history is short). No firefly clamp: one at 10x the brightest neighbour cost -5% of the mean and
+//!    the history is short). No firefly clamp: one at 10x the brightest neighbour darkened the mean and
 //!    gained nothing (docs/bench/denoise.md).
 //! 2. `wavelet` (`shaders/denoise/wavelet.wgsl`), passes 2 to 6: five a-trous iterations of a 3x3 binomial
 //!    kernel (steps 1, 2, 4, 8, 16 pixels: 45 taps a pixel where four 5x5 B3 iterations took 100), each tap kept
 //!    only on the same voxel-face plane (voxel faces are flat: an exact edge stop) and weighted by luminance
-//!    against the larger variance of the pair (each pixel's own darkened the image by 5%: a dark pixel refused a
+//!    against the larger variance of the pair (each pixel's own darkened the image: a dark pixel refused a
 //!    bright neighbour's light); the last remodulates (albedo x filtered + emission), draws the highlight and
 //!    writes the image.
 //!
@@ -19,8 +19,11 @@
 //! so a lamp switched on or off shows at once, noisier for a few frames. Off (`denoise=off`, `render`'s
 //! default) none of the passes runs and the shading passes write the image themselves.
 
-use super::frame::{Dispatch, VoxelPass};
-use super::gpu_types::{DENOISE_HISTORY, DENOISE_ON, DENOISE_TEXEL_BYTES};
+use super::gpu_types::{DENOISE_HISTORY, DENOISE_ON, DENOISE_TEXEL_BYTES, FrameParams};
+use super::interface::GpuBinding;
+use super::pass::{Dispatch, VoxelPass};
+use super::plan::FramePlan;
+use super::view::{ViewPart, ViewPartKind};
 use crate::settings::RenderSettings;
 use bevy::render::render_resource::{BindingResource, Buffer, BufferDescriptor, BufferUsages};
 use bevy::render::renderer::RenderDevice;
@@ -57,7 +60,19 @@ pub fn frame_flags(ran_last_frame: bool, runs: bool, world_changed: bool) -> u32
     (if runs { DENOISE_ON } else { 0 }) | if history { DENOISE_HISTORY } else { 0 }
 }
 
-/// One view's denoiser buffers (group 1, bindings 8 to 11): the shading passes' noisy frame; per pixel two
+/// Its part of group 1 (`shaders/lib/frame.wgsl`, where the shading passes write through it).
+pub const VIEW_BINDINGS: [GpuBinding; 4] = [
+    GpuBinding::read_write("noisy"),
+    GpuBinding::read_write("history"),
+    GpuBinding::read_write("prev_history"),
+    GpuBinding::read_write("wavelet"),
+];
+
+/// Its view part.
+pub const VIEW_PART: ViewPartKind =
+    ViewPartKind { bindings: &VIEW_BINDINGS, new: |device, pixels| Box::new(DenoiseView::new(device, pixels)) };
+
+/// One view's denoiser buffers: the shading passes' noisy frame; per pixel two
 /// texels of history (demodulated colour and length, luminance moments), this frame's and last frame's, two
 /// buffers that swap roles each denoised frame (the temporal pass writes every pixel's), so last frame's is never
 /// copied; the wavelet's two halves (colour and variance).
@@ -67,8 +82,8 @@ pub struct DenoiseView {
     /// Which history this frame writes.
     current: AtomicUsize,
     wavelet: Buffer,
-    /// Whether this frame runs the passes (set in prepare, read by the frame; last frame's until then).
-    pub runs: bool,
+    /// Whether this frame runs the passes (set in prepare; last frame's until then).
+    runs: bool,
 }
 
 impl DenoiseView {
@@ -89,33 +104,34 @@ impl DenoiseView {
             runs: false,
         }
     }
+}
 
-    /// Starts this frame: `FrameParams::denoise`, the `DENOISE_*` flags.
-    pub fn begin_frame(&mut self, runs: bool, world_changed: bool) -> u32 {
-        let flags = frame_flags(self.runs, runs, world_changed);
-        self.runs = runs;
-        flags
-    }
-
-    /// Starts a denoised frame: last frame's history becomes the previous one.
-    pub fn swap_history(&self) {
-        self.current.fetch_xor(1, Ordering::Relaxed);
-    }
-
-    /// Which history is this frame's (the view's bind groups are cached by it).
-    pub fn parity(&self) -> usize {
-        self.current.load(Ordering::Relaxed)
-    }
-
-    /// Bindings 8 to 11 of the view's group.
-    pub fn bindings(&self) -> [BindingResource<'_>; 4] {
+impl ViewPart for DenoiseView {
+    fn resources(&self) -> Vec<BindingResource<'_>> {
         let current = self.current.load(Ordering::Relaxed);
-        [
+        vec![
             self.noisy.as_entire_binding(),
             self.histories[current].as_entire_binding(),
             self.histories[current ^ 1].as_entire_binding(),
             self.wavelet.as_entire_binding(),
         ]
+    }
+
+    /// `FrameParams::denoise`, the `DENOISE_*` flags.
+    fn begin_frame(&mut self, plan: &FramePlan, _: &RenderSettings, params: &mut FrameParams) {
+        params.denoise = frame_flags(self.runs, plan.denoise, plan.changes.world);
+        self.runs = plan.denoise;
+    }
+
+    /// On a denoised frame, last frame's history becomes the previous one.
+    fn swap(&self) {
+        if self.runs {
+            self.current.fetch_xor(1, Ordering::Relaxed);
+        }
+    }
+
+    fn parity(&self) -> usize {
+        self.current.load(Ordering::Relaxed)
     }
 }
 

@@ -1,25 +1,31 @@
-//! The frame, in one place. Every voxel pass is a row of a table (`VoxelPass`: name, shader, entry point,
-//! dispatch shape); two systems list the passes top to bottom:
+//! The frame, in one place. Every voxel pass is a row of a technique's table (`pass::VoxelPass`); each frame
+//! `plan_frame` decides the frame plan (`plan::FramePlan`: which passes run, whether they are compiled, what
+//! changed), and two systems list the passes top to bottom:
 //!
-//! - `view_frame` (Core3d, main pass, once per camera): the G-buffer, then Voxel ReSTIR's three passes when it
-//!   lights the view, then the denoiser's passes when it is on; the view's bind group is built once here and
-//!   shared by every pass.
+//! - `view_frame` (Core3d, main pass, once per camera): the G-buffer, then Voxel ReSTIR's passes (light tiles,
+//!   candidates, temporal, spatial, shade) as the plan says, then the denoiser's six when it is on; the view's
+//!   bind group is built once here and shared by every pass.
 //! - `world_frame` (RenderGraph, before every camera, once per frame): the GI cache's passes, which keep a
 //!   world-level cache and so must not run once per camera. The cameras' shading reads what they write this
 //!   frame (a change of light or an edit shows in the frame it happens); the entries the cameras insert are
 //!   updated first next frame.
 //!
-//! Bind groups: 0 the world (grid, materials, objects, counters; `scene::world`), 1 the view (`view::ViewResources`,
-//! its parts owned by the techniques; empty for world passes), 2 the lights and scene lighting (`scene::lights`), 3 the GI cache (`gi`).
+//! Bind groups (each declared once, `interface`): 0 the world (grid, materials, objects, counters;
+//! `scene::world`), 1 the view (`view`, then the techniques' parts listed by `view_parts`; empty for world
+//! passes), 2 the lights and scene lighting (`scene::lights`), 3 the GI cache (`gi`).
 
 use super::gi::{self, GiCache};
-use super::gpu_types::shader_defs;
+use super::gpu_types::{ONE_POOL_PART, shader_defs};
+use super::interface::GroupInterface;
+use super::pass::{Dispatch, LINEAR_WORKGROUP, PIXEL_WORKGROUP_EDGE, VoxelPass};
 use super::pass_key::PassKey;
-use super::scene::lights::{GpuLights, LightsLayout};
+use super::plan::{FramePlan, FramePlanned, RestirPasses, SceneChanges};
+use super::scene::SceneUploaded;
+use super::scene::lights::{GpuLights, LightsLayout, lights_interface};
 use super::scene::objects::GpuObjects;
-use super::scene::world::{GpuWorld, ONE_POOL_PART, WorldLayout};
+use super::scene::world::{GpuWorld, WorldLayout, world_interface};
 use super::shaders::GlowbrickShaders;
-use super::view::{ViewResources, view_layout};
+use super::view::{ViewParts, ViewResources, view_interface};
 use super::{CameraFramesRendered, VoxelCamera, denoise, primary, restir};
 use crate::settings::{RenderSettings, Traversal};
 use bevy::ecs::system::SystemParam;
@@ -31,30 +37,15 @@ use bevy::render::view::{ViewTarget, ViewUniformOffset, ViewUniforms};
 use std::collections::HashMap;
 use std::sync::atomic::Ordering;
 
-/// One compute pass of the voxel renderer.
-#[derive(Clone, Copy, Debug)]
-pub struct VoxelPass {
-    /// The name its GPU time is recorded under (`render/<name>/elapsed_gpu`).
-    pub name: &'static str,
-    /// Its shader, a path under `shaders/`.
-    pub shader: &'static str,
-    pub entry_point: &'static str,
-    pub dispatch: Dispatch,
+/// The techniques' parts of a view's group 1, in binding order.
+fn view_parts() -> ViewParts {
+    ViewParts(vec![primary::VIEW_PART, restir::VIEW_PART, denoise::VIEW_PART])
 }
 
-/// How a pass is dispatched, which also says which bind group 1 it gets.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Dispatch {
-    /// One thread per pixel of the view, 8x8 workgroups; group 1 is the view.
-    Pixels,
-    /// One thread per light of the view's light tiles (`restir::TILE_THREADS`), 64 per workgroup; group 1 is
-    /// the view.
-    LightTiles,
-    /// One thread per slot of both GI tables, 64 per workgroup; no view.
-    Slots,
-    /// One thread per entry the GI compaction pass listed: the dispatch size is read from the GI work buffer at
-    /// this byte offset; no view.
-    Listed(u64),
+/// Every bind group's interface, groups 0 to 3: the layouts are built from these, and a CPU test checks the
+/// shaders against them.
+pub fn bind_groups() -> [GroupInterface; 4] {
+    [world_interface(), view_interface(&view_parts()), lights_interface(), gi::gi_interface()]
 }
 
 /// Every pass, for pipeline creation and compile errors.
@@ -75,8 +66,9 @@ pub struct ViewLayouts {
     pub empty: BindGroupLayoutDescriptor,
 }
 
-fn view_layouts() -> ViewLayouts {
-    ViewLayouts { view: view_layout(), empty: BindGroupLayoutDescriptor::new("glowbrick_no_view_layout", &[]) }
+fn view_layouts(parts: &ViewParts) -> ViewLayouts {
+    let empty = BindGroupLayoutDescriptor::new("glowbrick_no_view_layout", &[]);
+    ViewLayouts { view: view_interface(parts).layout(), empty }
 }
 
 /// Every pass's pipeline, in `all_passes` order, for each `PassKey` (the walk and the settings the shaders
@@ -143,8 +135,7 @@ fn queue_passes(
     all_passes()
         .into_iter()
         .map(|pass| {
-            let per_view = matches!(pass.dispatch, Dispatch::Pixels | Dispatch::LightTiles);
-            let group1 = if per_view { &layouts.view } else { &layouts.empty };
+            let group1 = if pass.dispatch.per_view() { &layouts.view } else { &layouts.empty };
             let id = cache.queue_compute_pipeline(ComputePipelineDescriptor {
                 label: Some(pass.name.into()),
                 layout: vec![groups[0].clone(), group1.clone(), groups[1].clone(), groups[2].clone()],
@@ -197,8 +188,9 @@ fn init_pipelines(
     pipeline_cache: Res<PipelineCache>,
     device: Res<RenderDevice>,
     adapter: Res<RenderAdapterInfo>,
+    parts: Res<ViewParts>,
 ) {
-    let layouts = view_layouts();
+    let layouts = view_layouts(&parts);
     // The pipelines are queued by `follow_settings`, which knows the settings.
     let cpu_adapter = adapter.device_type == wgpu::DeviceType::Cpu;
     let no_view =
@@ -219,6 +211,47 @@ pub fn pipeline_error(render_world: &World) -> Option<String> {
         }
         _ => None,
     })
+}
+
+/// Decides this frame's plan (`plan::FramePlan`): which passes run, whether they are compiled, what changed in
+/// the scene. The one place that decides what runs; the views, the GI cache and both frame systems read it.
+#[allow(clippy::too_many_arguments)]
+fn plan_frame(
+    mut plan: ResMut<FramePlan>,
+    settings: Option<Res<RenderSettings>>,
+    pipelines: Option<Res<VoxelPipelines>>,
+    pipeline_cache: Res<PipelineCache>,
+    gpu_world: Option<Res<GpuWorld>>,
+    gpu_lights: Option<Res<GpuLights>>,
+    objects: Option<Res<GpuObjects>>,
+) {
+    let fallback = RenderSettings::default();
+    let settings = settings.as_deref().unwrap_or(&fallback);
+    let changes = scene_changes(gpu_world.as_deref(), gpu_lights.as_deref(), objects.as_deref());
+    let restir = RestirPasses {
+        shades: restir::shades(settings),
+        samples: restir::samples(settings, changes.light_count),
+        tiles: settings.restir.light_tiles,
+    };
+    let denoise = denoise::runs(settings);
+    // A frame whose GI passes are not compiled yet must not use up the GI cache's first restart or its warm-up.
+    // Nor must one whose cameras cannot draw yet: the cache would spend its warm-up on frames no camera drew.
+    let ready = pipelines
+        .is_some_and(|p| p.gi_ready(&pipeline_cache) && p.views_ready(&pipeline_cache, restir.shades, denoise));
+    let gi = settings.gi.enabled;
+    *plan = FramePlan { restir, denoise, gi, compiling: gi && !ready, changes };
+}
+
+/// What changed in the scene this frame, as the views' histories see it.
+fn scene_changes(world: Option<&GpuWorld>, lights: Option<&GpuLights>, objects: Option<&GpuObjects>) -> SceneChanges {
+    let lights_changed = lights.is_some_and(|l| l.changed);
+    let world_changed = world.is_some_and(|w| w.uploaded_bytes > 0) || lights_changed;
+    SceneChanges {
+        lights: lights_changed,
+        world: world_changed,
+        anything: world_changed || objects.is_some_and(|o| o.changed),
+        light_count: lights.map_or(0, |l| l.light_count),
+    }
 }
 
 /// The bind groups every voxel pass shares: world (0), lights (2) and GI cache (3).
@@ -250,13 +283,15 @@ impl PassRecorder<'_> {
             compute.set_bind_group(index as u32, *group, offsets);
         }
         match pass.dispatch {
-            Dispatch::Pixels => {
-                compute.dispatch_workgroups(view_size.width.div_ceil(8), view_size.height.div_ceil(8), 1)
-            }
-            Dispatch::LightTiles => compute.dispatch_workgroups(restir::TILE_THREADS.div_ceil(64), 1, 1),
+            Dispatch::Pixels => compute.dispatch_workgroups(
+                view_size.width.div_ceil(PIXEL_WORKGROUP_EDGE),
+                view_size.height.div_ceil(PIXEL_WORKGROUP_EDGE),
+                1,
+            ),
+            Dispatch::LightTiles => compute.dispatch_workgroups(restir::TILE_THREADS.div_ceil(LINEAR_WORKGROUP), 1, 1),
             Dispatch::Slots => {
                 let (slots, _) = self.gi_work.expect("GI passes are recorded with the cache's work");
-                compute.dispatch_workgroups(slots.div_ceil(64), 1, 1)
+                compute.dispatch_workgroups(slots.div_ceil(LINEAR_WORKGROUP), 1, 1)
             }
             Dispatch::Listed(offset) => {
                 let (_, work) = self.gi_work.expect("GI passes are recorded with the cache's work");
@@ -297,8 +332,10 @@ impl<'a> TechniquePipelines<'a> {
 #[allow(clippy::too_many_arguments)]
 pub fn view_frame(
     view: ViewQuery<(&ViewTarget, &ViewUniformOffset, &ViewResources), With<VoxelCamera>>,
+    plan: Res<FramePlan>,
     pipelines: Option<Res<VoxelPipelines>>,
     layouts: Option<Res<ViewLayouts>>,
+    parts: Res<ViewParts>,
     pipeline_cache: Res<PipelineCache>,
     view_uniforms: Res<ViewUniforms>,
     scene: SceneBindGroups,
@@ -311,28 +348,25 @@ pub fn view_frame(
         return;
     };
     // GI on but not compiled yet: the frame waits for it, as for ReSTIR and the denoiser below.
-    let Some(gi_group) = scene.gi.as_ref().filter(|g| !g.compiling).and_then(|g| g.bind_group.as_ref()) else {
+    let Some(gi_group) = scene.gi.as_ref().filter(|_| !plan.compiling).and_then(|g| g.bind_group.as_ref()) else {
         return;
     };
     let Some(primary_pipeline) = pipelines.get(&pipeline_cache, &[primary::PRIMARY]).map(|p| p[0]) else { return };
-    let restir = TechniquePipelines::of(resources.restir.passes.shades, &pipelines, &pipeline_cache, &restir::PASSES);
-    let denoise = TechniquePipelines::of(resources.denoise.runs, &pipelines, &pipeline_cache, &denoise::PASSES);
+    let restir = TechniquePipelines::of(plan.restir.shades, &pipelines, &pipeline_cache, &restir::PASSES);
+    let denoise = TechniquePipelines::of(plan.denoise, &pipelines, &pipeline_cache, &denoise::PASSES);
     if matches!(restir, TechniquePipelines::Compiling) || matches!(denoise, TechniquePipelines::Compiling) {
         return;
     }
-    let denoised = matches!(denoise, TechniquePipelines::Ready(_));
     let (Some(view_binding), Some(view_buffer)) = (view_uniforms.uniforms.binding(), view_uniforms.uniforms.buffer())
     else {
         return;
     };
     let size = target.main_texture().size();
     // Last frame's G-buffer and denoiser history become the previous ones that the temporal reprojections read.
-    resources.gbuffers.swap();
-    if denoised {
-        resources.denoise.swap_history();
-    }
+    resources.swap();
     let layout = pipeline_cache.get_bind_group_layout(&layouts.view);
-    let view_group = resources.bind_group(ctx.render_device(), &layout, target, view_buffer, view_binding);
+    let interface = view_interface(&parts);
+    let view_group = resources.bind_group(ctx.render_device(), &interface, &layout, target, view_buffer, view_binding);
     let diagnostics = ctx.diagnostic_recorder();
     let encoder = ctx.command_encoder();
     let mut recorder = PassRecorder {
@@ -351,11 +385,11 @@ pub fn view_frame(
     // 2-6. Voxel ReSTIR: the light tiles (when the candidates read them), candidates, their visibility and
     // temporal reuse, spatial reuse (when there are lights to sample), shading.
     for (pass, pipeline) in restir::PASSES.iter().zip(restir.dispatched()) {
-        if resources.restir.passes.dispatches(pass) {
+        if restir::dispatches(&plan.restir, pass) {
             recorder.dispatch(pass, pipeline, size);
         }
     }
-    // 7-11. The denoiser: temporal accumulation, then the wavelet's iterations, the last writing the image.
+    // 7-12. The denoiser: temporal accumulation, then the wavelet's five iterations, the last writing the image.
     for (pass, pipeline) in denoise::PASSES.iter().zip(denoise.dispatched()) {
         recorder.dispatch(pass, pipeline, size);
     }
@@ -365,6 +399,7 @@ pub fn view_frame(
 /// The world-level frame, once before every camera (whose shading then reads this frame's light): the GI cache
 /// (work lists, refresh, updates, filters; the moving objects' table only while objects exist).
 pub fn world_frame(
+    plan: Res<FramePlan>,
     pipelines: Option<Res<VoxelPipelines>>,
     pipeline_cache: Res<PipelineCache>,
     scene: SceneBindGroups,
@@ -375,7 +410,7 @@ pub fn world_frame(
     else {
         return;
     };
-    let Some(gi_group) = cache.bind_group.as_ref().filter(|_| cache.enabled) else { return };
+    let Some(gi_group) = cache.bind_group.as_ref().filter(|_| plan.gi && !plan.compiling) else { return };
     let Some(compact) = pipelines.get(&pipeline_cache, &[gi::COMPACT_PASS]) else { return };
     let Some(statics) = pipelines.get(&pipeline_cache, &gi::STATIC_PASSES) else { return };
     let Some(dynamics) = pipelines.get(&pipeline_cache, &gi::DYNAMIC_PASSES) else { return };
@@ -411,23 +446,27 @@ pub fn world_frame(
     }
 }
 
-/// Adds the pipelines, the view preparation and the two frame systems to the render app.
+/// Adds the pipelines, the frame plan, the view preparation and the two frame systems to the render app.
 pub fn add(render_app: &mut SubApp) {
-    use super::scene::SceneUploaded;
     use bevy::core_pipeline::core_3d::main_transparent_pass_3d;
     use bevy::core_pipeline::schedule::camera_driver;
     use bevy::core_pipeline::{Core3d, Core3dSystems};
     use bevy::render::renderer::{RenderGraph, RenderGraphSystems};
     use bevy::render::{Render, RenderStartup, RenderSystems};
     render_app
+        .insert_resource(view_parts())
+        .init_resource::<FramePlan>()
+        .configure_sets(Render, FramePlanned.in_set(RenderSystems::PrepareResources))
         .add_systems(RenderStartup, init_pipelines)
         .add_systems(
             Render,
-            (
-                super::view::prepare_view_resources.after(SceneUploaded).in_set(RenderSystems::PrepareResources),
-                follow_settings.after(SceneUploaded).before(gi::prepare_gi).in_set(RenderSystems::PrepareResources),
-            ),
+            (follow_settings, plan_frame)
+                .chain()
+                .after(SceneUploaded)
+                .before(FramePlanned)
+                .in_set(RenderSystems::PrepareResources),
         )
         .add_systems(Core3d, view_frame.after(main_transparent_pass_3d).in_set(Core3dSystems::MainPass))
         .add_systems(RenderGraph, world_frame.before(camera_driver).in_set(RenderGraphSystems::Render));
+    super::view::add(render_app);
 }

@@ -41,7 +41,7 @@ pub struct WorldInfo {
 /// All zero but the pool's part shift: a pool in one buffer (a shift of 0 would put every slot in a part of its own).
 impl Default for WorldInfo {
     fn default() -> Self {
-        WorldInfo { pool_part_shift: crate::render::scene::world::ONE_POOL_PART, ..bytemuck::Zeroable::zeroed() }
+        WorldInfo { pool_part_shift: ONE_POOL_PART, ..bytemuck::Zeroable::zeroed() }
     }
 }
 
@@ -383,6 +383,12 @@ pub const GI_QMC: u32 = 32;
 /// The filtered colour of a GI entry that holds no value yet (radiance is never negative): the tables start with
 /// it and `forget_value` (`shaders/gi/cache.wgsl`) writes it back. An integer, as the shared table holds them.
 pub const GI_NO_VALUE: i32 = -1;
+/// Direct-light samples a GI entry starts over with after a change of light (`RESTART_SAMPLES` in
+/// `shaders/gi/direct.wgsl`).
+pub const GI_RESTART_DIRECT_SAMPLES: u32 = 8;
+
+/// The brick pool's part shift that keeps every slot in the first part (`WorldInfo::pool_part_shift`).
+pub const ONE_POOL_PART: u32 = 31;
 
 /// The G-buffer's packed hit: bit 0 hit, bits 1-3 face, bits 4-19 material, bits 20-31 the moving object's id.
 pub const GBUFFER_FACE_SHIFT: u32 = 1;
@@ -416,7 +422,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("BRICK_WORDS", U32((BRICK_VOXELS / 2) as u32)),
         ("MAX_WORLD_EDGE", U32(MAX_WORLD_EDGE)),
         // The pool's part shift of a pool in one buffer (src/render/scene/world.rs).
-        ("ONE_POOL_PART", U32(crate::render::scene::world::ONE_POOL_PART)),
+        ("ONE_POOL_PART", U32(ONE_POOL_PART)),
         // Secondary rays start this far off their surface (the CPU reference uses the same).
         ("RAY_OFFSET_INVERSE", U32(RAY_OFFSET_INVERSE)),
         // A light slot's packed edge and exposed faces.
@@ -466,7 +472,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("GI_EDIT_RESTART", U32(GI_EDIT_RESTART)),
         ("GI_QMC", U32(GI_QMC)),
         ("GI_NO_VALUE", I32(GI_NO_VALUE)),
-        ("GI_RESTART_SAMPLES", U32(super::gi::RESTART_DIRECT_SAMPLES)),
+        ("GI_RESTART_SAMPLES", U32(GI_RESTART_DIRECT_SAMPLES)),
         // The GI work buffer's words.
         ("GI_WORK_STATIC_WORD", U32(GI_WORK_STATIC_WORD)),
         ("GI_WORK_DYNAMIC_WORD", U32(GI_WORK_DYNAMIC_WORD)),

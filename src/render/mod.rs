@@ -3,12 +3,15 @@
 //! - `scene/`: the GPU copy of what is traced and lit (world, lights and this frame's lighting, moving objects,
 //!   counters): uploads in the main world's PostUpdate, buffers written in `RenderSystems::PrepareResources`.
 //! - `gpu_types`: the CPU/GPU contract (every buffer struct, every shared constant as a shader def).
-//! - `frame`: the passes in order, per camera (`view_frame`) and once per frame (`world_frame`); it owns no
-//!   technique's state.
+//! - `interface`: each bind group's bindings, declared once (the layouts follow; a CPU test checks the WGSL).
+//! - `pass`: a compute pass as a row of a technique's table.
+//! - `plan`: the frame plan, what this frame runs and what changed, which `frame` decides and the rest read.
+//! - `frame`: the plan, the pipelines, and the passes in order, per camera (`view_frame`) and once per frame
+//!   (`world_frame`); it owns no technique's state.
 //! - one module per technique, each owning its passes, its buffers and when its history restarts: `primary`
 //!   (the G-buffer), `restir` (Voxel ReSTIR direct light, the reservoirs), `denoise` (the denoiser's history),
 //!   `gi/` (the per-voxel-face GI cache: tables, edit log, the schedule of restarts and warm-up).
-//! - `view`: a camera's bind group, gathered from the techniques' parts, and its frame parameters.
+//! - `view`: a camera's group 1, its frame parameters, and the `ViewPart` each technique implements.
 //! - `shaders`: the embedded WGSL (`shaders/lib`, `shaders/restir`, `shaders/gi`, `shaders/denoise`).
 //!
 //! Bevy's tonemapping runs after the voxel passes.
@@ -19,7 +22,10 @@ pub mod denoise;
 pub mod frame;
 pub mod gi;
 pub mod gpu_types;
+pub mod interface;
+pub mod pass;
 pub mod pass_key;
+pub mod plan;
 pub mod primary;
 pub mod restir;
 pub mod scene;

@@ -5,8 +5,12 @@
 //!
 //! Its per-view state is the G-buffer, this frame's and last frame's (`GBuffers`, swapped, never copied).
 
-use super::frame::{Dispatch, VoxelPass};
-use super::gpu_types::GBUFFER_TEXEL_BYTES;
+use super::gpu_types::{FrameParams, GBUFFER_TEXEL_BYTES};
+use super::interface::GpuBinding;
+use super::pass::{Dispatch, VoxelPass};
+use super::plan::FramePlan;
+use super::view::{ViewPart, ViewPartKind};
+use crate::settings::RenderSettings;
 use bevy::render::render_resource::{BindingResource, Buffer, BufferDescriptor, BufferUsages};
 use bevy::render::renderer::RenderDevice;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -17,7 +21,14 @@ pub const PRIMARY: VoxelPass =
 /// The name the pass's GPU time is recorded under.
 pub const PRIMARY_PASS_NAME: &str = PRIMARY.name;
 
-/// A view's G-buffer (group 1, bindings 4 and 5): this frame's, which the primary pass writes, and last frame's,
+/// Its part of group 1 (`shaders/lib/frame.wgsl`): this frame's G-buffer, then last frame's.
+pub const VIEW_BINDINGS: [GpuBinding; 2] = [GpuBinding::read_write("gbuffer"), GpuBinding::read_write("prev_gbuffer")];
+
+/// Its view part.
+pub const VIEW_PART: ViewPartKind =
+    ViewPartKind { bindings: &VIEW_BINDINGS, new: |device, pixels| Box::new(GBuffers::new(device, pixels)) };
+
+/// A view's G-buffer: this frame's, which the primary pass writes, and last frame's,
 /// which the temporal reprojections of ReSTIR and the denoiser read. Two buffers that swap roles each frame (the
 /// primary pass writes every pixel of this frame's), so last frame's is never copied.
 pub struct GBuffers {
@@ -41,20 +52,23 @@ impl GBuffers {
             current: AtomicUsize::new(0),
         }
     }
+}
 
-    /// Starts a frame of the primary pass: last frame's G-buffer becomes the previous one.
-    pub fn swap(&self) {
+impl ViewPart for GBuffers {
+    fn resources(&self) -> Vec<BindingResource<'_>> {
+        let current = self.current.load(Ordering::Relaxed);
+        vec![self.buffers[current].as_entire_binding(), self.buffers[current ^ 1].as_entire_binding()]
+    }
+
+    /// The G-buffer has no history of its own to restart: the reprojections that read last frame's test it.
+    fn begin_frame(&mut self, _: &FramePlan, _: &RenderSettings, _: &mut FrameParams) {}
+
+    /// Every frame of the primary pass: last frame's G-buffer becomes the previous one.
+    fn swap(&self) {
         self.current.fetch_xor(1, Ordering::Relaxed);
     }
 
-    /// Which of the two buffers is this frame's (the view's bind groups are cached by it).
-    pub fn parity(&self) -> usize {
+    fn parity(&self) -> usize {
         self.current.load(Ordering::Relaxed)
-    }
-
-    /// Bindings 4 and 5 of the view's group: this frame's, then last frame's.
-    pub fn bindings(&self) -> [BindingResource<'_>; 2] {
-        let current = self.current.load(Ordering::Relaxed);
-        [self.buffers[current].as_entire_binding(), self.buffers[current ^ 1].as_entire_binding()]
     }
 }

@@ -1,21 +1,24 @@
-//! Voxel ReSTIR direct lighting (seed 000, DESIGN.md "Voxel ReSTIR"): four compute passes per camera after the
-//! primary pass has written the G-buffer: candidates (`shaders/restir/initial.wgsl`), their visibility and temporal
-//! reuse (`temporal.wgsl`), spatial reuse (`spatial.wgsl`) and shading (`shade.wgsl`); `common.wgsl` holds the
-//! reservoir and the resampling steps. The candidates trace no ray: a kernel without the traversal's code keeps more
-//! threads in flight (on an H200 the fused pass ran 5-10% slower with the occupancy walk than with the DDA).
-//! Before them (`light_tiles=on`, the default) `tiles.wgsl` presamples this frame's light tiles, which the
-//! candidates draw their lights from.
+//! Voxel ReSTIR direct lighting (seed 000, DESIGN.md "Voxel ReSTIR"): five compute passes per camera (`PASSES`)
+//! after the primary pass has written the G-buffer. First (`light_tiles=on`, the default) `tiles.wgsl` presamples
+//! this frame's light tiles, which the candidates draw their lights from; then four per pixel: candidates
+//! (`shaders/restir/initial.wgsl`), their visibility and temporal reuse (`temporal.wgsl`), spatial reuse
+//! (`spatial.wgsl`) and shading (`shade.wgsl`); `common.wgsl` holds the reservoir and the resampling steps. The
+//! candidates trace no ray: a kernel without the traversal's code keeps more threads in flight
+//! (docs/bench/why.md).
 //! None of them runs when the scene has no lights (or ReSTIR is not the lighting mode): the primary pass then
 //! shows emission alone, and the skipped passes record no GPU time.
 //!
-//! Its per-view state (`RestirView`): the two reservoir buffers, the light tiles, and whether last frame's
-//! reservoirs are this frame's temporal history. `frame::view_frame` dispatches the passes.
+//! Its per-view state (`RestirView`, a `view::ViewPart`): the two reservoir buffers, the light tiles, and whether
+//! last frame's reservoirs are this frame's temporal history. `frame::view_frame` dispatches the passes.
 
-use super::frame::{Dispatch, VoxelPass};
 use super::gpu_types::{
-    LIGHT_TILE_SIZE, LIGHT_TILES, RESERVOIR_BYTES, RESTIR_INITIAL_VISIBILITY, RESTIR_LIGHT_TILES, RESTIR_LOCAL,
-    RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL, RESTIR_TEMPORAL, RESTIR_UNBIASED, TILE_LIGHT_BYTES,
+    FrameParams, LIGHT_TILE_SIZE, LIGHT_TILES, RESERVOIR_BYTES, RESTIR_INITIAL_VISIBILITY, RESTIR_LIGHT_TILES,
+    RESTIR_LOCAL, RESTIR_ONE_RAY, RESTIR_POINT, RESTIR_SPATIAL, RESTIR_TEMPORAL, RESTIR_UNBIASED, TILE_LIGHT_BYTES,
 };
+use super::interface::GpuBinding;
+use super::pass::{Dispatch, VoxelPass};
+use super::plan::{FramePlan, RestirPasses};
+use super::view::{ViewPart, ViewPartKind};
 use crate::settings::{DebugView, LightSample, RenderSettings, Reuse};
 use bevy::render::render_resource::{BindingResource, Buffer, BufferDescriptor, BufferUsages};
 use bevy::render::renderer::RenderDevice;
@@ -74,26 +77,13 @@ pub fn samples(settings: &RenderSettings, light_count: u32) -> bool {
     shades(settings) && light_count > 0
 }
 
-/// Which of the passes a view's frame dispatches.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RestirPasses {
-    /// The shading pass shades the image (`shades`).
-    pub shades: bool,
-    /// The sampling passes run (`samples`).
-    pub samples: bool,
-    /// The candidates read light tiles, so the tiles' pass runs with the sampling passes.
-    pub tiles: bool,
-}
-
-impl RestirPasses {
-    /// Whether `pass` is dispatched: the shading pass whenever ReSTIR shades, the light tiles only when the
-    /// candidates read them, the other passes when there is something to sample.
-    pub fn dispatches(&self, pass: &VoxelPass) -> bool {
-        match pass.dispatch {
-            Dispatch::LightTiles => self.samples && self.tiles,
-            _ if pass.name == SHADE_PASS => self.shades,
-            _ => self.samples,
-        }
+/// Whether a view's frame dispatches `pass`: the shading pass whenever ReSTIR shades, the light tiles only when
+/// the candidates read them, the other passes when there is something to sample.
+pub fn dispatches(passes: &RestirPasses, pass: &VoxelPass) -> bool {
+    match pass.dispatch {
+        Dispatch::LightTiles => passes.samples && passes.tiles,
+        _ if pass.name == SHADE_PASS => passes.shades,
+        _ => passes.samples,
     }
 }
 
@@ -132,14 +122,25 @@ impl RestirParams {
     }
 }
 
-/// One view's reservoirs (group 1, bindings 6 and 7: after temporal reuse, and final), their history, and its
-/// light tiles (binding 12, rewritten every frame).
+/// Its part of group 1 (`shaders/restir/common.wgsl`).
+pub const VIEW_BINDINGS: [GpuBinding; 3] = [
+    GpuBinding::read_write("reservoirs_temporal"),
+    GpuBinding::read_write("reservoirs_final"),
+    GpuBinding::read_write("light_tiles"),
+];
+
+/// Its view part.
+pub const VIEW_PART: ViewPartKind =
+    ViewPartKind { bindings: &VIEW_BINDINGS, new: |device, pixels| Box::new(RestirView::new(device, pixels)) };
+
+/// One view's reservoirs (after temporal reuse, and final), their history, and its light tiles (rewritten every
+/// frame).
 pub struct RestirView {
     reservoirs_temporal: Buffer,
     reservoirs_final: Buffer,
     light_tiles: Buffer,
-    /// The passes this frame dispatches (set in prepare, read by the frame; last frame's until then).
-    pub passes: RestirPasses,
+    /// Whether last frame ran the sampling passes.
+    sampled: bool,
 }
 
 impl RestirView {
@@ -156,25 +157,28 @@ impl RestirView {
             reservoirs_temporal: buffer("glowbrick_reservoirs_temporal", pixels * RESERVOIR_BYTES),
             reservoirs_final: buffer("glowbrick_reservoirs_final", pixels * RESERVOIR_BYTES),
             light_tiles: buffer("glowbrick_light_tiles", u64::from(TILE_THREADS) * TILE_LIGHT_BYTES),
-            passes: RestirPasses::default(),
+            sampled: false,
         }
     }
+}
 
-    /// Starts this frame with its passes, and says whether last frame's reservoirs are its history.
-    pub fn begin_frame(&mut self, passes: RestirPasses, lights_changed: bool) -> bool {
-        let history = history_is_valid(self.passes.samples, passes.samples, lights_changed);
-        self.passes = passes;
-        history
+impl ViewPart for RestirView {
+    fn resources(&self) -> Vec<BindingResource<'_>> {
+        vec![
+            self.reservoirs_temporal.as_entire_binding(),
+            self.reservoirs_final.as_entire_binding(),
+            self.light_tiles.as_entire_binding(),
+        ]
     }
 
-    /// Bindings 6 and 7 of the view's group.
-    pub fn bindings(&self) -> [BindingResource<'_>; 2] {
-        [self.reservoirs_temporal.as_entire_binding(), self.reservoirs_final.as_entire_binding()]
-    }
-
-    /// Binding 12 of the view's group.
-    pub fn tiles_binding(&self) -> BindingResource<'_> {
-        self.light_tiles.as_entire_binding()
+    /// Its parameters, and whether last frame's reservoirs are this frame's history (`prev_camera.w`).
+    fn begin_frame(&mut self, plan: &FramePlan, settings: &RenderSettings, params: &mut FrameParams) {
+        let restir = RestirParams::of(settings);
+        (params.candidates, params.taps, params.radius, params.restir_flags) =
+            (restir.candidates, restir.taps, restir.radius, restir.flags);
+        let history = history_is_valid(self.sampled, plan.restir.samples, plan.changes.lights);
+        self.sampled = plan.restir.samples;
+        params.prev_camera[3] = if history { 1.0 } else { 0.0 };
     }
 }
 
@@ -206,12 +210,47 @@ mod tests {
         assert!(!shades(&settings(&["lighting=sun"])) && !samples(&settings(&["lighting=sun"]), 1));
         assert!(!shades(&settings(&["lighting=nee"])));
         let view = |shades: bool, samples: bool, tiles: bool| RestirPasses { shades, samples, tiles };
-        let count = |v: &RestirPasses| PASSES.iter().filter(|p| v.dispatches(p)).count();
+        let count = |v: &RestirPasses| PASSES.iter().filter(|p| dispatches(v, p)).count();
         assert_eq!(count(&view(true, true, true)), 5);
         assert_eq!(count(&view(true, true, false)), 4, "no tiles");
         let shade_only = view(true, false, true);
         assert_eq!(count(&shade_only), 1);
-        assert!(shade_only.dispatches(&PASSES[4]), "the shading pass shades a world without lights");
+        assert!(dispatches(&shade_only, &PASSES[4]), "the shading pass shades a world without lights");
         assert_eq!(count(&view(false, false, true)), 0);
+    }
+
+    /// The named choices reach the GPU as the bits the shaders test.
+    #[test]
+    fn named_choices_reach_the_gpu_as_flag_bits() {
+        use crate::render::scene::lights::scene_lighting;
+        let settings = |pairs: &[&str]| {
+            RenderSettings::default().with_pairs(&pairs.iter().map(|p| p.to_string()).collect::<Vec<_>>()).unwrap()
+        };
+        let default = settings(&[]);
+        // Default: temporal, spatial, one ray per neighbour, local candidates, the chosen candidate's visibility.
+        let defaults = RESTIR_TEMPORAL
+            | RESTIR_SPATIAL
+            | RESTIR_ONE_RAY
+            | RESTIR_LOCAL
+            | RESTIR_INITIAL_VISIBILITY
+            | RESTIR_LIGHT_TILES;
+        assert_eq!((scene_lighting(&default, 3).power_pick, RestirParams::of(&default).flags), (1, defaults));
+        assert_eq!((RESTIR_TEMPORAL, RESTIR_SPATIAL, RESTIR_POINT, RESTIR_UNBIASED), (1, 2, 4, 8));
+        assert_eq!((RESTIR_ONE_RAY, RESTIR_LOCAL, RESTIR_INITIAL_VISIBILITY, RESTIR_LIGHT_TILES), (16, 32, 64, 128));
+        assert_eq!(RestirParams::of(&settings(&["reuse=biased"])).flags, defaults & !RESTIR_ONE_RAY);
+        let changed = settings(&[
+            "pick=uniform",
+            "sample=point",
+            "reuse=unbiased",
+            "temporal=off",
+            "local_lights=off",
+            "initial_visibility=off",
+            "light_tiles=off",
+        ]);
+        assert_eq!(
+            (scene_lighting(&changed, 3).power_pick, RestirParams::of(&changed).flags),
+            (0, RESTIR_SPATIAL | RESTIR_POINT | RESTIR_UNBIASED)
+        );
+        assert_eq!(scene_lighting(&changed, 3).light_count, 3);
     }
 }

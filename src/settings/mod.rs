@@ -194,10 +194,10 @@ impl Named for LightSample {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Reuse {
     /// No rays: a neighbour's weight for this pixel's sample ignores whether the neighbour sees it (darker near
-    /// shadow edges: -6% to -12% on the thesis' views). The thesis' protocol (`assets/settings/thesis.ron`).
+    /// shadow edges, docs/bench/why.md). The thesis' protocol (`assets/settings/thesis.ron`).
     Biased,
     /// One ray per neighbour: whether the neighbour sees this pixel's sample. Unbiased for a static view, and
-    /// about 3% dearer than `Biased` on the thesis' letters (docs/bench/restir.md).
+    /// a little dearer than `Biased` (docs/bench/restir.md).
     #[default]
     OneRay,
     /// Two rays per neighbour: also whether this pixel sees the neighbour's sample, so an occluded one is never

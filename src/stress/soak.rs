@@ -7,6 +7,7 @@
 
 use super::memory::{MemorySample, MemoryTrack};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::image_io::LinearImage;
 use crate::progress::Progress;
 use crate::reference::sampling::Pcg;
 use crate::reference::{ReferenceOptions, render_reference};
@@ -246,7 +247,8 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
     let home = world.view(None).cloned().unwrap_or_else(|| world.overview());
     let lamps: Vec<u16> = (0..world.palette.id_count() as u16).filter(|&id| world.palette.is_emissive(id)).collect();
     let blocks: Vec<u16> = (1..world.palette.id_count() as u16).filter(|&id| !world.palette.is_emissive(id)).collect();
-    if lamps.is_empty() {
+    let palette_ids = (lamps, blocks);
+    if palette_ids.0.is_empty() {
         return Err(format!("scene {}: the soak needs an emissive material", config.scene));
     }
     let size = world.grid.size().as_ivec3();
@@ -279,26 +281,7 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
                 (rng.next_u32() % size.y as u32) as i32,
                 (rng.next_u32() % size.z as u32) as i32,
             );
-            let edit = match rng.next_u32() % 4 {
-                0 => {
-                    report.lamps_placed += 1;
-                    placed.push(at);
-                    Edit::Place { at, material: lamps[rng.next_u32() as usize % lamps.len()] }
-                }
-                1 if !placed.is_empty() => {
-                    // Recolour a lamp placed earlier (same slot, new radiance) or another lamp material.
-                    report.lamps_recoloured += 1;
-                    let at = placed[rng.next_u32() as usize % placed.len()];
-                    Edit::Place { at, material: lamps[rng.next_u32() as usize % lamps.len()] }
-                }
-                2 if !placed.is_empty() => {
-                    report.broken += 1;
-                    let at = placed.swap_remove(rng.next_u32() as usize % placed.len());
-                    Edit::Break { at }
-                }
-                _ if !blocks.is_empty() => Edit::Place { at, material: blocks[rng.next_u32() as usize % blocks.len()] },
-                _ => Edit::Break { at },
-            };
+            let edit = random_edit(&mut rng, at, &palette_ids, &mut placed, &mut report);
             report.edits += 1;
             renderer.app_mut().world_mut().write_message(EditRequest::unrecorded(edit));
         }
@@ -326,26 +309,9 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
         *renderer.app_mut().world_mut().resource_mut::<RenderSettings>() = settings(soaked, debug, hours)?;
         let image = renderer.render(1)?;
         if debug == DebugView::Reservoir {
-            report.reservoir_reads += 1;
             let pool = renderer.app_mut().world().get_resource::<crate::lights::LightPool>();
-            report.reads_without_lights += pool.is_some_and(|p| p.is_empty()) as u32;
-            let before = report.nonfinite_reservoirs;
-            for p in &image.pixels {
-                let [w, m, w_sum, bad] = *p;
-                report.nonfinite_reservoirs += (bad != 0.0 || !w.is_finite() || !w_sum.is_finite()) as u64;
-                if m.is_finite() {
-                    report.max_m = report.max_m.max(m);
-                }
-                if w.is_finite() && w > 0.0 {
-                    report.max_w = report.max_w.max(w);
-                    report.min_w = report.min_w.min(w);
-                }
-            }
-            let bad = report.nonfinite_reservoirs - before;
-            if bad > 0 {
-                report.bad_reservoir_reads += 1;
-                report.first_bad_read.get_or_insert_with(|| (frame, soaked.to_string(), bad));
-            }
+            let no_lights = pool.is_some_and(|p| p.is_empty());
+            count_reservoirs(&image, no_lights, (frame, soaked), &mut report);
         } else {
             report.nonfinite_pixels += image.non_finite_pixels() as u64;
         }
@@ -359,9 +325,79 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
     report.reservoir_resets = counters[GpuCounter::ReservoirResets as usize];
     report.gi_resets = counters[GpuCounter::GiResets as usize];
 
-    // Static phase: the home view of the world as the soak left it, no edits, unbiased reuse (so the reference
-    // comparison measures drift and error, not the biased variant's known darkening).
-    renderer.set_view(&home);
+    static_phase(&mut renderer, &home, config, hours, &mut report)?;
+    if report.min_w == f32::INFINITY {
+        report.min_w = 0.0;
+    }
+    Ok(report)
+}
+
+/// One random edit at `at`: a lamp placed, recoloured or broken, or a block placed or broken. `ids` are the
+/// world's lamp materials and its other solid ones; `placed` the lamps placed so far.
+fn random_edit(
+    rng: &mut Pcg,
+    at: IVec3,
+    (lamps, blocks): &(Vec<u16>, Vec<u16>),
+    placed: &mut Vec<IVec3>,
+    report: &mut StressReport,
+) -> Edit {
+    match rng.next_u32() % 4 {
+        0 => {
+            report.lamps_placed += 1;
+            placed.push(at);
+            Edit::Place { at, material: lamps[rng.next_u32() as usize % lamps.len()] }
+        }
+        1 if !placed.is_empty() => {
+            // Recolour a lamp placed earlier (same slot, new radiance) or another lamp material.
+            report.lamps_recoloured += 1;
+            let at = placed[rng.next_u32() as usize % placed.len()];
+            Edit::Place { at, material: lamps[rng.next_u32() as usize % lamps.len()] }
+        }
+        2 if !placed.is_empty() => {
+            report.broken += 1;
+            let at = placed.swap_remove(rng.next_u32() as usize % placed.len());
+            Edit::Break { at }
+        }
+        _ if !blocks.is_empty() => Edit::Place { at, material: blocks[rng.next_u32() as usize % blocks.len()] },
+        _ => Edit::Break { at },
+    }
+}
+
+/// Counts a reservoir read (the reservoir debug view's pixels: W, M, w_sum, a non-finite flag) of frame
+/// `frame` under `soaked` into the report.
+fn count_reservoirs(image: &LinearImage, no_lights: bool, (frame, soaked): (u32, Soaked), report: &mut StressReport) {
+    report.reservoir_reads += 1;
+    report.reads_without_lights += no_lights as u32;
+    let before = report.nonfinite_reservoirs;
+    for p in &image.pixels {
+        let [w, m, w_sum, bad] = *p;
+        report.nonfinite_reservoirs += (bad != 0.0 || !w.is_finite() || !w_sum.is_finite()) as u64;
+        if m.is_finite() {
+            report.max_m = report.max_m.max(m);
+        }
+        if w.is_finite() && w > 0.0 {
+            report.max_w = report.max_w.max(w);
+            report.min_w = report.min_w.min(w);
+        }
+    }
+    let bad = report.nonfinite_reservoirs - before;
+    if bad > 0 {
+        report.bad_reservoir_reads += 1;
+        report.first_bad_read.get_or_insert_with(|| (frame, soaked.to_string(), bad));
+    }
+}
+
+/// The static phase: the home view of the world as the soak left it, no edits, unbiased reuse (so the reference
+/// comparison measures drift and error, not the biased variant's known darkening); its drift, frame noise and
+/// the reference's mean into the report.
+fn static_phase(
+    renderer: &mut HeadlessRenderer,
+    home: &CameraView,
+    config: &StressConfig,
+    hours: f32,
+    report: &mut StressReport,
+) -> Result<(), String> {
+    renderer.set_view(home);
     // The reference is direct light only, so the GI cache is off here.
     *renderer.app_mut().world_mut().resource_mut::<RenderSettings>() =
         settings(Soaked::Restir(&["reuse=unbiased", "gi=off"]), DebugView::None, hours)?;
@@ -381,12 +417,9 @@ pub fn run_stress(config: &StressConfig) -> Result<StressReport, String> {
     let final_world = renderer.app_mut().world().resource::<VoxelWorld>().clone();
     let reference = render_reference(
         &final_world,
-        &home,
+        home,
         &ReferenceOptions { width: config.width, height: config.height, spp: 256, ..Default::default() },
     )?;
     report.reference_mean = reference.image.mean_luminance();
-    if report.min_w == f32::INFINITY {
-        report.min_w = 0.0;
-    }
-    Ok(report)
+    Ok(())
 }

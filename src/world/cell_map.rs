@@ -1,7 +1,6 @@
 //! A hash map keyed by grid cells (`IVec3`) with a cheap hash. The CPU reference looks up 27 cells of its nearby
-//! lights per shading point and the importers one brick per voxel read; with the standard library's SipHash those
-//! lookups were a fifth of the reference's time (perf), and loading the thesis' letters took 3.0-3.3 s against
-//! 1.7 s with this hash (docs/bench/traversal.md). Its keys are the world's own cells, so it needs no resistance
+//! lights per shading point and the importers one brick per voxel read; the standard library's SipHash made those
+//! lookups a large share of the reference's time and of a `.vx` import's (docs/bench/why.md). Its keys are the world's own cells, so it needs no resistance
 //! to chosen keys; it has no random seed, so iteration order is the same every run.
 
 use bevy::math::IVec3;

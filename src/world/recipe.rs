@@ -114,145 +114,211 @@ fn apply_op(world: &mut VoxelWorld, seed: u32, op_index: u32, op: &SceneOp) -> R
             let (lo, hi) = (IVec3::from(*min), IVec3::from(*max));
             world.grid.fill_box(lo, hi, id).map(|_| ()).map_err(|e| format!("box {lo}..{hi}: {e}"))
         }
-        SceneOp::Checker { min, max, material } => {
-            let id = material_id(&world.palette, material)?;
-            let (lo, hi) = (IVec3::from(*min), IVec3::from(*max));
-            if lo.cmpge(hi).any() || !world.grid.contains(lo) || !world.grid.contains(hi - IVec3::ONE) {
-                return Err(format!("checker {lo}..{hi} must be a non-empty box inside the world"));
-            }
-            for z in lo.z..hi.z {
-                for y in lo.y..hi.y {
-                    // The first x of this row whose x + y + z is even.
-                    let first = lo.x + (lo.x + y + z).rem_euclid(2);
-                    for x in (first..hi.x).step_by(2) {
-                        world.grid.set(IVec3::new(x, y, z), id).map_err(|e| e.to_string())?;
-                    }
-                }
-            }
-            Ok(())
-        }
-        SceneOp::Terrain { params, rock, soil, surface } => {
-            let ids = (
-                material_id(&world.palette, rock)?,
-                material_id(&world.palette, soil)?,
-                material_id(&world.palette, surface)?,
-            );
-            if !(params.frequency.is_finite() && params.amplitude.is_finite() && params.base_height.is_finite()) {
-                return Err("terrain parameters must be finite".into());
-            }
-            // Found by the fuzzer (recipe input 520195 of seed 2): a frequency of 7e36 put the noise's lattice
-            // coordinates beyond an isize and panicked inside the `noise` crate. Above one cycle per voxel the
-            // terrain is noise anyway.
-            if !(0.0..=1.0).contains(&params.frequency.abs()) {
-                return Err(format!("terrain frequency {} must be within -1..=1 cycles per voxel", params.frequency));
-            }
-            fill_terrain(world, seed, params, ids.0, ids.1, ids.2);
-            Ok(())
-        }
-        SceneOp::Scatter { material, count, size } => {
-            let id = material_id(&world.palette, material)?;
-            if *count > MAX_SCATTER {
-                return Err(format!("scatter count {count} exceeds {MAX_SCATTER}"));
-            }
-            let extent = IVec3::from(*size);
-            let world_size = world.grid.size().as_ivec3();
-            if extent.cmplt(IVec3::ONE).any() || extent.cmpgt(world_size).any() {
-                return Err(format!("scatter size {extent} must be at least 1 and fit in the world"));
-            }
-            for n in 0..*count {
-                let h = hash_u32(seed ^ hash_u32(op_index.wrapping_mul(0x9E37_79B9) ^ n));
-                let x = (h % (world_size.x - extent.x + 1) as u32) as i32;
-                let z = (hash_u32(h) % (world_size.z - extent.z + 1) as u32) as i32;
-                let base = surface_height(world, x, z) + 1;
-                if base + extent.y > world_size.y {
-                    continue;
-                }
-                let lo = IVec3::new(x, base, z);
-                world.grid.fill_box(lo, lo + extent, id).map_err(|e| e.to_string())?;
-            }
-            Ok(())
-        }
+        SceneOp::Checker { min, max, material } => apply_checker(world, min, max, material),
+        SceneOp::Terrain { params, rock, soil, surface } => apply_terrain(world, seed, params, rock, soil, surface),
+        SceneOp::Scatter { material, count, size } => apply_scatter(world, seed, op_index, material, count, size),
         SceneOp::RandomBoxes { material, count, min, max, size_min, size_max } => {
-            let id = material_id(&world.palette, material)?;
-            if *count > MAX_SCATTER {
-                return Err(format!("random box count {count} exceeds {MAX_SCATTER}"));
-            }
-            let (lo, hi) = (IVec3::from(*min), IVec3::from(*max));
-            let (smin, smax) = (IVec3::from(*size_min), IVec3::from(*size_max));
-            if smin.cmplt(IVec3::ONE).any() || smax.cmplt(smin).any() || (hi - lo).cmplt(smax).any() {
-                return Err("random boxes need 1 <= size_min <= size_max <= max - min".into());
-            }
-            if !world.grid.contains(lo) || !world.grid.contains(hi - IVec3::ONE) {
-                return Err(format!("random box region {lo}..{hi} leaves the world"));
-            }
-            for n in 0..*count {
-                let mut h = hash_u32(seed ^ hash_u32(op_index.wrapping_mul(0x85EB_CA6B) ^ n));
-                let mut draw = |lo: i32, hi_inclusive: i32| {
-                    h = hash_u32(h);
-                    lo + (h % (hi_inclusive - lo + 1) as u32) as i32
-                };
-                let size = IVec3::new(draw(smin.x, smax.x), draw(smin.y, smax.y), draw(smin.z, smax.z));
-                let at = IVec3::new(draw(lo.x, hi.x - size.x), draw(lo.y, hi.y - size.y), draw(lo.z, hi.z - size.z));
-                world.grid.fill_box(at, at + size, id).map_err(|e| e.to_string())?;
-            }
-            Ok(())
+            apply_random_boxes(world, seed, op_index, material, count, min, max, size_min, size_max)
         }
-        SceneOp::Speckle { on, materials, fraction } => {
-            let on = material_id(&world.palette, on)?;
-            let ids = materials.iter().map(|m| material_id(&world.palette, m)).collect::<Result<Vec<_>, _>>()?;
-            if ids.is_empty() || !(0.0..=1.0).contains(fraction) {
-                return Err("speckle needs materials and a fraction within [0, 1]".into());
-            }
-            let mut exposed = Vec::new();
-            world.grid.for_each_solid(|p, m| {
-                if m == on && NEIGHBOURS.iter().any(|&d| world.grid.get(p + d) == AIR) {
-                    exposed.push(p);
-                }
-            });
-            let threshold = (*fraction as f64 * u32::MAX as f64) as u32;
-            for p in exposed {
-                let h = hash_u32(
-                    seed ^ hash_u32(op_index ^ hash_u32((p.x as u32) ^ hash_u32((p.y as u32) ^ hash_u32(p.z as u32)))),
-                );
-                if h < threshold {
-                    let pick = ids[(hash_u32(h) % ids.len() as u32) as usize];
-                    world.grid.set(p, pick).map_err(|e| e.to_string())?;
-                }
-            }
-            Ok(())
-        }
+        SceneOp::Speckle { on, materials, fraction } => apply_speckle(world, seed, op_index, on, materials, fraction),
         SceneOp::Text { text, material, origin, right, up, depth_dir, scale, depth } => {
-            let id = material_id(&world.palette, material)?;
-            let axes = [IVec3::from(*right), IVec3::from(*up), IVec3::from(*depth_dir)];
-            if axes.iter().any(|a| a.abs().element_sum() != 1) {
-                return Err("text right, up and depth_dir must be unit axes like (1, 0, 0)".into());
-            }
-            if !(1..=64).contains(scale) || !(1..=64).contains(depth) || text.chars().count() > 256 {
-                return Err("text scale and depth must be within 1..=64, text at most 256 characters".into());
-            }
-            let [right, up, into] = axes;
-            for (i, c) in text.chars().enumerate() {
-                let rows = glyph(c).ok_or_else(|| format!("the font has no {c:?} (A-Z, 0-9 and space)"))?;
-                for (row, bits) in rows.iter().enumerate() {
-                    for col in 0..5 {
-                        if bits & (0b10000 >> col) == 0 {
-                            continue;
-                        }
-                        let cell = IVec3::from(*origin)
-                            + right * ((i as i32 * 6 + col) * scale)
-                            + up * ((6 - row as i32) * scale);
-                        for (a, b, k) in
-                            (0..*scale).flat_map(|a| (0..*scale).flat_map(move |b| (0..*depth).map(move |k| (a, b, k))))
-                        {
-                            let p = cell + right * a + up * b + into * k;
-                            world.grid.set(p, id).map_err(|e| format!("text '{text}': {e}"))?;
-                        }
-                    }
-                }
-            }
-            Ok(())
+            apply_text(world, text, material, origin, right, up, depth_dir, scale, depth)
         }
     }
+}
+
+/// A checkerboard of one-voxel cells in a box.
+fn apply_checker(
+    world: &mut VoxelWorld,
+    min: &(i32, i32, i32),
+    max: &(i32, i32, i32),
+    material: &str,
+) -> Result<(), String> {
+    let id = material_id(&world.palette, material)?;
+    let (lo, hi) = (IVec3::from(*min), IVec3::from(*max));
+    if lo.cmpge(hi).any() || !world.grid.contains(lo) || !world.grid.contains(hi - IVec3::ONE) {
+        return Err(format!("checker {lo}..{hi} must be a non-empty box inside the world"));
+    }
+    for z in lo.z..hi.z {
+        for y in lo.y..hi.y {
+            // The first x of this row whose x + y + z is even.
+            let first = lo.x + (lo.x + y + z).rem_euclid(2);
+            for x in (first..hi.x).step_by(2) {
+                world.grid.set(IVec3::new(x, y, z), id).map_err(|e| e.to_string())?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Noise terrain over the whole world.
+fn apply_terrain(
+    world: &mut VoxelWorld,
+    seed: u32,
+    params: &TerrainParams,
+    rock: &str,
+    soil: &str,
+    surface: &str,
+) -> Result<(), String> {
+    let ids =
+        (material_id(&world.palette, rock)?, material_id(&world.palette, soil)?, material_id(&world.palette, surface)?);
+    if !(params.frequency.is_finite() && params.amplitude.is_finite() && params.base_height.is_finite()) {
+        return Err("terrain parameters must be finite".into());
+    }
+    // Found by the fuzzer (recipe input 520195 of seed 2): a frequency of 7e36 put the noise's lattice
+    // coordinates beyond an isize and panicked inside the `noise` crate. Above one cycle per voxel the
+    // terrain is noise anyway.
+    if !(0.0..=1.0).contains(&params.frequency.abs()) {
+        return Err(format!("terrain frequency {} must be within -1..=1 cycles per voxel", params.frequency));
+    }
+    fill_terrain(world, seed, params, ids.0, ids.1, ids.2);
+    Ok(())
+}
+
+/// Boxes of one size dropped on the surface at hashed places.
+fn apply_scatter(
+    world: &mut VoxelWorld,
+    seed: u32,
+    op_index: u32,
+    material: &str,
+    count: &u32,
+    size: &(i32, i32, i32),
+) -> Result<(), String> {
+    let id = material_id(&world.palette, material)?;
+    if *count > MAX_SCATTER {
+        return Err(format!("scatter count {count} exceeds {MAX_SCATTER}"));
+    }
+    let extent = IVec3::from(*size);
+    let world_size = world.grid.size().as_ivec3();
+    if extent.cmplt(IVec3::ONE).any() || extent.cmpgt(world_size).any() {
+        return Err(format!("scatter size {extent} must be at least 1 and fit in the world"));
+    }
+    for n in 0..*count {
+        let h = hash_u32(seed ^ hash_u32(op_index.wrapping_mul(0x9E37_79B9) ^ n));
+        let x = (h % (world_size.x - extent.x + 1) as u32) as i32;
+        let z = (hash_u32(h) % (world_size.z - extent.z + 1) as u32) as i32;
+        let base = surface_height(world, x, z) + 1;
+        if base + extent.y > world_size.y {
+            continue;
+        }
+        let lo = IVec3::new(x, base, z);
+        world.grid.fill_box(lo, lo + extent, id).map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+/// Boxes of hashed sizes at hashed places in a region.
+#[allow(clippy::too_many_arguments)]
+fn apply_random_boxes(
+    world: &mut VoxelWorld,
+    seed: u32,
+    op_index: u32,
+    material: &str,
+    count: &u32,
+    min: &(i32, i32, i32),
+    max: &(i32, i32, i32),
+    size_min: &(i32, i32, i32),
+    size_max: &(i32, i32, i32),
+) -> Result<(), String> {
+    let id = material_id(&world.palette, material)?;
+    if *count > MAX_SCATTER {
+        return Err(format!("random box count {count} exceeds {MAX_SCATTER}"));
+    }
+    let (lo, hi) = (IVec3::from(*min), IVec3::from(*max));
+    let (smin, smax) = (IVec3::from(*size_min), IVec3::from(*size_max));
+    if smin.cmplt(IVec3::ONE).any() || smax.cmplt(smin).any() || (hi - lo).cmplt(smax).any() {
+        return Err("random boxes need 1 <= size_min <= size_max <= max - min".into());
+    }
+    if !world.grid.contains(lo) || !world.grid.contains(hi - IVec3::ONE) {
+        return Err(format!("random box region {lo}..{hi} leaves the world"));
+    }
+    for n in 0..*count {
+        let mut h = hash_u32(seed ^ hash_u32(op_index.wrapping_mul(0x85EB_CA6B) ^ n));
+        let mut draw = |lo: i32, hi_inclusive: i32| {
+            h = hash_u32(h);
+            lo + (h % (hi_inclusive - lo + 1) as u32) as i32
+        };
+        let size = IVec3::new(draw(smin.x, smax.x), draw(smin.y, smax.y), draw(smin.z, smax.z));
+        let at = IVec3::new(draw(lo.x, hi.x - size.x), draw(lo.y, hi.y - size.y), draw(lo.z, hi.z - size.z));
+        world.grid.fill_box(at, at + size, id).map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+/// Exposed voxels of one material turned, by a hashed fraction, into others.
+fn apply_speckle(
+    world: &mut VoxelWorld,
+    seed: u32,
+    op_index: u32,
+    on: &str,
+    materials: &[String],
+    fraction: &f32,
+) -> Result<(), String> {
+    let on = material_id(&world.palette, on)?;
+    let ids = materials.iter().map(|m| material_id(&world.palette, m)).collect::<Result<Vec<_>, _>>()?;
+    if ids.is_empty() || !(0.0..=1.0).contains(fraction) {
+        return Err("speckle needs materials and a fraction within [0, 1]".into());
+    }
+    let mut exposed = Vec::new();
+    world.grid.for_each_solid(|p, m| {
+        if m == on && NEIGHBOURS.iter().any(|&d| world.grid.get(p + d) == AIR) {
+            exposed.push(p);
+        }
+    });
+    let threshold = (*fraction as f64 * u32::MAX as f64) as u32;
+    for p in exposed {
+        let h = hash_u32(
+            seed ^ hash_u32(op_index ^ hash_u32((p.x as u32) ^ hash_u32((p.y as u32) ^ hash_u32(p.z as u32)))),
+        );
+        if h < threshold {
+            let pick = ids[(hash_u32(h) % ids.len() as u32) as usize];
+            world.grid.set(p, pick).map_err(|e| e.to_string())?;
+        }
+    }
+    Ok(())
+}
+
+/// Text in the 5 x 7 font.
+#[allow(clippy::too_many_arguments)]
+fn apply_text(
+    world: &mut VoxelWorld,
+    text: &str,
+    material: &str,
+    origin: &(i32, i32, i32),
+    right: &(i32, i32, i32),
+    up: &(i32, i32, i32),
+    depth_dir: &(i32, i32, i32),
+    scale: &i32,
+    depth: &i32,
+) -> Result<(), String> {
+    let id = material_id(&world.palette, material)?;
+    let axes = [IVec3::from(*right), IVec3::from(*up), IVec3::from(*depth_dir)];
+    if axes.iter().any(|a| a.abs().element_sum() != 1) {
+        return Err("text right, up and depth_dir must be unit axes like (1, 0, 0)".into());
+    }
+    if !(1..=64).contains(scale) || !(1..=64).contains(depth) || text.chars().count() > 256 {
+        return Err("text scale and depth must be within 1..=64, text at most 256 characters".into());
+    }
+    let [right, up, into] = axes;
+    for (i, c) in text.chars().enumerate() {
+        let rows = glyph(c).ok_or_else(|| format!("the font has no {c:?} (A-Z, 0-9 and space)"))?;
+        for (row, bits) in rows.iter().enumerate() {
+            for col in 0..5 {
+                if bits & (0b10000 >> col) == 0 {
+                    continue;
+                }
+                let cell =
+                    IVec3::from(*origin) + right * ((i as i32 * 6 + col) * scale) + up * ((6 - row as i32) * scale);
+                for (a, b, k) in
+                    (0..*scale).flat_map(|a| (0..*scale).flat_map(move |b| (0..*depth).map(move |k| (a, b, k))))
+                {
+                    let p = cell + right * a + up * b + into * k;
+                    world.grid.set(p, id).map_err(|e| format!("text '{text}': {e}"))?;
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 const NEIGHBOURS: [IVec3; 6] = [IVec3::X, IVec3::NEG_X, IVec3::Y, IVec3::NEG_Y, IVec3::Z, IVec3::NEG_Z];

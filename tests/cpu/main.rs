@@ -2,6 +2,7 @@
 //! `tests/gpu`.
 
 mod cli;
+mod code_shape;
 #[path = "../shared/compose.rs"]
 mod compose;
 mod daylight;

@@ -5,7 +5,10 @@
 
 use crate::compose;
 use glowbrick::lights::AliasEntry;
+use glowbrick::render::frame::{all_passes, bind_groups};
 use glowbrick::render::gpu_types::*;
+use glowbrick::render::interface::{Access, GroupInterface};
+use glowbrick::render::pass::{Dispatch, LINEAR_WORKGROUP, PIXEL_WORKGROUP_EDGE};
 use glowbrick::render::shaders::SOURCES;
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use std::mem::offset_of;
@@ -322,4 +325,128 @@ fn every_buffer_has_the_layout_of_its_rust_twin() {
         }
     }
     assert!(errors.is_empty(), "{}", errors.join("\n"));
+}
+
+/// How a naga global is accessed, in the terms of the Rust declarations (`interface::Access`); `None` for a
+/// global the check does not cover (a sampler, a workgroup variable).
+fn wgsl_access(module: &naga::Module, global: &naga::GlobalVariable) -> Option<Access> {
+    use naga::{AddressSpace, ImageClass, StorageAccess, TypeInner};
+    Some(match global.space {
+        AddressSpace::Uniform if undecorated(global.name.as_deref().unwrap_or("")) == "view" => Access::ViewUniform,
+        AddressSpace::Uniform => match module.types[global.ty].inner {
+            TypeInner::Struct { span, .. } => Access::Uniform(span as u64),
+            _ => return None,
+        },
+        AddressSpace::Storage { access } if access.contains(StorageAccess::STORE) => Access::ReadWrite,
+        AddressSpace::Storage { .. } => Access::Read,
+        AddressSpace::Handle => match module.types[global.ty].inner {
+            TypeInner::Image { class: ImageClass::Storage { access, .. }, .. } if access == StorageAccess::STORE => {
+                Access::OutputTexture
+            }
+            _ => return None,
+        },
+        _ => return None,
+    })
+}
+
+/// Every way the shaders' globals disagree with the Rust declarations: a global at a binding declared with
+/// another name or access, at a binding nobody declared, or a declared binding no shader uses. Bevy's view
+/// uniform is compared by access only (its size is Bevy's).
+fn interface_mismatches(modules: &[(&str, naga::Module)], groups: &[GroupInterface]) -> Vec<String> {
+    let mut errors = Vec::new();
+    let mut used = std::collections::HashSet::new();
+    for (path, module) in modules {
+        for (_, global) in module.global_variables.iter() {
+            let (Some(binding), Some(access)) = (&global.binding, wgsl_access(module, global)) else { continue };
+            let name = undecorated(global.name.as_deref().unwrap_or(""));
+            let declared =
+                groups.iter().find(|g| g.group == binding.group).and_then(|g| g.bindings.get(binding.binding as usize));
+            let at = format!("{path}: @group({}) @binding({}) `{name}`", binding.group, binding.binding);
+            match declared {
+                None => errors.push(format!("{at}: no Rust declaration at this binding")),
+                Some(d) if d.name != name => errors.push(format!("{at}: declared as `{}`", d.name)),
+                Some(d) if d.access != access => {
+                    errors.push(format!("{at}: {access:?} in WGSL, {:?} in its Rust declaration", d.access))
+                }
+                Some(_) => {
+                    used.insert((binding.group, binding.binding));
+                }
+            }
+        }
+    }
+    for group in groups {
+        for (i, declared) in group.bindings.iter().enumerate() {
+            if !used.contains(&(group.group, i as u32)) {
+                errors.push(format!(
+                    "{} binding {i} `{}` is declared but no shader binds it",
+                    group.label, declared.name
+                ));
+            }
+        }
+    }
+    errors.sort();
+    errors.dedup();
+    errors
+}
+
+/// Every pass, in both traversals' variants (the occupancy masks are bound by the occupancy one only), but the
+/// one-off test shaders' bindings past 100.
+fn pass_modules() -> Vec<(&'static str, naga::Module)> {
+    composed_passes().into_iter().chain(composed_passes_with(&["TRAVERSAL_OCCUPANCY"])).collect()
+}
+
+/// Every `@group/@binding var<..>` in `shaders/` has the name and access its group's Rust declaration gives it,
+/// and every declaration is bound by some shader: the layouts and bind groups are built from those declarations.
+#[test]
+fn every_shader_binding_matches_its_rust_declaration() {
+    let errors = interface_mismatches(&pass_modules(), &bind_groups());
+    assert!(errors.is_empty(), "{}", errors.join("\n"));
+}
+
+/// The check fails on a declaration that disagrees with the WGSL: an access mode changed, two bindings swapped,
+/// one left out.
+#[test]
+fn the_binding_check_sees_a_wrong_access_a_wrong_number_and_a_missing_declaration() {
+    let modules = pass_modules();
+    let mut groups = bind_groups();
+    let world = groups.iter_mut().find(|g| g.group == 0).unwrap();
+    let occupancy = world.bindings.iter().position(|b| b.name == "occupancy").unwrap();
+    world.bindings[occupancy].access = Access::ReadWrite;
+    let errors = interface_mismatches(&modules, &groups);
+    assert!(errors.iter().any(|e| e.contains("`occupancy`") && e.contains("Read in WGSL")), "{errors:?}");
+
+    let mut groups = bind_groups();
+    let gi = groups.iter_mut().find(|g| g.group == 3).unwrap();
+    gi.bindings.swap(1, 2);
+    let errors = interface_mismatches(&modules, &groups);
+    assert!(errors.iter().any(|e| e.contains("`gi_keys`: declared as `gi_entries`")), "{errors:?}");
+
+    let mut groups = bind_groups();
+    groups.iter_mut().find(|g| g.group == 1).unwrap().bindings.pop();
+    let errors = interface_mismatches(&modules, &groups);
+    assert!(errors.iter().any(|e| e.contains("`wavelet`: no Rust declaration")), "{errors:?}");
+}
+
+/// Every `@workgroup_size` is the one `frame` dispatches with: a square of `PIXEL_WORKGROUP_EDGE` for the
+/// per-pixel passes, `LINEAR_WORKGROUP` for the others.
+#[test]
+fn every_workgroup_size_is_the_one_the_frame_dispatches() {
+    let pixels = format!("@workgroup_size({PIXEL_WORKGROUP_EDGE}, {PIXEL_WORKGROUP_EDGE}, 1)");
+    let linear = format!("@workgroup_size({LINEAR_WORKGROUP}, 1, 1)");
+    let mut seen = 0;
+    for (path, source) in SOURCES {
+        for (i, _) in source.match_indices("@workgroup_size") {
+            let size = &source[i..i + source[i..].find(')').unwrap() + 1];
+            assert!(size == pixels || size == linear, "{path}: {size} is neither {pixels} nor {linear}");
+            seen += 1;
+        }
+    }
+    assert!(seen >= 10, "only {seen} entry points found");
+    for pass in all_passes() {
+        let source = SOURCES.iter().find(|(p, _)| *p == pass.shader).map(|(_, s)| *s).unwrap();
+        let entry = source.find(&format!("fn {}(", pass.entry_point)).expect(pass.entry_point);
+        let size_at = source[..entry].rfind("@workgroup_size").unwrap();
+        let expected = if matches!(pass.dispatch, Dispatch::Pixels) { &pixels } else { &linear };
+        assert!(source[size_at..].starts_with(expected.as_str()), "{}: {} is not {expected}", pass.shader, pass.name);
+    }
 }

@@ -3,10 +3,11 @@
 //! the renderer's parts.
 
 use glowbrick::render::gpu_types::WorldInfo;
-use glowbrick::render::scene::world::{UploadState, fits_gpu, split_pool, stage_upload, world_info};
+use glowbrick::render::scene::world::{UploadState, fits_gpu, split_pool, stage_upload, world_info, world_interface};
 use wgpu::util::DeviceExt;
 
-/// The GPU's copy of one world: the buffers of group 0 that `trace` and `voxel_at` read (bindings 0-3 and 7-10).
+/// The GPU's copy of one world: the buffers of group 0 that `trace` and `voxel_at` read (the world's part of
+/// `world_interface`, by name).
 pub struct GpuWorld {
     buffers: Vec<(u32, wgpu::Buffer)>,
 }
@@ -35,18 +36,18 @@ impl GpuWorld {
             contents: bytemuck::bytes_of(&info),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        Ok(GpuWorld {
-            buffers: vec![
-                (0, uniform),
-                (1, storage("gpu_world_top_cells", bytemuck::cast_slice(&full.top_cells[..]))),
-                (2, storage("gpu_world_pool", parts[0])),
-                (3, storage("gpu_world_materials", bytemuck::cast_slice(&materials[..]))),
-                (7, storage("gpu_world_occupancy", bytemuck::cast_slice(&full.occupancy[..]))),
-                (8, storage("gpu_world_pool_1", parts[1])),
-                (9, storage("gpu_world_pool_2", parts[2])),
-                (10, storage("gpu_world_pool_3", parts[3])),
-            ],
-        })
+        let group = world_interface();
+        let buffers = [
+            ("world_info", uniform),
+            ("top_cells", storage("gpu_world_top_cells", bytemuck::cast_slice(&full.top_cells[..]))),
+            ("brick_pool", storage("gpu_world_pool", parts[0])),
+            ("brick_pool_1", storage("gpu_world_pool_1", parts[1])),
+            ("brick_pool_2", storage("gpu_world_pool_2", parts[2])),
+            ("brick_pool_3", storage("gpu_world_pool_3", parts[3])),
+            ("occupancy", storage("gpu_world_occupancy", bytemuck::cast_slice(&full.occupancy[..]))),
+            ("materials", storage("gpu_world_materials", bytemuck::cast_slice(&materials[..]))),
+        ];
+        Ok(GpuWorld { buffers: buffers.into_iter().map(|(name, buffer)| (group.binding(name), buffer)).collect() })
     }
 
     /// Its bind group entries.
@@ -67,8 +68,10 @@ pub fn world_layout(device: &wgpu::Device, label: &str, own: &[(u32, bool)]) -> 
         count: None,
     };
     let storage = |read_only| wgpu::BufferBindingType::Storage { read_only };
-    let mut entries = vec![entry(0, wgpu::BufferBindingType::Uniform)];
-    entries.extend([1, 2, 3, 7, 8, 9, 10].map(|binding| entry(binding, storage(true))));
+    let group = world_interface();
+    let mut entries = vec![entry(group.binding("world_info"), wgpu::BufferBindingType::Uniform)];
+    let grid = ["top_cells", "brick_pool", "brick_pool_1", "brick_pool_2", "brick_pool_3", "occupancy", "materials"];
+    entries.extend(grid.map(|name| entry(group.binding(name), storage(true))));
     entries.extend(own.iter().map(|&(binding, read_only)| entry(binding, storage(read_only))));
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
 }

@@ -21,28 +21,21 @@ mod tables;
 pub use schedule::{RESTART_ITERATIONS, WARM_UP_FRAMES};
 pub use tables::{DYNAMIC_CAPACITY, ENTRY_BYTES, RAY_BYTES, cache_bytes, static_capacity};
 
-use super::frame::{Dispatch, VoxelPass, VoxelPipelines};
 use super::gpu_types::{GI_BOUNCES, GI_CACHE, GI_EDIT_RESTART, GI_FILTER, GI_QMC, GI_RESTART, GiEdit, GiParams};
-use super::scene::SceneUploaded;
+use super::interface::{GpuBinding, GroupInterface};
+use super::pass::{Dispatch, VoxelPass};
+use super::plan::{FramePlan, FramePlanned};
 use super::scene::lights::GpuLights;
 use super::scene::objects::GpuObjects;
 use super::scene::world::GpuWorld;
 use crate::settings::{GiSettings, RenderSettings};
 use bevy::prelude::*;
-use bevy::render::render_resource::binding_types::{
-    storage_buffer_read_only_sized, storage_buffer_sized, uniform_buffer_sized,
-};
 use bevy::render::render_resource::*;
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use bevy::render::{Render, RenderStartup, RenderSystems};
 use edit_log::{EDIT_LOG, EditLog};
-use schedule::{FrameEvents, FramePlan, GiSchedule, LightingKey};
-use std::num::NonZeroU64;
+use schedule::{FrameEvents, GiPlan, GiSchedule, LightingKey};
 use tables::{EMPTY_WORK, Shape, Tables, WORK_BYTES, WORK_DYNAMIC, WORK_STATIC};
-
-/// Direct-light samples an entry starts over with after a change of light (`RESTART_SAMPLES` in
-/// shaders/gi/direct.wgsl, a shader def).
-pub const RESTART_DIRECT_SAMPLES: u32 = 8;
 
 /// The first GI pass, one thread per slot of both tables: ages the entries and lists those due this frame
 /// (`shaders/gi/compact.wgsl`), with the indirect dispatch sizes of the passes below.
@@ -99,25 +92,23 @@ pub const DYNAMIC_GI_PASS_NAMES: [&str; 2] = [DYNAMIC_PASSES[0].name, DYNAMIC_PA
 #[derive(Resource)]
 pub struct GiLayout(pub BindGroupLayoutDescriptor);
 
-pub fn gi_bind_group_layout() -> BindGroupLayoutDescriptor {
-    let storage = || storage_buffer_sized(false, None);
-    BindGroupLayoutDescriptor::new(
+/// Group 3 (`shaders/gi/cache.wgsl`): the parameters, the tables, the edit log and the work lists.
+pub fn gi_interface() -> GroupInterface {
+    GroupInterface::new(
+        3,
         "glowbrick_gi_layout",
-        &BindGroupLayoutEntries::sequential(
-            ShaderStages::COMPUTE,
-            (
-                uniform_buffer_sized(false, NonZeroU64::new(size_of::<GiParams>() as u64)),
-                storage(),
-                storage(),
-                storage(),
-                storage(),
-                storage(),
-                storage_buffer_read_only_sized(false, None),
-                storage(),
-                storage(),
-                storage(),
-            ),
-        ),
+        &[&[
+            GpuBinding::uniform("gi", size_of::<GiParams>()),
+            GpuBinding::read_write("gi_keys"),
+            GpuBinding::read_write("gi_entries"),
+            GpuBinding::read_write("gi_irradiance"),
+            GpuBinding::read_write("gi_filtered"),
+            GpuBinding::read_write("gi_rays"),
+            GpuBinding::read("gi_edits"),
+            GpuBinding::read_write("gi_direct"),
+            GpuBinding::read_write("gi_work"),
+            GpuBinding::read_write("gi_list"),
+        ]],
     )
 }
 
@@ -136,11 +127,6 @@ pub struct GiCache {
     /// Update iterations this frame.
     iterations: u32,
     pub bind_group: Option<BindGroup>,
-    /// Whether GI runs this frame.
-    pub enabled: bool,
-    /// GI is on but its pipelines are still compiling: the cache waits (its schedule holds) and so do the
-    /// cameras, rather than showing frames without it.
-    pub compiling: bool,
 }
 
 impl GiCache {
@@ -201,7 +187,7 @@ impl GiCache {
     }
 
     /// This frame's parameters (`GiParams`).
-    fn params(&self, gi: &GiSettings, plan: &FramePlan) -> GiParams {
+    fn params(&self, gi: &GiSettings, plan: &GiPlan) -> GiParams {
         let flag = |on: bool, bit: u32| if on { bit } else { 0 };
         let rays = self.shape.rays;
         GiParams {
@@ -231,7 +217,7 @@ impl GiCache {
         device.create_bind_group(
             "glowbrick_gi",
             layout,
-            &BindGroupEntries::sequential((
+            &gi_interface().entries(vec![
                 self.params.as_entire_binding(),
                 t.keys.as_entire_binding(),
                 t.entries.as_entire_binding(),
@@ -242,7 +228,7 @@ impl GiCache {
                 t.direct.as_entire_binding(),
                 t.work.as_entire_binding(),
                 t.list.as_entire_binding(),
-            )),
+            ]),
         )
     }
 }
@@ -277,8 +263,6 @@ pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
         schedule: GiSchedule::default(),
         iterations: 1,
         bind_group: None,
-        enabled: false,
-        compiling: false,
     });
 }
 
@@ -289,7 +273,7 @@ pub fn setting_flags(gi: &GiSettings) -> u32 {
 }
 
 /// Sizes the tables for the settings, logs this frame's edits, plans the frame and writes the parameters (Render
-/// schedule, PrepareResources, after the world upload).
+/// schedule, PrepareResources, after the frame plan).
 #[allow(clippy::too_many_arguments)]
 pub fn prepare_gi(
     mut cache: ResMut<GiCache>,
@@ -298,7 +282,7 @@ pub fn prepare_gi(
     gpu_lights: Option<Res<GpuLights>>,
     gpu_objects: Option<Res<GpuObjects>>,
     layout: Res<GiLayout>,
-    pipelines: Option<Res<VoxelPipelines>>,
+    plan: Res<FramePlan>,
     pipeline_cache: Res<PipelineCache>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
@@ -322,29 +306,21 @@ pub fn prepare_gi(
         edited,
         warm_up: settings.gi.warm_up,
     };
-    // A frame whose GI passes are not compiled yet must not use up the first frame's restart or the warm-up. Nor
-    // must one whose cameras cannot draw yet (their passes still compiling: frame::view_frame waits for them): the
-    // cache would spend its warm-up on frames no camera drew, before any entry exists.
-    let ready = pipelines.is_some_and(|p| {
-        p.gi_ready(&pipeline_cache)
-            && p.views_ready(&pipeline_cache, super::restir::shades(settings), super::denoise::runs(settings))
-    });
-    cache.compiling = settings.gi.enabled && !ready;
-    cache.enabled = settings.gi.enabled && !cache.compiling;
-    if cache.compiling {
+    // The frame plan holds the cache while a pass this frame runs is still compiling.
+    if plan.compiling {
         cache.schedule.hold(events);
         return;
     }
-    let plan = cache.schedule.plan(events);
-    cache.iterations = plan.iterations;
-    queue.write_buffer(&cache.params, 0, bytemuck::bytes_of(&cache.params(&settings.gi, &plan)));
+    let gi_plan = cache.schedule.plan(events);
+    cache.iterations = gi_plan.iterations;
+    queue.write_buffer(&cache.params, 0, bytemuck::bytes_of(&cache.params(&settings.gi, &gi_plan)));
     queue.write_buffer(&cache.tables.work, 0, bytemuck::cast_slice(&EMPTY_WORK));
 }
 
 /// Adds the cache and its preparation to the render app (its passes are in `frame::world_frame`).
 pub fn add(render_app: &mut SubApp) {
     render_app
-        .insert_resource(GiLayout(gi_bind_group_layout()))
+        .insert_resource(GiLayout(gi_interface().layout()))
         .add_systems(RenderStartup, init_gi_cache)
-        .add_systems(Render, prepare_gi.after(SceneUploaded).in_set(RenderSystems::PrepareResources));
+        .add_systems(Render, prepare_gi.after(FramePlanned).in_set(RenderSystems::PrepareResources));
 }

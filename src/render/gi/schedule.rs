@@ -76,7 +76,7 @@ impl FrameEvents {
 
 /// What this frame runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FramePlan {
+pub struct GiPlan {
     /// The entries restart (`GI_RESTART`).
     pub restart: bool,
     /// The entries an edit reached restart their blends (`GI_EDIT_RESTART`).
@@ -90,7 +90,7 @@ pub struct FramePlan {
     pub update_run: u32,
 }
 
-impl FramePlan {
+impl GiPlan {
     /// Frames between two updates of a settled entry (the `gi_period` setting), or 1 while the light is new: after
     /// a change of light, during a fresh cache's warm-up and in the frames an edit restarts, every entry updates
     /// every frame so the new light reaches all of them at once.
@@ -152,7 +152,7 @@ impl GiSchedule {
     }
 
     /// Advances one frame.
-    pub fn plan(&mut self, events: FrameEvents) -> FramePlan {
+    pub fn plan(&mut self, events: FrameEvents) -> GiPlan {
         let events = self.held.take().map_or(events, |held| held.then(events));
         let restart = events.lights_changed || events.objects_came_or_went || self.lighting != Some(events.lighting);
         self.lighting = Some(events.lighting);
@@ -172,7 +172,7 @@ impl GiSchedule {
         self.edit_restart_frames = self.edit_restart_frames.saturating_sub(1);
         self.frame = self.frame.wrapping_add(1);
         let seed_offset = self.seed.wrapping_mul(SEED_FRAMES);
-        let plan = FramePlan {
+        let plan = GiPlan {
             restart,
             edit_restart,
             iterations,

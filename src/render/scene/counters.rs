@@ -2,12 +2,16 @@
 //! group 0. An asset of the main world, so tests, the bench and the stress run can read it back.
 
 use crate::render::gpu_types::{COUNTERS, PER_FRAME_COUNTERS};
+use crate::render::interface::GpuBinding;
 use bevy::prelude::*;
 use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
 use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::RenderQueue;
 use bevy::render::storage::{GpuShaderBuffer, ShaderBuffer};
 use bevy::render::{Render, RenderApp, RenderSystems};
+
+/// Group 0's counters part (`shaders/lib/counters.wgsl`).
+pub const COUNTER_BINDINGS: [GpuBinding; 1] = [GpuBinding::read_write("counters")];
 
 /// The counters buffer's handle, in both worlds.
 #[derive(Resource, ExtractResource, Clone)]

@@ -6,16 +6,14 @@ use super::staging::{Fit, Staging, upload};
 use crate::lights::daylight::Daylight;
 use crate::lights::{AliasEntry, Light, LightBricks, LightPool};
 use crate::render::gpu_types::{GpuLight, LIGHT_FACES_SHIFT, SceneLighting};
+use crate::render::interface::{GpuBinding, GroupInterface};
 use crate::settings::{LightPick, RenderSettings};
 use bevy::prelude::*;
-use bevy::render::render_resource::binding_types::{storage_buffer_read_only_sized, uniform_buffer_sized};
 use bevy::render::render_resource::{
-    BindGroup, BindGroupEntries, BindGroupLayoutDescriptor, BindGroupLayoutEntries, Buffer, BufferDescriptor,
-    BufferUsages, PipelineCache, ShaderStages,
+    BindGroup, BindGroupLayoutDescriptor, Buffer, BufferDescriptor, BufferUsages, PipelineCache,
 };
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use bevy::render::{Extract, ExtractSchedule, RenderApp, RenderStartup};
-use std::num::NonZeroU64;
 use std::sync::Arc;
 
 /// Stages the light pool's changes (main world) and keeps its GPU copy (render world).
@@ -145,7 +143,7 @@ pub fn stage_light_upload(
 
 /// Binding 3 of group 2 as `shaders/lib/lights.wgsl` reads it: the light index's capacity, its entries, then the
 /// light bricks' words. One buffer rather than a binding of their own: a fifth binding in this group made
-/// lavapipe's memory grow by megabytes every frame while the GI cache ran (2026-11-28).
+/// lavapipe's memory grow every frame while the GI cache ran (docs/bench/why.md).
 pub fn gpu_light_index(entries: &[u32], bricks: &LightBricks) -> Vec<u32> {
     let mut words = Vec::with_capacity(1 + entries.len() + bricks.words().len());
     words.push(entries.len() as u32);
@@ -174,19 +172,23 @@ pub struct LightsLayout(pub BindGroupLayoutDescriptor);
 
 impl Default for LightsLayout {
     fn default() -> Self {
-        LightsLayout(BindGroupLayoutDescriptor::new(
-            "glowbrick_lights_layout",
-            &BindGroupLayoutEntries::sequential(
-                ShaderStages::COMPUTE,
-                (
-                    storage_buffer_read_only_sized(false, None),
-                    storage_buffer_read_only_sized(false, None),
-                    uniform_buffer_sized(false, NonZeroU64::new(size_of::<SceneLighting>() as u64)),
-                    storage_buffer_read_only_sized(false, None),
-                ),
-            ),
-        ))
+        LightsLayout(lights_interface().layout())
     }
+}
+
+/// Group 2 (`shaders/lib/lights.wgsl`): the light pool, its alias table, this frame's scene lighting and the
+/// light index.
+pub fn lights_interface() -> GroupInterface {
+    GroupInterface::new(
+        2,
+        "glowbrick_lights_layout",
+        &[&[
+            GpuBinding::read("lights"),
+            GpuBinding::read("alias_table"),
+            GpuBinding::uniform("scene", size_of::<SceneLighting>()),
+            GpuBinding::read("light_index"),
+        ]],
+    )
 }
 
 /// Builds group 2 around the scene lighting uniform.
@@ -202,12 +204,12 @@ impl LightsBinding<'_> {
         self.device.create_bind_group(
             "glowbrick_lights",
             &self.cache.get_bind_group_layout(&self.layout.0),
-            &BindGroupEntries::sequential((
+            &lights_interface().entries(vec![
                 lights.as_entire_binding(),
                 alias.as_entire_binding(),
                 self.scene.as_entire_binding(),
                 index.as_entire_binding(),
-            )),
+            ]),
         )
     }
 }

@@ -4,7 +4,8 @@
 //! extracts it, and writes the GPU buffers in `RenderSystems::PrepareResources`, changed ranges only. The world's
 //! and the lights' buffers go through one queue per buffer (`staging`), which merges the frames' uploads in order.
 //!
-//! Bind groups: group 0 (`world`: grid, materials, objects, counters) and group 2 (`lights`) of every voxel pass.
+//! Bind groups: group 0 (`world`: grid, materials, then the parts of `objects` and `counters`) and group 2
+//! (`lights`) of every voxel pass.
 
 pub mod counters;
 pub mod lights;
@@ -45,7 +46,12 @@ impl Plugin for ScenePlugin {
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
         render_app.configure_sets(Render, SceneUploaded.in_set(RenderSystems::PrepareResources)).add_systems(
             Render,
-            (lights::prepare_gpu_lights, world::prepare_gpu_world, objects::prepare_gpu_objects)
+            (
+                lights::prepare_gpu_lights,
+                world::prepare_gpu_world,
+                objects::prepare_gpu_objects,
+                world::write_object_count,
+            )
                 .chain()
                 .before(SceneUploaded)
                 .in_set(RenderSystems::PrepareResources),

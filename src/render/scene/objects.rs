@@ -2,16 +2,19 @@
 //! voxels start), the render world writes them into two fixed-size buffers that group 0 binds next to the brick
 //! grid (`shaders/lib/world.wgsl`: `objects`, `object_voxels`), and their count into the world's uniform.
 
-use super::world::GpuWorld;
 use crate::dynamic::model::MAX_MODEL_EDGE;
 use crate::dynamic::{DynamicObject, MAX_OBJECTS};
 use crate::render::gpu_types::GpuObject;
+use crate::render::interface::GpuBinding;
 use bevy::prelude::*;
 use bevy::render::extract_resource::{ExtractResource, ExtractResourcePlugin};
 use bevy::render::render_resource::{Buffer, BufferDescriptor, BufferUsages};
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use bevy::render::{RenderApp, RenderStartup};
 use std::sync::Arc;
+
+/// Group 0's moving-objects part (`shaders/lib/world.wgsl`): the objects and their voxels.
+pub const OBJECT_BINDINGS: [GpuBinding; 2] = [GpuBinding::read("objects"), GpuBinding::read("object_voxels")];
 
 /// Voxel slots the GPU holds: every object at the largest model size.
 const VOXEL_CAPACITY: usize = MAX_OBJECTS * (MAX_MODEL_EDGE * MAX_MODEL_EDGE * MAX_MODEL_EDGE) as usize;
@@ -88,14 +91,9 @@ fn init_gpu_objects(mut commands: Commands, device: Res<RenderDevice>) {
     });
 }
 
-/// Writes this frame's objects (Render, PrepareResources, after the world upload so the count lands in the
-/// current world uniform).
-pub fn prepare_gpu_objects(
-    upload: Option<Res<ObjectsUpload>>,
-    mut gpu: ResMut<GpuObjects>,
-    gpu_world: Option<ResMut<GpuWorld>>,
-    queue: Res<RenderQueue>,
-) {
+/// Writes this frame's objects (Render, PrepareResources, after the world upload; the world then writes their
+/// count into its uniform).
+pub fn prepare_gpu_objects(upload: Option<Res<ObjectsUpload>>, mut gpu: ResMut<GpuObjects>, queue: Res<RenderQueue>) {
     let Some(upload) = upload else { return };
     gpu.changed = upload.objects != gpu.last_objects;
     if gpu.changed && !upload.objects.is_empty() {
@@ -109,9 +107,6 @@ pub fn prepare_gpu_objects(
     }
     gpu.count = upload.objects.len() as u32;
     gpu.last_objects = upload.objects.clone();
-    if let Some(mut world) = gpu_world {
-        world.set_object_count(&queue, gpu.count);
-    }
 }
 
 /// Lists the moving objects (main world) and keeps their GPU copy (render world).

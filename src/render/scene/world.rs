@@ -3,24 +3,21 @@
 //! or a full one when the world was replaced or outgrew the GPU buffers; the render world applies it in
 //! `prepare_gpu_world`, writing only the changed ranges.
 
-use super::counters::GpuCountersBuffer;
-use super::objects::GpuObjects;
+use super::counters::{COUNTER_BINDINGS, GpuCountersBuffer};
+use super::objects::{GpuObjects, OBJECT_BINDINGS};
 use super::staging::{BufferOp, Fit, Staging, upload};
 use super::storage_buffer;
-use crate::render::gpu_types::{GpuMaterial, WorldInfo};
+use crate::render::gpu_types::{GpuMaterial, ONE_POOL_PART, WorldInfo};
+use crate::render::interface::{GpuBinding, GroupInterface};
 use crate::world::grid::{BRICK_VOXELS, BrickCell, Voxel};
 use crate::world::occupancy::VOXEL_MASK_WORDS;
 use crate::world::{Palette, VoxelWorld};
 use bevy::prelude::*;
 use bevy::render::render_asset::RenderAssets;
-use bevy::render::render_resource::binding_types::{
-    storage_buffer_read_only_sized, storage_buffer_sized, uniform_buffer_sized,
-};
 use bevy::render::render_resource::*;
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use bevy::render::storage::GpuShaderBuffer;
 use bevy::render::{Extract, ExtractSchedule, RenderApp};
-use std::num::NonZeroU64;
 use std::sync::Arc;
 
 /// Stages the world's dirty bricks (main world) and keeps its GPU copy (render world).
@@ -38,7 +35,7 @@ fn add(app: &mut App) {
         .add_systems(PostUpdate, stage_world_upload.run_if(resource_exists::<VoxelWorld>));
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
     render_app
-        .insert_resource(WorldLayout(world_bind_group_layout()))
+        .insert_resource(WorldLayout(world_interface().layout()))
         .init_resource::<PendingUploads>()
         .add_systems(ExtractSchedule, extract_world_upload);
 }
@@ -126,9 +123,6 @@ pub fn gpu_pool_slots(needed: u32) -> u32 {
 /// Parts the brick pool may be split into (bindings 2, 8, 9 and 10 of group 0): a world's pool may be up to four
 /// times what the GPU binds in one buffer (the 2048-wide world's 425 MiB on software Vulkan's 128 MiB).
 pub const POOL_PARTS: usize = 4;
-
-/// The part shift that keeps every slot in the first part (`WorldInfo::pool_part_shift`).
-pub const ONE_POOL_PART: u32 = 31;
 
 /// Bytes of one pool slot on the GPU.
 const SLOT_BYTES: u64 = BRICK_VOXELS as u64 * size_of::<Voxel>() as u64;
@@ -320,31 +314,22 @@ pub fn extract_world_upload(upload: Extract<Option<Res<WorldUpload>>>, mut pendi
     }
 }
 
-/// Layout of group 0 (`shaders/lib/world.wgsl`, `shaders/lib/counters.wgsl`).
-pub fn world_bind_group_layout() -> BindGroupLayoutDescriptor {
-    BindGroupLayoutDescriptor::new(
-        "glowbrick_world_layout",
-        &BindGroupLayoutEntries::sequential(
-            ShaderStages::COMPUTE,
-            (
-                uniform_buffer_sized(false, NonZeroU64::new(size_of::<WorldInfo>() as u64)),
-                storage_buffer_read_only_sized(false, None),
-                storage_buffer_read_only_sized(false, None),
-                storage_buffer_read_only_sized(false, None),
-                // Moving objects and their voxels (`super::objects`).
-                storage_buffer_read_only_sized(false, None),
-                storage_buffer_read_only_sized(false, None),
-                // Counters (`super::counters`).
-                storage_buffer_sized(false, None),
-                // Occupancy masks (`world::occupancy`).
-                storage_buffer_read_only_sized(false, None),
-                // The brick pool's parts past the first (`POOL_PARTS`).
-                storage_buffer_read_only_sized(false, None),
-                storage_buffer_read_only_sized(false, None),
-                storage_buffer_read_only_sized(false, None),
-            ),
-        ),
-    )
+/// Group 0's world part (`shaders/lib/world.wgsl`): the uniform, the grid (top cells, the brick pool's parts in
+/// order, occupancy masks) and the materials.
+pub const WORLD_BINDINGS: [GpuBinding; 8] = [
+    GpuBinding::uniform("world_info", size_of::<WorldInfo>()),
+    GpuBinding::read("top_cells"),
+    GpuBinding::read("brick_pool"),
+    GpuBinding::read("brick_pool_1"),
+    GpuBinding::read("brick_pool_2"),
+    GpuBinding::read("brick_pool_3"),
+    GpuBinding::read("occupancy"),
+    GpuBinding::read("materials"),
+];
+
+/// Group 0: the world's part, then the moving objects' and the counters'.
+pub fn world_interface() -> GroupInterface {
+    GroupInterface::new(0, "glowbrick_world_layout", &[&WORLD_BINDINGS, &OBJECT_BINDINGS, &COUNTER_BINDINGS])
 }
 
 /// The GPU world, once the first full upload arrived.
@@ -373,11 +358,18 @@ pub struct GpuWorld {
 
 impl GpuWorld {
     /// Sets the moving-object count every trace loops over.
-    pub fn set_object_count(&mut self, queue: &RenderQueue, count: u32) {
+    fn set_object_count(&mut self, queue: &RenderQueue, count: u32) {
         if self.info.object_count != count {
             self.info.object_count = count;
             queue.write_buffer(&self.info_buffer, 0, bytemuck::bytes_of(&self.info));
         }
+    }
+}
+
+/// Writes this frame's count of moving objects into the world's uniform (after `objects::prepare_gpu_objects`).
+pub fn write_object_count(objects: Res<GpuObjects>, gpu_world: Option<ResMut<GpuWorld>>, queue: Res<RenderQueue>) {
+    if let Some(mut world) = gpu_world {
+        world.set_object_count(&queue, objects.count);
     }
 }
 
@@ -404,19 +396,19 @@ impl WorldBinding<'_> {
         self.device.create_bind_group(
             "glowbrick_world",
             &self.cache.get_bind_group_layout(self.layout),
-            &BindGroupEntries::sequential((
+            &world_interface().entries(vec![
                 gpu.info.as_entire_binding(),
                 gpu.top_cells.as_entire_binding(),
                 gpu.brick_pool[0].as_entire_binding(),
+                gpu.brick_pool[1].as_entire_binding(),
+                gpu.brick_pool[2].as_entire_binding(),
+                gpu.brick_pool[3].as_entire_binding(),
+                gpu.occupancy.as_entire_binding(),
                 gpu.materials.as_entire_binding(),
                 self.objects.objects.as_entire_binding(),
                 self.objects.voxels.as_entire_binding(),
                 self.counters.as_entire_binding(),
-                gpu.occupancy.as_entire_binding(),
-                gpu.brick_pool[1].as_entire_binding(),
-                gpu.brick_pool[2].as_entire_binding(),
-                gpu.brick_pool[3].as_entire_binding(),
-            )),
+            ]),
         )
     }
 }

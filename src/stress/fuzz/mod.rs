@@ -240,8 +240,11 @@ pub fn input(seeds: &[Seed], target: Target, seed: u64, index: u64) -> Vec<u8> {
     target.file_bytes(mutated, &mut rng)
 }
 
+/// What a loader did with one input: its answer (Ok: loaded, Err: its error), or the panic it raised.
+type Outcome = Result<Result<String, String>, String>;
+
 /// Runs one input, catching a panic: the loader's answer, or the panic's message.
-fn run_one(target: Target, bytes: &[u8]) -> Result<Result<String, String>, String> {
+fn run_one(target: Target, bytes: &[u8]) -> Outcome {
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| target.load(bytes))).map_err(|panic| {
         panic
             .downcast_ref::<String>()
@@ -252,7 +255,7 @@ fn run_one(target: Target, bytes: &[u8]) -> Result<Result<String, String>, Strin
 }
 
 /// What a loader's answer breaks, if anything.
-fn judge(outcome: &Result<Result<String, String>, String>, took: Duration, heap: u64) -> Option<String> {
+fn judge(outcome: &Outcome, took: Duration, heap: u64) -> Option<String> {
     match outcome {
         Err(panic) => return Some(format!("panic: {}", panic.replace('\n', " "))),
         Ok(Ok(summary)) if summary.starts_with("BUG") => return Some(summary.clone()),
@@ -301,104 +304,147 @@ pub fn run_fuzz(config: &FuzzConfig) -> Result<FuzzReport, String> {
     result.map(|()| report)
 }
 
-fn run_target(config: &FuzzConfig, target: Target, inputs: u64) -> Result<(TargetReport, Vec<Finding>), String> {
-    let (seeds, left_out) = corpus::seeds(target)?;
-    let start = Instant::now();
-    let progress = Progress::new(&format!("fuzz {}", target.name()), inputs);
-    let findings = Mutex::new(Vec::new());
-    let totals = Mutex::new((0u64, 0u64, 0u64, Duration::ZERO, 0u64)); // loaded, errors, panics, slowest, heap
-    let busy: Vec<Busy> =
-        (0..config.threads).map(|_| Busy { since_ms: AtomicU64::new(0), index: AtomicU64::new(0) }).collect();
-    let finished = AtomicBool::new(false);
-    std::thread::scope(|scope| {
-        // The watchdog: an input that never returns cannot be caught, so save it and end the run.
-        scope.spawn(|| {
-            while !finished.load(Ordering::Relaxed) {
-                std::thread::sleep(Duration::from_millis(200));
-                let now = start.elapsed().as_millis() as u64;
-                for b in busy.iter() {
-                    let since = b.since_ms.load(Ordering::Relaxed);
-                    if since > 0 && now.saturating_sub(since) > HUNG_INPUT.as_millis() as u64 {
-                        let index = b.index.load(Ordering::Relaxed);
-                        let bytes = input(&seeds, target, config.seed, index);
-                        let saved = save_finding(&config.findings_dir, target, index, &bytes);
-                        eprintln!(
-                            "error: fuzz {} input {index} still running after {} s: a hang (saved: {:?})",
-                            target.name(),
-                            HUNG_INPUT.as_secs(),
-                            saved
-                        );
-                        std::process::exit(1);
-                    }
+/// What one target's inputs did, summed over the threads.
+#[derive(Clone, Copy, Default)]
+struct Totals {
+    loaded: u64,
+    errors: u64,
+    panics: u64,
+    slowest: Duration,
+    peak_heap: u64,
+}
+
+impl Totals {
+    fn count(&mut self, outcome: &Outcome, took: Duration, heap: u64) {
+        match outcome {
+            Ok(Ok(_)) => self.loaded += 1,
+            Ok(Err(_)) => self.errors += 1,
+            Err(_) => self.panics += 1,
+        }
+        self.slowest = self.slowest.max(took);
+        self.peak_heap = self.peak_heap.max(heap);
+    }
+
+    fn merge(&mut self, other: Totals) {
+        self.loaded += other.loaded;
+        self.errors += other.errors;
+        self.panics += other.panics;
+        self.slowest = self.slowest.max(other.slowest);
+        self.peak_heap = self.peak_heap.max(other.peak_heap);
+    }
+}
+
+/// What every fuzzing thread of one target shares.
+struct FuzzRun<'a> {
+    config: &'a FuzzConfig,
+    target: Target,
+    inputs: u64,
+    seeds: &'a [Seed],
+    start: Instant,
+    progress: Progress,
+    busy: Vec<Busy>,
+    findings: Mutex<Vec<Finding>>,
+    totals: Mutex<Totals>,
+    finished: AtomicBool,
+}
+
+impl FuzzRun<'_> {
+    /// The watchdog: an input that never returns cannot be caught, so save it and end the run.
+    fn watch_for_hangs(&self) {
+        while !self.finished.load(Ordering::Relaxed) {
+            std::thread::sleep(Duration::from_millis(200));
+            let now = self.start.elapsed().as_millis() as u64;
+            for b in self.busy.iter() {
+                let since = b.since_ms.load(Ordering::Relaxed);
+                if since > 0 && now.saturating_sub(since) > HUNG_INPUT.as_millis() as u64 {
+                    let index = b.index.load(Ordering::Relaxed);
+                    let bytes = input(self.seeds, self.target, self.config.seed, index);
+                    let saved = save_finding(&self.config.findings_dir, self.target, index, &bytes);
+                    eprintln!(
+                        "error: fuzz {} input {index} still running after {} s: a hang (saved: {:?})",
+                        self.target.name(),
+                        HUNG_INPUT.as_secs(),
+                        saved
+                    );
+                    std::process::exit(1);
                 }
             }
-        });
-        let workers: Vec<_> = (0..config.threads)
-            .map(|t| {
-                let (seeds, busy, findings, totals, progress) = (&seeds, &busy, &findings, &totals, &progress);
-                scope.spawn(move || {
-                    let mut mine = (0u64, 0u64, 0u64, Duration::ZERO, 0u64);
-                    let mut done = 0u64;
-                    for index in (t as u64..inputs).step_by(config.threads) {
-                        let bytes = input(seeds, target, config.seed, index);
-                        busy[t].index.store(index, Ordering::Relaxed);
-                        busy[t].since_ms.store(start.elapsed().as_millis() as u64 + 1, Ordering::Relaxed);
-                        let mark = HeapMark::now();
-                        let began = Instant::now();
-                        let outcome = run_one(target, &bytes);
-                        let took = began.elapsed();
-                        let heap = mark.peak_bytes();
-                        busy[t].since_ms.store(0, Ordering::Relaxed);
-                        match &outcome {
-                            Ok(Ok(_)) => mine.0 += 1,
-                            Ok(Err(_)) => mine.1 += 1,
-                            Err(_) => mine.2 += 1,
-                        }
-                        mine.3 = mine.3.max(took);
-                        mine.4 = mine.4.max(heap);
-                        if let Some(what) = judge(&outcome, took, heap) {
-                            let saved = save_finding(&config.findings_dir, target, index, &bytes);
-                            progress.println(&format!("FINDING {} input {index}: {what}", target.name()));
-                            if let Ok(mut list) = findings.lock() {
-                                list.push(Finding { target, index, what, saved });
-                            }
-                        }
-                        done += 1;
-                        if done.is_multiple_of(64) {
-                            progress.advance(64);
-                        }
-                    }
-                    progress.advance(done % 64);
-                    if let Ok(mut all) = totals.lock() {
-                        all.0 += mine.0;
-                        all.1 += mine.1;
-                        all.2 += mine.2;
-                        all.3 = all.3.max(mine.3);
-                        all.4 = all.4.max(mine.4);
-                    }
-                })
-            })
-            .collect();
+        }
+    }
+
+    /// Thread `t`'s share of the inputs: every `threads`-th from `t`.
+    fn fuzz_share(&self, t: usize) {
+        let (target, busy) = (self.target, &self.busy[t]);
+        let mut mine = Totals::default();
+        let mut done = 0u64;
+        for index in (t as u64..self.inputs).step_by(self.config.threads) {
+            let bytes = input(self.seeds, target, self.config.seed, index);
+            busy.index.store(index, Ordering::Relaxed);
+            busy.since_ms.store(self.start.elapsed().as_millis() as u64 + 1, Ordering::Relaxed);
+            let mark = HeapMark::now();
+            let began = Instant::now();
+            let outcome = run_one(target, &bytes);
+            let took = began.elapsed();
+            let heap = mark.peak_bytes();
+            busy.since_ms.store(0, Ordering::Relaxed);
+            mine.count(&outcome, took, heap);
+            if let Some(what) = judge(&outcome, took, heap) {
+                let saved = save_finding(&self.config.findings_dir, target, index, &bytes);
+                self.progress.println(&format!("FINDING {} input {index}: {what}", target.name()));
+                if let Ok(mut list) = self.findings.lock() {
+                    list.push(Finding { target, index, what, saved });
+                }
+            }
+            done += 1;
+            if done.is_multiple_of(64) {
+                self.progress.advance(64);
+            }
+        }
+        self.progress.advance(done % 64);
+        if let Ok(mut all) = self.totals.lock() {
+            all.merge(mine);
+        }
+    }
+}
+
+fn run_target(config: &FuzzConfig, target: Target, inputs: u64) -> Result<(TargetReport, Vec<Finding>), String> {
+    let (seeds, left_out) = corpus::seeds(target)?;
+    let run = FuzzRun {
+        config,
+        target,
+        inputs,
+        seeds: &seeds,
+        start: Instant::now(),
+        progress: Progress::new(&format!("fuzz {}", target.name()), inputs),
+        busy: (0..config.threads).map(|_| Busy { since_ms: AtomicU64::new(0), index: AtomicU64::new(0) }).collect(),
+        findings: Mutex::new(Vec::new()),
+        totals: Mutex::new(Totals::default()),
+        finished: AtomicBool::new(false),
+    };
+    std::thread::scope(|scope| {
+        scope.spawn(|| run.watch_for_hangs());
+        let run = &run;
+        let workers: Vec<_> = (0..config.threads).map(|t| scope.spawn(move || run.fuzz_share(t))).collect();
         for worker in workers {
             let _ = worker.join();
         }
-        finished.store(true, Ordering::Relaxed);
+        run.finished.store(true, Ordering::Relaxed);
     });
-    progress.finish();
-    let (loaded, errors, panics, slowest, peak_heap) = *totals.lock().map_err(|_| "fuzz totals poisoned")?;
-    let mut findings = findings.into_inner().map_err(|_| "fuzz findings poisoned")?;
+    run.progress.finish();
+    let totals = *run.totals.lock().map_err(|_| "fuzz totals poisoned")?;
+    let mut findings = run.findings.into_inner().map_err(|_| "fuzz findings poisoned")?;
     findings.sort_by_key(|f| f.index);
     let report = TargetReport {
         target,
         seeds: seeds.iter().map(|s| s.name.clone()).collect(),
         left_out,
         inputs,
-        loaded,
-        errors,
-        panics,
-        slowest,
-        peak_heap,
-        seconds: start.elapsed().as_secs_f64(),
+        loaded: totals.loaded,
+        errors: totals.errors,
+        panics: totals.panics,
+        slowest: totals.slowest,
+        peak_heap: totals.peak_heap,
+        seconds: run.start.elapsed().as_secs_f64(),
     };
     Ok((report, findings))
 }
