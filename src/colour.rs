@@ -1,8 +1,12 @@
 //! Colour helpers shared by every layer: luminance, the ACES tonemapping curve and the sRGB transfer functions.
 
+/// Rec. 709 luminance weights of linear R, G and B (the shaders' `luminance` uses the same; a CPU test checks).
+pub const LUMINANCE_WEIGHTS: [f32; 3] = [0.2126, 0.7152, 0.0722];
+
 /// Rec. 709 luminance of linear RGB.
 pub fn luminance(rgb: [f32; 3]) -> f32 {
-    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
+    let [r, g, b] = LUMINANCE_WEIGHTS;
+    r * rgb[0] + g * rgb[1] + b * rgb[2]
 }
 
 /// ACES filmic fit (Narkowicz 2015): maps linear HDR radiance to [0, 1].

@@ -11,6 +11,15 @@ const BRICK_WORDS: u32 = #{BRICK_WORDS}u;
 const MAX_WORLD_EDGE: u32 = #{MAX_WORLD_EDGE}u;
 // The brick pool's part shift when it is one buffer (src/render/scene/world.rs).
 const ONE_POOL_PART: u32 = #{ONE_POOL_PART}u;
+// The occupancy walk (src/world/occupancy.rs): log2 of a brick cell's, a sector's and a region's edge (a brick's is
+// BRICK_SHIFT), the walk level of a box of brick cells, u32 words of a brick's voxel mask.
+const CELL_SHIFT: u32 = #{CELL_SHIFT}u;
+const SECTOR_SHIFT: u32 = #{SECTOR_SHIFT}u;
+const REGION_SHIFT: u32 = #{REGION_SHIFT}u;
+const CELL_BOX_LEVEL: u32 = #{CELL_BOX_LEVEL}u;
+const VOXEL_MASK_WORDS: u32 = #{VOXEL_MASK_WORDS}u;
+// A moving object's DDA steps at most (three per voxel of the largest model edge, src/dynamic/model.rs).
+const OBJECT_TRACE_STEPS: i32 = #{OBJECT_TRACE_STEPS};
 
 // Secondary rays start RAY_OFFSET off their surface (src/world/traversal.rs; the CPU reference uses the same).
 const RAY_OFFSET_INVERSE: u32 = #{RAY_OFFSET_INVERSE}u;

@@ -4,7 +4,8 @@
 #define_import_path glowbrick::traversal
 
 #import glowbrick::world::{world_info, top_cells, occupancy, brick_cell, pooled_voxel, objects, object_count, object_voxel, Object}
-#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, MAX_WORLD_EDGE, COUNT_TRACE_STEPS, COUNT_TRACE_LOADS}
+#import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, MAX_WORLD_EDGE, COUNT_TRACE_STEPS, COUNT_TRACE_LOADS,
+    CELL_SHIFT, SECTOR_SHIFT, REGION_SHIFT, CELL_BOX_LEVEL, VOXEL_MASK_WORDS, OBJECT_TRACE_STEPS}
 #import glowbrick::counters::counters
 
 const INF: f32 = 3.0e38;
@@ -318,7 +319,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
     let starts_in_brick = any(brick_mask != vec2(0u));
     var region_unread = starts_in_brick;
     var sector_unread = starts_in_brick;
-    var entered = select(7u, 2u, starts_in_brick);
+    var entered = select(REGION_SHIFT, CELL_BOX_LEVEL, starts_in_brick);
     // Every step crosses at least one voxel boundary; the bound only stops a non-finite t. A constant: lavapipe's
     // primary pass took twice as long with the world's own size here (docs/bench/traversal.md).
     let max_steps = 3 * i32(MAX_WORLD_EDGE) + 8;
@@ -326,31 +327,32 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
         trace_steps += 1u;
         // The level of the coarsest empty cell holding v (edge 0 while every mask says occupied). A mask's tests
         // are skipped while the ray stays in the child it last proved occupied: a move out of a cell of a
-        // sector's size or more crosses a sector's face, so `entered` < 5 means the last step found the sector
+        // sector's size or more crosses a sector's face, so `entered` < SECTOR_SHIFT means the last step found the sector
         // occupied; likewise for bricks.
         var cell = vec4(v, 0);
-        if entered >= 5u {
-            if entered >= 7u || region_unread {
+        if entered >= SECTOR_SHIFT {
+            if entered >= REGION_SHIFT || region_unread {
                 trace_loads += 1u;
-                region_mask = occupancy[world_info.region_base + mask_index(v >> vec3(7u), world_info.regions)];
+                region_mask = occupancy[world_info.region_base + mask_index(v >> vec3(REGION_SHIFT), world_info.regions)];
                 region_unread = false;
             }
-            cell = select(empty_child_cell(region_mask, v, 5u, positive), vec4(v & vec3(~127), 128),
+            let region_edge = i32(1) << REGION_SHIFT;
+            cell = select(empty_child_cell(region_mask, v, SECTOR_SHIFT, positive), vec4(v & vec3(~(region_edge - 1)), region_edge),
                           all(region_mask == vec2(0u)));
             if cell.w == 0 {
                 trace_loads += 1u;
-                sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(5u), world_info.sectors)];
+                sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(SECTOR_SHIFT), world_info.sectors)];
                 sector_unread = false;
             }
         }
         if cell.w == 0 {
-            if entered >= 3u {
+            if entered >= BRICK_SHIFT {
                 if sector_unread {
                     trace_loads += 1u;
-                    sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(5u), world_info.sectors)];
+                    sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(SECTOR_SHIFT), world_info.sectors)];
                     sector_unread = false;
                 }
-                cell = empty_child_cell(sector_mask, v, 3u, positive);
+                cell = empty_child_cell(sector_mask, v, BRICK_SHIFT, positive);
                 if cell.w == 0 {
                     // The brick's mask first: its top cell (homogeneous, or the pool slot) is read only where a
                     // voxel must be.
@@ -363,7 +365,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
                 }
             }
             if cell.w == 0 {
-                cell = empty_child_cell(brick_mask, v, 1u, positive);
+                cell = empty_child_cell(brick_mask, v, CELL_SHIFT, positive);
                 if cell.w == 0 {
                     if slot == NO_SLOT {
                         trace_loads += 1u;
@@ -387,7 +389,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
                             if word != quadrant {
                                 trace_loads += 1u;
                                 quadrant = word;
-                                quadrant_mask = occupancy[world_info.voxel_mask_base + slot * 8u + word];
+                                quadrant_mask = occupancy[world_info.voxel_mask_base + slot * VOXEL_MASK_WORDS + word];
                             }
                             let place = local & vec3(3);
                             if has_child(quadrant_mask, u32(place.x + 4 * (place.y + 4 * place.z))) {
@@ -438,7 +440,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
 #endif
 
 // The first solid voxel of object o along the ray, before max_distance: the object's box, then a DDA through its
-// voxels (at most 16 per side, so at most 48 steps).
+// voxels (at most MAX_MODEL_EDGE per side, so at most OBJECT_TRACE_STEPS steps).
 fn trace_object(o: Object, origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
     let size = vec3<f32>(o.size);
     let entry = box_entry(origin, dir, o.min, o.min + size);
@@ -463,7 +465,7 @@ fn trace_object(o: Object, origin: vec3<f32>, dir: vec3<f32>, max_distance: f32)
     for (var a = 0u; a < 3u; a++) {
         t_max[a] = cross_t(p[a], dir[a], inv[a], f32(voxel[a] + select(0, 1, positive[a])));
     }
-    for (var i = 0; i < 48; i++) {
+    for (var i = 0; i < OBJECT_TRACE_STEPS; i++) {
         let material = object_voxel(o, voxel);
         if material != 0u {
             return Hit(voxel, face_entered(axis, positive[axis]), t, material, true, o.id);

@@ -4,9 +4,11 @@
 //! constants of the same names; no number is written on both sides.
 
 use crate::dynamic::MAX_OBJECT_ID;
+use crate::dynamic::model::MAX_MODEL_EDGE;
 use crate::lights::index;
 use crate::settings::{DebugView, Lighting};
 use crate::world::grid::{BRICK_SIZE, BRICK_VOXELS, MAX_WORLD_EDGE, POOLED_FLAG};
+use crate::world::occupancy;
 use crate::world::traversal::RAY_OFFSET_INVERSE;
 use bevy::shader::ShaderDefVal;
 
@@ -410,6 +412,8 @@ pub enum Shared {
     I32(i32),
 }
 
+const _: () = assert!(occupancy::BRICK_SHIFT as u32 == BRICK_SIZE.trailing_zeros());
+
 /// Every constant the WGSL shares with Rust, by the name both sides use.
 pub fn shared_constants() -> Vec<(&'static str, Shared)> {
     use Shared::{I32, U32};
@@ -423,6 +427,15 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("MAX_WORLD_EDGE", U32(MAX_WORLD_EDGE)),
         // The pool's part shift of a pool in one buffer (src/render/scene/world.rs).
         ("ONE_POOL_PART", U32(ONE_POOL_PART)),
+        // The occupancy walk's levels (src/world/occupancy.rs): log2 of a brick cell's, a sector's and a
+        // region's edge, the walk level of a box of brick cells, and u32 words of a brick's voxel mask.
+        ("CELL_SHIFT", U32(occupancy::CELL_SHIFT as u32)),
+        ("SECTOR_SHIFT", U32(occupancy::SECTOR_SHIFT as u32)),
+        ("REGION_SHIFT", U32(occupancy::REGION_SHIFT as u32)),
+        ("CELL_BOX_LEVEL", U32(occupancy::CELL_BOX_LEVEL as u32)),
+        ("VOXEL_MASK_WORDS", U32(occupancy::VOXEL_MASK_WORDS as u32)),
+        // A moving object's DDA crosses at most three faces per voxel of its largest edge (src/dynamic/model.rs).
+        ("OBJECT_TRACE_STEPS", I32(3 * MAX_MODEL_EDGE as i32)),
         // Secondary rays start this far off their surface (the CPU reference uses the same).
         ("RAY_OFFSET_INVERSE", U32(RAY_OFFSET_INVERSE)),
         // A light slot's packed edge and exposed faces.

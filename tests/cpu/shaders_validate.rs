@@ -450,3 +450,18 @@ fn every_workgroup_size_is_the_one_the_frame_dispatches() {
         assert!(source[size_at..].starts_with(expected.as_str()), "{}: {} is not {expected}", pass.shader, pass.name);
     }
 }
+
+/// The shaders' luminance weights are Rust's (`colour::LUMINANCE_WEIGHTS`), wherever they are written.
+#[test]
+fn every_luminance_in_wgsl_weighs_as_the_cpu_does() {
+    let [r, g, b] = glowbrick::colour::LUMINANCE_WEIGHTS;
+    let weights = format!("vec3({r}, {g}, {b})");
+    let mut found = 0;
+    for (path, source) in SOURCES {
+        let written = source.matches(&format!("{g}")).count();
+        let as_rust = source.matches(&weights).count();
+        assert_eq!(written, as_rust, "{path}: a green weight of {g} outside `{weights}`");
+        found += as_rust;
+    }
+    assert!(found >= 2, "the luminance weights are written {found} times in WGSL");
+}

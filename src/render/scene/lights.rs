@@ -2,7 +2,7 @@
 //! changed slots, its alias table and light index (with the light bricks) when they changed, and this frame's `SceneLighting` (sun, sky, mode, light
 //! count). Staged in the main world (PostUpdate), written to GPU buffers in the render world (PrepareResources).
 
-use super::staging::{Fit, Staging, upload};
+use super::staging::{Fit, Mirrored, Staging, sync, upload};
 use crate::lights::daylight::Daylight;
 use crate::lights::{AliasEntry, Light, LightBricks, LightPool};
 use crate::render::gpu_types::{GpuLight, LIGHT_FACES_SHIFT, SceneLighting};
@@ -263,14 +263,11 @@ fn padded_index(words: &Arc<Vec<u32>>) -> Arc<Vec<u32>> {
     if words.is_empty() { Arc::new(vec![1, crate::lights::index::NO_COLUMN, 0]) } else { words.clone() }
 }
 
-const LIGHTS_LABEL: &str = "glowbrick_lights";
-const ALIAS_LABEL: &str = "glowbrick_light_alias";
-const INDEX_LABEL: &str = "glowbrick_light_index";
 /// The slot buffer is sized by the main world (`arrayLength` bounds reservoir slots), so it is exactly its
 /// contents; the alias table and the light index may be larger than what they hold (the index says its capacity).
-const LIGHTS_FIT: Fit = Fit::Exact;
-const ALIAS_FIT: Fit = Fit::AtLeast;
-const INDEX_FIT: Fit = Fit::AtLeast;
+const LIGHTS: Mirrored = Mirrored { label: "glowbrick_lights", fit: Fit::Exact };
+const ALIAS: Mirrored = Mirrored { label: "glowbrick_light_alias", fit: Fit::AtLeast };
+const INDEX: Mirrored = Mirrored { label: "glowbrick_light_index", fit: Fit::AtLeast };
 
 /// Applies the queued light uploads and writes this frame's scene lighting.
 #[allow(clippy::too_many_arguments)]
@@ -317,9 +314,9 @@ fn create_gpu_lights(
         batch.index.whole(padded_index(&Arc::default()));
     }
     let device = binding.device;
-    let lights = upload(&mut batch.lights, None, LIGHTS_FIT, LIGHTS_LABEL, device, queue)?;
-    let alias = upload(&mut batch.alias, None, ALIAS_FIT, ALIAS_LABEL, device, queue)?;
-    let index = upload(&mut batch.index, None, INDEX_FIT, INDEX_LABEL, device, queue)?;
+    let lights = upload(&mut batch.lights, None, LIGHTS, device, queue)?;
+    let alias = upload(&mut batch.alias, None, ALIAS, device, queue)?;
+    let index = upload(&mut batch.index, None, INDEX, device, queue)?;
     let light_count = batch.light_count.unwrap_or(0);
     Some(GpuLights {
         bind_group: binding.bind(&lights, &alias, &index),
@@ -345,20 +342,13 @@ fn apply_light_uploads(
         gpu.light_count = count;
         gpu.has_lights = count > 0;
     }
-    let mut rebind = false;
-    if let Some(buffer) = upload(&mut batch.lights, Some(&gpu.lights), LIGHTS_FIT, LIGHTS_LABEL, device, queue) {
-        gpu.lights = buffer;
-        rebind = true;
-    }
-    if let Some(buffer) = upload(&mut batch.alias, Some(&gpu.alias), ALIAS_FIT, ALIAS_LABEL, device, queue) {
-        gpu.alias = buffer;
-        rebind = true;
-    }
-    if let Some(buffer) = upload(&mut batch.index, Some(&gpu.index), INDEX_FIT, INDEX_LABEL, device, queue) {
-        gpu.index = buffer;
-        rebind = true;
-    }
-    if rebind {
+    // Every buffer is brought up to date (no short circuit), then bound again if any was created again.
+    let recreated = [
+        sync(&mut batch.lights, &mut gpu.lights, LIGHTS, device, queue),
+        sync(&mut batch.alias, &mut gpu.alias, ALIAS, device, queue),
+        sync(&mut batch.index, &mut gpu.index, INDEX, device, queue),
+    ];
+    if recreated.contains(&true) {
         gpu.bind_group = binding.bind(&gpu.lights, &gpu.alias, &gpu.index);
     }
 }

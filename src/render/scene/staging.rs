@@ -1,5 +1,6 @@
-//! The one way scene data reaches a GPU buffer: a `Staging` queue per buffer takes whole contents or element
-//! ranges in the order the main world produced them, and turns them into the buffer operations that leave the
+//! How the world's and the lights' data reach their GPU buffers (the moving objects write their two fixed-size
+//! buffers directly, the counters are a `ShaderBuffer` asset): a `Staging` queue per buffer takes whole contents
+//! or element ranges in the order the main world produced them, and turns them into the buffer operations that leave the
 //! GPU copy equal to the CPU source. What to write (`Staging::ops`) is pure, so it is tested without a GPU;
 //! `upload` runs the operations with wgpu.
 
@@ -103,20 +104,26 @@ fn fits(buffer_bytes: u64, content_bytes: usize, fit: Fit) -> bool {
     }
 }
 
+/// A CPU-owned GPU buffer's name and how whole new contents fit it.
+#[derive(Clone, Copy, Debug)]
+pub struct Mirrored {
+    pub label: &'static str,
+    pub fit: Fit,
+}
+
 /// Writes what `staging` holds into `current` (or a buffer created for it) and empties the queue. Returns the
-/// buffer when one was created: the caller swaps it in and rebinds.
+/// buffer when one was created.
 pub fn upload<T: Pod>(
     staging: &mut Staging<T>,
     current: Option<&Buffer>,
-    fit: Fit,
-    label: &str,
+    mirrored: Mirrored,
     device: &RenderDevice,
     queue: &RenderQueue,
 ) -> Option<Buffer> {
     let mut created: Option<Buffer> = None;
-    for op in staging.ops(current.map(|b| b.size()), fit) {
+    for op in staging.ops(current.map(|b| b.size()), mirrored.fit) {
         match op {
-            BufferOp::Create(bytes) => created = Some(storage_buffer(device, label, bytes)),
+            BufferOp::Create(bytes) => created = Some(storage_buffer(device, mirrored.label, bytes)),
             BufferOp::Write { offset, bytes } => {
                 if let Some(target) = created.as_ref().or(current) {
                     queue.write_buffer(target, offset, bytes);
@@ -126,6 +133,19 @@ pub fn upload<T: Pod>(
     }
     staging.clear();
     created
+}
+
+/// Brings `buffer` in line with `staging` (swapping in a new buffer where the contents no longer fit it) and
+/// says whether it was created again: bind groups over it must then be made again.
+pub fn sync<T: Pod>(
+    staging: &mut Staging<T>,
+    buffer: &mut Buffer,
+    mirrored: Mirrored,
+    device: &RenderDevice,
+    queue: &RenderQueue,
+) -> bool {
+    let created = upload(staging, Some(buffer), mirrored, device, queue);
+    created.map(|new| *buffer = new).is_some()
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 
 use super::counters::{COUNTER_BINDINGS, GpuCountersBuffer};
 use super::objects::{GpuObjects, OBJECT_BINDINGS};
-use super::staging::{BufferOp, Fit, Staging, upload};
+use super::staging::{BufferOp, Fit, Mirrored, Staging, sync, upload};
 use super::storage_buffer;
 use crate::render::gpu_types::{GpuMaterial, ONE_POOL_PART, WorldInfo};
 use crate::render::interface::{GpuBinding, GroupInterface};
@@ -377,10 +377,11 @@ pub fn write_object_count(objects: Res<GpuObjects>, gpu_world: Option<ResMut<Gpu
 #[derive(Resource)]
 pub struct WorldLayout(pub BindGroupLayoutDescriptor);
 
-const TOP_CELLS_LABEL: &str = "glowbrick_top_cells";
-const OCCUPANCY_LABEL: &str = "glowbrick_occupancy";
+/// The shaders index the whole grid and its masks (exact sizes); the materials only as far as voxels name them.
+const TOP_CELLS: Mirrored = Mirrored { label: "glowbrick_top_cells", fit: Fit::Exact };
+const OCCUPANCY: Mirrored = Mirrored { label: "glowbrick_occupancy", fit: Fit::Exact };
+const MATERIALS: Mirrored = Mirrored { label: "glowbrick_materials", fit: Fit::AtLeast };
 const BRICK_POOL_LABEL: &str = "glowbrick_brick_pool";
-const MATERIALS_LABEL: &str = "glowbrick_materials";
 
 /// What group 0 binds next to the world's own buffers, and how to build it.
 struct WorldBinding<'a> {
@@ -491,9 +492,9 @@ fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &
         contents: bytemuck::bytes_of(&info),
         usage: BufferUsages::UNIFORM | BufferUsages::COPY_DST,
     });
-    let top_cells = upload(&mut batch.top_cells, None, Fit::Exact, TOP_CELLS_LABEL, device, queue)?;
-    let occupancy = upload(&mut batch.occupancy, None, Fit::Exact, OCCUPANCY_LABEL, device, queue)?;
-    let materials = upload(&mut batch.materials, None, Fit::AtLeast, MATERIALS_LABEL, device, queue)?;
+    let top_cells = upload(&mut batch.top_cells, None, TOP_CELLS, device, queue)?;
+    let occupancy = upload(&mut batch.occupancy, None, OCCUPANCY, device, queue)?;
+    let materials = upload(&mut batch.materials, None, MATERIALS, device, queue)?;
     let bind_group = binding.bind(&GpuWorldBuffers {
         info: &info_buffer,
         top_cells: &top_cells,
@@ -532,17 +533,8 @@ fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &World
     if batch.layout.is_some() || batch.occupied.is_some() {
         queue.write_buffer(&gpu.info_buffer, 0, bytemuck::bytes_of(&gpu.info));
     }
-    let mut rebind = false;
-    if let Some(buffer) = upload(&mut batch.top_cells, Some(&gpu.top_cells), Fit::Exact, TOP_CELLS_LABEL, device, queue)
-    {
-        gpu.top_cells = buffer;
-        rebind = true;
-    }
-    if let Some(buffer) = upload(&mut batch.occupancy, Some(&gpu.occupancy), Fit::Exact, OCCUPANCY_LABEL, device, queue)
-    {
-        gpu.occupancy = buffer;
-        rebind = true;
-    }
+    let mut rebind = sync(&mut batch.top_cells, &mut gpu.top_cells, TOP_CELLS, device, queue);
+    rebind |= sync(&mut batch.occupancy, &mut gpu.occupancy, OCCUPANCY, device, queue);
     let current = Some(CurrentPool { parts: &gpu.brick_pool, bytes: gpu.pool_bytes, shift: gpu.pool_part_shift });
     let max_binding = device.limits().max_storage_buffer_binding_size;
     if let Some((parts, bytes, shift)) = upload_pool(&mut batch.pool, current, max_binding, device, queue) {
@@ -553,12 +545,7 @@ fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &World
             queue.write_buffer(&gpu.info_buffer, 0, bytemuck::bytes_of(&gpu.info));
         }
     }
-    if let Some(buffer) =
-        upload(&mut batch.materials, Some(&gpu.materials), Fit::AtLeast, MATERIALS_LABEL, device, queue)
-    {
-        gpu.materials = buffer;
-        rebind = true;
-    }
+    rebind |= sync(&mut batch.materials, &mut gpu.materials, MATERIALS, device, queue);
     if rebind {
         gpu.bind_group = binding.bind(&GpuWorldBuffers {
             info: &gpu.info_buffer,
