@@ -62,13 +62,16 @@ pub fn all_passes() -> Vec<VoxelPass> {
 /// Layouts of group 1: the view's (`shaders/lib/frame.wgsl`) and the empty one world passes bind instead.
 #[derive(Resource)]
 pub struct ViewLayouts {
+    /// Group 1's declaration, made once (the view's bind groups are built from it).
+    pub interface: GroupInterface,
     pub view: BindGroupLayoutDescriptor,
     pub empty: BindGroupLayoutDescriptor,
 }
 
 fn view_layouts(parts: &ViewParts) -> ViewLayouts {
     let empty = BindGroupLayoutDescriptor::new("glowbrick_no_view_layout", &[]);
-    ViewLayouts { view: view_interface(parts).layout(), empty }
+    let interface = view_interface(parts);
+    ViewLayouts { view: interface.layout(), interface, empty }
 }
 
 /// Every pass's pipeline, in `all_passes` order, for each `PassKey` (the walk and the settings the shaders
@@ -335,7 +338,6 @@ pub fn view_frame(
     plan: Res<FramePlan>,
     pipelines: Option<Res<VoxelPipelines>>,
     layouts: Option<Res<ViewLayouts>>,
-    parts: Res<ViewParts>,
     pipeline_cache: Res<PipelineCache>,
     view_uniforms: Res<ViewUniforms>,
     scene: SceneBindGroups,
@@ -365,8 +367,8 @@ pub fn view_frame(
     // Last frame's G-buffer and denoiser history become the previous ones that the temporal reprojections read.
     resources.swap();
     let layout = pipeline_cache.get_bind_group_layout(&layouts.view);
-    let interface = view_interface(&parts);
-    let view_group = resources.bind_group(ctx.render_device(), &interface, &layout, target, view_buffer, view_binding);
+    let view_group =
+        resources.bind_group(ctx.render_device(), &layouts.interface, &layout, target, view_buffer, view_binding);
     let diagnostics = ctx.diagnostic_recorder();
     let encoder = ctx.command_encoder();
     let mut recorder = PassRecorder {
