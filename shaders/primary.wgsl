@@ -3,7 +3,7 @@
 // sun-only debug look. Debug views show the pass's inputs.
 
 #import glowbrick::world::{materials, Material, albedo_at}
-#import glowbrick::frame::{debug_view, frame, view, gbuffer, pack_surface, pixel_index, highlight, write_output, primary_ray_dir, lit_view,
+#import glowbrick::frame::{debug_view, frame, view, gbuffer, upscaling, pack_surface, pixel_index, output_texel, highlight, write_output, primary_ray_dir, lit_view,
     pixel_footprint, NOT_A_VOXEL}
 #import glowbrick::gi::cache::{gi_on, gi_touch_surface, gi_incoming, camera_level}
 #import glowbrick::traversal::{Hit, trace_scene, face_normal, INF, count_rays}
@@ -35,10 +35,17 @@ fn primary_pixel(id: vec3<u32>) {
     let hit = trace_scene(origin, dir, INF);
     pixel_hit = hit.found;
     let point = origin + dir * hit.distance;
-    gbuffer[pixel_index(id.xy)] =
-        select(vec4(0.0), vec4(point, pack_surface(hit.face, hit.material, hit.object)), hit.found);
-    // The GI cache keeps the entries the camera sees (and their interpolation neighbours) alive and updated.
-    if gi_on() && hit.found {
+    let texel = select(vec4(0.0), vec4(point, pack_surface(hit.face, hit.material, hit.object)), hit.found);
+    // Below the output's resolution the lighting passes' G-buffer takes its texels from this one
+    // (upscale.wgsl's `pick`).
+    if upscaling() {
+        gbuffer[output_texel(id.xy)] = texel;
+    } else {
+        gbuffer[pixel_index(id.xy)] = texel;
+    }
+    // The GI cache keeps the entries the camera sees (and their interpolation neighbours) alive and updated:
+    // those the lighting passes read, so below render scale 1 the render pixels' (upscale.wgsl's `pick`).
+    if gi_on() && hit.found && !upscaling() {
         gi_touch_surface(point, hit.face, hit.object, camera_level(pixel_footprint(point), hit.object));
     }
     // Voxel ReSTIR's shading pass shades its lit views (and its reservoir view), with or without lights to

@@ -3,7 +3,7 @@
 
 #import glowbrick::world::{materials, object_motion, albedo_at}
 #import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, noisy, history, prev_history, wavelet, unpack_surface, surface_voxel,
-    pixel_index, previous_pixel, luminance, Surface}
+    pixel_index, render_size, previous_pixel, luminance, Surface}
 #import glowbrick::constants::DENOISE_HISTORY
 #import glowbrick::denoise::common::{MAX_HISTORY, ALBEDO_FLOOR, same_plane}
 
@@ -16,7 +16,7 @@ fn demodulated(index: u32, s: Surface) -> vec3<f32> {
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = vec2<u32>(view.viewport.zw);
+    let size = render_size();
     if any(id.xy >= size) {
         return;
     }

@@ -7,7 +7,7 @@
 
 #import glowbrick::world::{materials, albedo_at}
 #import glowbrick::frame::{debug_view, frame, view, gbuffer, history, wavelet, unpack_surface, pixel_index, present, draw_highlight,
-    surface_voxel, luminance, pixel_footprint}
+    surface_voxel, luminance, pixel_footprint, render_size, upscaling}
 #import glowbrick::constants::{DEBUG_VARIANCE, DEBUG_HISTORY}
 #import glowbrick::denoise::common::{MAX_HISTORY, ALBEDO_FLOOR, same_plane}
 
@@ -20,12 +20,12 @@ fn kernel(offset: i32) -> f32 {
 }
 
 fn pixel_count() -> u32 {
-    return u32(view.viewport.z) * u32(view.viewport.w);
+    return render_size().x * render_size().y;
 }
 
 // One iteration at `pixel`, reading the half of `wavelet` at `source`: filtered colour and its variance.
 fn filtered(pixel: vec2<u32>, step: i32, source: u32) -> vec4<f32> {
-    let size = vec2<i32>(view.viewport.zw);
+    let size = vec2<i32>(render_size());
     let index = pixel_index(pixel);
     let centre = wavelet[source + index];
     let s = unpack_surface(gbuffer[index]);
@@ -74,28 +74,28 @@ fn filtered(pixel: vec2<u32>, step: i32, source: u32) -> vec4<f32> {
 
 @compute @workgroup_size(8, 8, 1)
 fn step_1(@builtin(global_invocation_id) id: vec3<u32>) {
-    if all(id.xy < vec2<u32>(view.viewport.zw)) {
+    if all(id.xy < render_size()) {
         wavelet[pixel_count() + pixel_index(id.xy)] = filtered(id.xy, 1, 0u);
     }
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn step_2(@builtin(global_invocation_id) id: vec3<u32>) {
-    if all(id.xy < vec2<u32>(view.viewport.zw)) {
+    if all(id.xy < render_size()) {
         wavelet[pixel_index(id.xy)] = filtered(id.xy, 2, pixel_count());
     }
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn step_4(@builtin(global_invocation_id) id: vec3<u32>) {
-    if all(id.xy < vec2<u32>(view.viewport.zw)) {
+    if all(id.xy < render_size()) {
         wavelet[pixel_count() + pixel_index(id.xy)] = filtered(id.xy, 4, 0u);
     }
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn step_8(@builtin(global_invocation_id) id: vec3<u32>) {
-    if all(id.xy < vec2<u32>(view.viewport.zw)) {
+    if all(id.xy < render_size()) {
         wavelet[pixel_index(id.xy)] = filtered(id.xy, 8, pixel_count());
     }
 }
@@ -103,11 +103,16 @@ fn step_8(@builtin(global_invocation_id) id: vec3<u32>) {
 // The last iteration, remodulated (albedo x light + emission), with the highlight, into the image.
 @compute @workgroup_size(8, 8, 1)
 fn step_16_and_write(@builtin(global_invocation_id) id: vec3<u32>) {
-    if any(id.xy >= vec2<u32>(view.viewport.zw)) {
+    if any(id.xy >= render_size()) {
         return;
     }
     let f = filtered(id.xy, 16, 0u);
     let index = pixel_index(id.xy);
+    if upscaling() {
+        // The upscaler remodulates at the output's resolution (render::upscale): the filtered light goes to it.
+        wavelet[pixel_count() + index] = f;
+        return;
+    }
     let s = unpack_surface(gbuffer[index]);
     if !s.found || f.a < 0.0 {
         present(id.xy, vec4(f.rgb, 1.0));

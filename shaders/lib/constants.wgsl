@@ -71,6 +71,8 @@ const LIGHT_TILES: u32 = #{LIGHT_TILES}u;
 const LIGHT_TILE_SIZE: u32 = #{LIGHT_TILE_SIZE}u;
 const DENOISE_ON: u32 = #{DENOISE_ON}u;
 const DENOISE_HISTORY: u32 = #{DENOISE_HISTORY}u;
+const UPSCALE_ON: u32 = #{UPSCALE_ON}u;
+const UPSCALE_HISTORY: u32 = #{UPSCALE_HISTORY}u;
 const MAX_TAPS: u32 = #{MAX_TAPS}u;
 
 // GiParams.flags bits.

@@ -7,7 +7,7 @@
 #import glowbrick::traversal::face_normal
 #import glowbrick::guards::finite3
 #import glowbrick::constants::{KEY_GENERIC, KEY_DEBUG_VIEW, KEY_RESTIR_FLAGS, GBUFFER_FACE_SHIFT, GBUFFER_MATERIAL_SHIFT, GBUFFER_MATERIAL_MASK, GBUFFER_OBJECT_SHIFT,
-    DENOISE_ON, DEBUG_NONE, DEBUG_VARIANCE, DEBUG_HISTORY}
+    DENOISE_ON, UPSCALE_ON, DEBUG_NONE, DEBUG_VARIANCE, DEBUG_HISTORY}
 
 // FrameParams in src/render/gpu_types.rs: one view's parameters this frame (the scene's lighting, the same for
 // every view, is SceneLighting in glowbrick::lights).
@@ -34,10 +34,15 @@ struct FrameParams {
     restir_flags: u32,
     // DENOISE_* flags.
     denoise: u32,
+    // UPSCALE_* flags.
+    upscale: u32,
+    // The lighting passes' pixels (the output's at render scale 1).
+    render_size: vec2<u32>,
+    // Where in its footprint each render pixel takes its output pixel this frame, [0, 1) per axis.
+    jitter: vec2<f32>,
     // Padding to 16 bytes (FrameParams::_pad).
     _pad_a: u32,
     _pad_b: u32,
-    _pad_c: u32,
 }
 
 @group(1) @binding(0) var output: texture_storage_2d<rgba16float, write>;
@@ -45,7 +50,10 @@ struct FrameParams {
 @group(1) @binding(2) var<uniform> frame: FrameParams;
 // Running sum of accumulated frames per pixel (rgb; a unused).
 @group(1) @binding(3) var<storage, read_write> accumulation: array<vec4<f32>>;
-// Per pixel: hit point (xyz) and the packed hit (w, see pack_surface); this frame's and last frame's.
+// Per pixel: hit point (xyz) and the packed hit (w, see pack_surface); this frame's and last frame's. Each holds
+// GBUFFER_REGIONS regions of the output's pixels: the lighting passes' G-buffer (at their render size), then below
+// render scale 1 the output's own G-buffer and the upscaler's history (render::upscale; in these buffers because
+// a stage may bind no more storage buffers than lavapipe's 32, and they swap every frame as the G-buffer does).
 @group(1) @binding(4) var<storage, read_write> gbuffer: array<vec4<f32>>;
 @group(1) @binding(5) var<storage, read_write> prev_gbuffer: array<vec4<f32>>;
 // Voxel ReSTIR's part follows (restir/common.wgsl), then the denoiser's (render::denoise): the shading passes'
@@ -87,6 +95,21 @@ fn denoising() -> bool {
     return (frame.denoise & DENOISE_ON) != 0u;
 }
 
+// Whether the lighting passes run below the output's resolution and the upscaler writes the image.
+fn upscaling() -> bool {
+    return (frame.upscale & UPSCALE_ON) != 0u;
+}
+
+// The lighting passes' pixels: the output's at render scale 1.
+fn render_size() -> vec2<u32> {
+    return frame.render_size;
+}
+
+// The output's pixels (the primary pass, the upscaler and the image).
+fn output_size() -> vec2<u32> {
+    return vec2<u32>(view.viewport.zw);
+}
+
 // The G-buffer's w: bit 0 hit, then the face (3 bits), the material and the moving object's id (0: the static
 // world), at the GBUFFER_* shifts. Zero (a cleared buffer) reads as a miss.
 fn pack_surface(face: u32, material: u32, object: u32) -> f32 {
@@ -122,11 +145,35 @@ fn primary_ray_dir(pixel: vec2<u32>, size: vec2<f32>) -> vec3<f32> {
 // Voxels across one pixel at `point` (at the view's centre; the GI cache picks its level of detail from it).
 fn pixel_footprint(point: vec3<f32>) -> f32 {
     // clip_from_view[1][1] is 1 / tan(half the vertical field of view).
-    return distance(point, view.world_position) * 2.0 / (view.clip_from_view[1][1] * view.viewport.w);
+    return distance(point, view.world_position) * 2.0 / (view.clip_from_view[1][1] * f32(frame.render_size.y));
 }
 
+// A render pixel's index in the lighting passes' buffers.
 fn pixel_index(pixel: vec2<u32>) -> u32 {
+    return pixel.x + frame.render_size.x * pixel.y;
+}
+
+// An output pixel's index in the output's buffers (the image's accumulation, the upscaler's).
+fn output_index(pixel: vec2<u32>) -> u32 {
     return pixel.x + u32(view.viewport.z) * pixel.y;
+}
+
+// Where an output pixel's G-buffer texel lies in `gbuffer` and `prev_gbuffer` below render scale 1.
+fn output_texel(pixel: vec2<u32>) -> u32 {
+    return u32(view.viewport.z) * u32(view.viewport.w) + output_index(pixel);
+}
+
+// Where an output pixel's upscaled history (demodulated light, length) lies in `gbuffer` and `prev_gbuffer`.
+fn upscaled_texel(pixel: vec2<u32>) -> u32 {
+    return 2u * u32(view.viewport.z) * u32(view.viewport.w) + output_index(pixel);
+}
+
+// The output pixel whose G-buffer texel render pixel `pixel` lights this frame: a point of its footprint that
+// moves with the jitter, so that over frames every output pixel is lit by a render pixel of its own.
+fn render_pixel_source(pixel: vec2<u32>) -> vec2<u32> {
+    let output = output_size();
+    let at = (vec2<f32>(pixel) + frame.jitter) * vec2<f32>(output) / vec2<f32>(frame.render_size);
+    return min(vec2<u32>(floor(at)), output - 1u);
 }
 
 // Last frame's pixel that saw `point` (xy, z = 1), or z = -1 when it was off screen.
@@ -147,7 +194,7 @@ fn previous_pixel(point: vec3<f32>, size: vec2<u32>) -> vec3<i32> {
 // The highlight, where the shading passes write the image; the denoiser draws it after filtering instead (an
 // outline filtered along with the light would smear across its face).
 fn highlight(colour: vec3<f32>, hit_voxel: vec3<i32>, face: u32, point: vec3<f32>, distance: f32) -> vec3<f32> {
-    if denoising() {
+    if denoising() || upscaling() {
         return colour;
     }
     return draw_highlight(colour, hit_voxel, face, point, distance);
@@ -190,9 +237,9 @@ fn surface_voxel(s: Surface) -> vec3<i32> {
     return vec3<i32>(floor(s.point - face_normal(s.face) * 0.5));
 }
 
-// A shading pass's result: the image, or with the denoiser on its noisy input (render::denoise).
+// A shading pass's result: the image, or the noisy input of the denoiser (render::denoise) or the upscaler.
 fn write_output(pixel: vec2<u32>, colour: vec4<f32>) {
-    if denoising() {
+    if denoising() || upscaling() {
         noisy[pixel_index(pixel)] = colour;
         return;
     }
@@ -201,7 +248,7 @@ fn write_output(pixel: vec2<u32>, colour: vec4<f32>) {
 
 // Progressive accumulation (the running mean of the frames since anything changed), then the HDR target.
 fn present(pixel: vec2<u32>, colour: vec4<f32>) {
-    let index = pixel_index(pixel);
+    let index = output_index(pixel);
     // A non-finite value would poison the running sum until the next restart: write black instead.
     let c = select(vec3(0.0), colour.rgb, finite3(colour.rgb));
     var sum = c;

@@ -13,7 +13,7 @@
 #import glowbrick::guards::finite
 #import glowbrick::constants::{RAY_OFFSET, PI, RESTIR_POINT, RESTIR_UNBIASED, RESTIR_ONE_RAY, RESTIR_LOCAL,
     RESTIR_LIGHT_TILES, LIGHT_TILES, LIGHT_TILE_SIZE, COUNT_RESERVOIR_RESETS, NO_COLUMN, NEAR_FACE}
-#import glowbrick::frame::{restir_flag, frame, view, Surface, luminance, surface_voxel}
+#import glowbrick::frame::{restir_flag, frame, view, Surface, luminance, surface_voxel, render_size}
 
 // 32 bytes. `face` is the light cube's face (0 +X, 1 -X, ... as the traversal numbers faces) or POINT_FACE,
 // `uv` the point on it (pack2x16unorm). `w_sum` is only meaningful while a pass streams candidates; `big_w` is the
@@ -539,6 +539,6 @@ fn own_sample_rays() -> bool {
 
 // Random numbers per pixel, pass and frame.
 fn pixel_rng(pixel: vec2<u32>, pass_salt: u32) -> Rng {
-    let size = vec2<u32>(view.viewport.zw);
+    let size = render_size();
     return Rng(pcg(pixel.x + size.x * pixel.y) ^ pcg(frame.frame * 0x9E3779B9u + pass_salt));
 }

@@ -2,7 +2,7 @@
 // candidate's visibility and the temporal reuse are the next pass (temporal.wgsl), so this kernel, the frame's
 // costliest, holds no traversal code and keeps its registers for the candidates' loads in flight.
 
-#import glowbrick::frame::{gbuffer, unpack_surface, pixel_index, view, frame}
+#import glowbrick::frame::{gbuffer, unpack_surface, pixel_index, render_size, view, frame}
 #import glowbrick::random::rng_next
 #import glowbrick::guards::finite
 #import glowbrick::restir::common::{reservoirs_temporal, empty_reservoir, shading, local_lights, pixel_tile,
@@ -10,7 +10,7 @@
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = vec2<u32>(view.viewport.zw);
+    let size = render_size();
     if any(id.xy >= size) {
         return;
     }

@@ -7,7 +7,7 @@
 #import glowbrick::traversal::{count_rays}
 #import glowbrick::constants::COUNT_RAYS_RESTIR_SHADE
 #import glowbrick::world::materials
-#import glowbrick::frame::{debug_view, frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, highlight, write_output,
+#import glowbrick::frame::{debug_view, frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, render_size, highlight, write_output,
     primary_ray_dir, pixel_footprint}
 #import glowbrick::constants::{DEBUG_RESERVOIR, LIGHTING_FULL}
 #import glowbrick::guards::finite
@@ -23,7 +23,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 fn shade_pixel(id: vec3<u32>) {
-    let size = vec2<u32>(view.viewport.zw);
+    let size = render_size();
     if any(id.xy >= size) {
         return;
     }

@@ -3,7 +3,7 @@
 
 #import glowbrick::traversal::{count_rays}
 #import glowbrick::constants::COUNT_RAYS_RESTIR_SPATIAL
-#import glowbrick::frame::{restir_flag, frame, view, gbuffer, unpack_surface, pixel_index}
+#import glowbrick::frame::{restir_flag, frame, view, gbuffer, unpack_surface, pixel_index, render_size}
 #import glowbrick::constants::{RESTIR_SPATIAL, MAX_TAPS, PI}
 #import glowbrick::random::{Rng, rng_next}
 #import glowbrick::restir::common::{Reservoir, Shading, reservoirs_temporal, reservoirs_final, empty_reservoir, validated,
@@ -16,7 +16,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 fn spatial_pixel(id: vec3<u32>) {
-    let size = vec2<u32>(view.viewport.zw);
+    let size = render_size();
     if any(id.xy >= size) {
         return;
     }

@@ -4,7 +4,7 @@
 
 #import glowbrick::traversal::{count_rays}
 #import glowbrick::constants::COUNT_RAYS_RESTIR_INITIAL
-#import glowbrick::frame::{restir_flag, frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index, previous_pixel}
+#import glowbrick::frame::{restir_flag, frame, view, gbuffer, prev_gbuffer, unpack_surface, pixel_index, render_size, previous_pixel}
 #import glowbrick::constants::{RESTIR_TEMPORAL, RESTIR_INITIAL_VISIBILITY}
 #import glowbrick::world::object_motion
 #import glowbrick::random::rng_next
@@ -22,7 +22,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 fn temporal_pixel(id: vec3<u32>) {
-    let size = vec2<u32>(view.viewport.zw);
+    let size = render_size();
     if any(id.xy >= size) {
         return;
     }

@@ -248,7 +248,7 @@ pub fn run_denoise_bench(config: &DenoiseConfig, out: &Path) -> Result<String, S
         );
         return write_report(out, "denoise-reaction.md", text);
     }
-    let motion = || run_motion((config.width, config.height), config.reference_spp);
+    let motion = || run_motion((config.width, config.height), config.reference_spp, &config.settings);
     if only(DenoiseSection::Motion) {
         let text = format!("# The denoiser under motion\n{}", motion_markdown(&motion()?));
         return write_report(out, "denoise-motion.md", text);

@@ -14,11 +14,13 @@ use crate::render::frame::all_passes;
 use crate::render::gi::{DYNAMIC_GI_PASS_NAMES, GI_PASS_NAMES, WARM_UP_FRAMES};
 use crate::render::gpu_types::{COUNTERS, GpuCounter};
 use crate::render::primary::PRIMARY_PASS_NAME;
-use crate::render::restir::RESTIR_PASS_NAMES;
+use crate::render::plan::render_size;
+use crate::render::restir::{self, RESTIR_PASS_NAMES};
+use crate::render::upscale::{self, UPSCALE_PASS_NAMES};
 use crate::settings::RenderSettings;
 use crate::world::recipe::generated_world;
 use crate::world::{CameraView, VoxelWorld};
-use bevy::math::UVec3;
+use bevy::math::{UVec2, UVec3};
 use std::path::Path;
 use std::time::Instant;
 
@@ -121,6 +123,8 @@ pub struct FrameRow {
     pub counters: [u32; COUNTERS],
     /// ReSTIR's candidates per hit pixel (the setting), 0 where ReSTIR does not run.
     pub candidates: u32,
+    /// The lighting passes' share of the output's pixels per axis (`render_scale`).
+    pub render_scale: f32,
 }
 
 impl FrameRow {
@@ -132,7 +136,28 @@ impl FrameRow {
         (self.size.0 * self.size.1) as f64
     }
 
-    /// Rays per pixel of one budgeted pass.
+    /// The lighting passes' pixels (`render_scale` of the output's per axis).
+    pub fn render_pixels(&self) -> f64 {
+        let size = render_size(UVec2::new(self.size.0, self.size.1), self.render_scale);
+        f64::from(size.x) * f64::from(size.y)
+    }
+
+    /// Brick-grid rays of the lighting passes (ReSTIR's candidates' visibility, spatial taps and shading, and the
+    /// GI cache's refresh and update rays) per output pixel: what render scale lowers.
+    pub fn lighting_rays_per_output_pixel(&self) -> f64 {
+        (self.restir_rays() + self.count(GpuCounter::RaysGi)) / self.pixels()
+    }
+
+    /// ReSTIR's rays per render pixel (the same at every scale for the same scene).
+    pub fn restir_rays_per_render_pixel(&self) -> f64 {
+        self.restir_rays() / self.render_pixels()
+    }
+
+    fn restir_rays(&self) -> f64 {
+        self.direct_rays() - self.count(GpuCounter::RaysPrimary)
+    }
+
+    /// Rays per (output) pixel of one budgeted pass.
     pub fn rays_per_pixel(&self, counter: GpuCounter) -> f64 {
         self.count(counter) / self.pixels()
     }
@@ -215,6 +240,7 @@ pub fn measure(
         case.settings.iter().chain(lighting.1).map(|p| p.to_string()).chain(config.extra.iter().cloned()).collect();
     let settings = RenderSettings::game().with_pairs(&pairs)?;
     let candidates = if settings.lighting.uses_restir() { settings.restir.candidates } else { 0 };
+    let render_scale = upscale::frame_scale(&settings, None, restir::shades(&settings));
     let options = HeadlessOptions { width: size.0, height: size.1, settings, ..Default::default() };
     let mut renderer = HeadlessRenderer::new(world, &view, &options)?;
     renderer.render(config.warm_frames)?;
@@ -226,7 +252,7 @@ pub fn measure(
     let wall_ms = start.elapsed().as_secs_f64() * 1000.0 / config.timed_frames.max(1) as f64;
     let passes = all_passes().iter().filter_map(|p| renderer.gpu_pass_ms(p.name).map(|ms| (p.name, ms))).collect();
     let counters = renderer.counters()?;
-    Ok(FrameRow { case: case.label, lighting: lighting.0, size, wall_ms, passes, counters, candidates })
+    Ok(FrameRow { case: case.label, lighting: lighting.0, size, wall_ms, passes, counters, candidates, render_scale })
 }
 
 /// Every case x lighting at each size, printing a line per row.
@@ -278,7 +304,7 @@ pub fn run_frame_bench(config: &FrameConfig, quick: bool, out: &Path) -> Result<
 }
 
 /// The pass groups of the report's time table: the passes (from the techniques' tables) and the column.
-const GROUPS: [(&[&str], &str); 12] = [
+const GROUPS: [(&[&str], &str); 13] = [
     (&[PRIMARY_PASS_NAME], "primary"),
     (&[RESTIR_PASS_NAMES[0]], "ReSTIR tiles"),
     (&[RESTIR_PASS_NAMES[1]], "ReSTIR initial"),
@@ -291,18 +317,19 @@ const GROUPS: [(&[&str], &str); 12] = [
     (&[GI_PASS_NAMES[3]], "GI filter"),
     (&DYNAMIC_GI_PASS_NAMES, "GI objects"),
     (&DENOISE_PASS_NAMES, "denoiser"),
+    (&UPSCALE_PASS_NAMES, "upscale"),
 ];
 
 pub fn csv(rows: &[FrameRow]) -> String {
     let mut text = String::from(
         "adapter,case,lighting,width,height,wall_ms,gpu_total_ms,pass,pass_gpu_ms,rays_primary,rays_initial,\
-         rays_spatial,rays_shade,primary_hits,trace_steps,trace_loads,candidates,gi_updated,gi_rays\n",
+         rays_spatial,rays_shade,primary_hits,trace_steps,trace_loads,candidates,gi_updated,gi_rays,render_scale\n",
     );
     let adapter = crate::render::adapter::adapter_name().replace(',', ";");
     for r in rows {
         let c = |g: GpuCounter| r.counters[g as usize];
         let counts = format!(
-            "{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{}",
             c(GpuCounter::RaysPrimary),
             c(GpuCounter::RaysRestirInitial),
             c(GpuCounter::RaysRestirSpatial),
@@ -312,7 +339,8 @@ pub fn csv(rows: &[FrameRow]) -> String {
             c(GpuCounter::TraceLoads),
             r.candidates,
             c(GpuCounter::GiUpdated),
-            c(GpuCounter::RaysGi)
+            c(GpuCounter::RaysGi),
+            r.render_scale
         );
         let total = r.gpu_total_ms().map_or(String::new(), |ms| format!("{ms:.4}"));
         let head = format!("{adapter},{},{},{},{},{:.3},{total}", r.case, r.lighting, r.size.0, r.size.1, r.wall_ms);
@@ -359,19 +387,22 @@ pub fn markdown(rows: &[FrameRow], config: &FrameConfig) -> String {
              the direct light's rays per pixel whose primary ray hit (its primary ray and ReSTIR's rays), the share of such pixels, steps per ray (cells \
              visited at any level of the occupancy hierarchy) and memory loads per ray over those rays, \
              ReSTIR's candidates per hit pixel, and the GI cache's entries updated and brick-grid rays traced (refresh and \
-             update passes) in the frame.\n\n\
-             | case | lighting | size | primary | initial | spatial | shade | rays / hit pixel | hit share | \
-             steps / ray | loads / ray | candidates | GI updated | GI rays |\n\
-             |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+             update passes) in the frame. Below render scale 1 the per-pass rays are per output pixel; the lighting \
+             passes' rays (ReSTIR's and the GI cache's) are given per output pixel, and ReSTIR's per render pixel.\n\n\
+             | case | lighting | size | scale | primary | initial | spatial | shade | rays / hit pixel | hit share | \
+             steps / ray | loads / ray | candidates | GI updated | GI rays | lighting rays / output px | \
+             ReSTIR rays / render px |\n\
+             |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {
         let (steps, loads) = r.steps_per_ray();
         let rays: Vec<String> = RAY_BUDGET.iter().map(|&(c, _, _)| format!("{:.2}", r.rays_per_pixel(c))).collect();
         text += &format!(
-            "| {} | {} | {}x{} | {} | {:.2} | {:.2} | {:.1} | {:.1} | {} | {} | {} |\n",
+            "| {} | {} | {}x{} | {} | {} | {:.2} | {:.2} | {:.1} | {:.1} | {} | {} | {} | {:.3} | {:.2} |\n",
             r.case,
             r.lighting,
             r.size.0,
             r.size.1,
+            r.render_scale,
             rays.join(" | "),
             r.rays_per_hit_pixel(),
             r.hit_share(),
@@ -379,7 +410,9 @@ pub fn markdown(rows: &[FrameRow], config: &FrameConfig) -> String {
             loads,
             r.candidates,
             r.counters[GpuCounter::GiUpdated as usize],
-            r.counters[GpuCounter::RaysGi as usize]
+            r.counters[GpuCounter::RaysGi as usize],
+            r.lighting_rays_per_output_pixel(),
+            r.restir_rays_per_render_pixel()
         );
     }
     text

@@ -89,8 +89,10 @@ fn render_path(
     base: &CameraView,
     size: (u32, u32),
     denoise: &str,
+    extra: &[String],
 ) -> Result<(LinearImage, Vec<LinearImage>), String> {
-    let pairs: Vec<String> = LIGHTING.iter().chain(&[denoise]).map(|p| p.to_string()).collect();
+    let pairs: Vec<String> =
+        LIGHTING.iter().chain(&[denoise]).map(|p| p.to_string()).chain(extra.iter().cloned()).collect();
     let settings = RenderSettings::default().with_pairs(&pairs)?;
     let options = HeadlessOptions { width: size.0, height: size.1, settings, ..Default::default() };
     let mut world = world.clone();
@@ -139,12 +141,12 @@ fn masked(image: &LinearImage, keep: &[bool]) -> LinearImage {
 }
 
 /// Runs the path raw and denoised at `size` and compares every frame with its reference of `reference_spp`
-/// samples per pixel.
-pub fn run_motion(size: (u32, u32), reference_spp: u32) -> Result<MotionRun, String> {
+/// samples per pixel; `extra` settings on top of the path's own (`--set`, e.g. `render_scale=0.5`).
+pub fn run_motion(size: (u32, u32), reference_spp: u32, extra: &[String]) -> Result<MotionRun, String> {
     let world = load_scene("cornell").map_err(|e| e.to_string())?;
     let base = world.view(Some("inside")).cloned().ok_or("cornell: no view 'inside'")?;
-    let (still_raw, raw) = render_path(&world, &base, size, "denoise=off")?;
-    let (still_denoised, denoised) = render_path(&world, &base, size, "denoise=on")?;
+    let (still_raw, raw) = render_path(&world, &base, size, "denoise=off", extra)?;
+    let (still_denoised, denoised) = render_path(&world, &base, size, "denoise=on", extra)?;
     let options = |seed| ReferenceOptions {
         width: size.0,
         height: size.1,

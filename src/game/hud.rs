@@ -216,6 +216,7 @@ fn update_texts(
     world: Res<VoxelWorld>,
     pool: Res<LightPool>,
     settings: Res<crate::settings::RenderSettings>,
+    scale: Option<Res<super::dynamic_resolution::DynamicResolution>>,
     player: Query<&Player>,
     mut status: ResMut<StatusLine>,
     mut texts: ParamSet<(
@@ -241,9 +242,10 @@ fn update_texts(
     let (voxel_lights, brick_lights) = pool.counts();
     if let Ok(mut t) = texts.p0().single_mut() {
         t.0 = format!(
-            "{:.0} fps  {:.1} ms\nlights {} (voxel {voxel_lights}, brick {brick_lights})\n{}\n{mode} | brush {brush}\ntarget {target}",
+            "{:.0} fps  {:.1} ms\n{}\nlights {} (voxel {voxel_lights}, brick {brick_lights})\n{}\n{mode} | brush {brush}\ntarget {target}",
             1.0 / smoothed_dt.max(1e-6),
             *smoothed_dt * 1000.0,
+            scale_line(&settings, scale.as_deref()),
             pool.len(),
             settings.summary(),
         );
@@ -267,6 +269,23 @@ fn update_texts(
         if t.0 != shown {
             t.0 = shown.to_string();
         }
+    }
+}
+
+/// The render scale in force, and with `render_scale=auto` the GPU time it was chosen from and the target.
+pub fn scale_line(
+    settings: &crate::settings::RenderSettings,
+    dynamic: Option<&super::dynamic_resolution::DynamicResolution>,
+) -> String {
+    use crate::settings::RenderScale;
+    match (settings.render_scale, dynamic) {
+        (RenderScale::Auto, Some(d)) if d.gpu_ms > 0.0 => format!(
+            "render scale {:.2} (auto: GPU {:.1} ms, target {} ms)",
+            d.scale, d.gpu_ms, settings.frame_target
+        ),
+        (RenderScale::Auto, Some(d)) => format!("render scale {:.2} (auto: measuring)", d.scale),
+        (RenderScale::Auto, None) => "render scale 1 (auto)".to_string(),
+        (RenderScale::Fixed(scale), _) => format!("render scale {scale}"),
     }
 }
 

@@ -3,6 +3,7 @@
 //! `GameLogicPlugin` holds everything that needs no window (so tests drive it headless through messages);
 //! `run_game` adds the window, input mapping and HUD on top.
 
+pub mod dynamic_resolution;
 pub mod frame_pacing;
 pub mod hud;
 pub mod interaction;
@@ -83,6 +84,7 @@ pub fn run_game(
             settings_panel::SettingsPanelPlugin,
             objects::GameObjectsPlugin,
             frame_pacing::FramePacingPlugin,
+            dynamic_resolution::DynamicResolutionPlugin,
         ))
         .add_systems(Startup, move |mut commands: Commands| {
             commands.spawn((voxel_camera_bundle(&view), Tonemapping::AcesFitted, player::Player::looking(&view)));

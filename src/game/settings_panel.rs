@@ -6,7 +6,7 @@ use crate::settings::{RenderSettings, setting};
 use bevy::prelude::*;
 
 /// The settings the panel shows, top to bottom (keys of `crate::settings::SETTINGS`).
-pub const ROWS: [&str; 12] = [
+pub const ROWS: [&str; 14] = [
     "lighting",
     "candidates",
     "taps",
@@ -19,6 +19,8 @@ pub const ROWS: [&str; 12] = [
     "accumulate",
     "time",
     "denoise",
+    "render_scale",
+    "frame_target",
 ];
 
 #[derive(Resource, Default, Debug)]

@@ -118,8 +118,8 @@ impl ViewPart for DenoiseView {
     }
 
     /// `FrameParams::denoise`, the `DENOISE_*` flags.
-    fn begin_frame(&mut self, plan: &FramePlan, _: &RenderSettings, params: &mut FrameParams) {
-        params.denoise = frame_flags(self.runs, plan.denoise, plan.changes.world);
+    fn begin_frame(&mut self, plan: &FramePlan, resized: bool, _: &RenderSettings, params: &mut FrameParams) {
+        params.denoise = frame_flags(self.runs && !resized, plan.denoise, plan.changes.world);
         self.runs = plan.denoise;
     }
 

@@ -3,8 +3,10 @@
 //! changed), and two systems list the passes top to bottom:
 //!
 //! - `view_frame` (Core3d, main pass, once per camera): the G-buffer, then Voxel ReSTIR's passes (light tiles,
-//!   candidates, temporal, spatial, shade) as the plan says, then the denoiser's six when it is on; the view's
-//!   bind group is built once here and shared by every pass.
+//!   candidates, temporal, spatial, shade) as the plan says, then the denoiser's six when it is on; below render
+//!   scale 1 the upscaler's `pick` follows the G-buffer and its last pass writes the image (`upscale`). The
+//!   G-buffer and the upscaler run at the output's pixels, the rest at the plan's render size. The view's bind
+//!   group is built once here and shared by every pass.
 //! - `world_frame` (RenderGraph, before every camera, once per frame): the GI cache's passes, which keep a
 //!   world-level cache and so must not run once per camera. The cameras' shading reads what they write this
 //!   frame (a change of light or an edit shows in the frame it happens); the entries the cameras insert are
@@ -26,6 +28,7 @@ use super::scene::objects::GpuObjects;
 use super::scene::world::{GpuWorld, WorldLayout, world_interface};
 use super::shaders::GlowbrickShaders;
 use super::view::{ViewParts, ViewResources, view_interface};
+use super::upscale::{self, RenderScaleInForce};
 use super::{CameraFramesRendered, VoxelCamera, denoise, primary, restir};
 use crate::settings::{RenderSettings, Traversal};
 use bevy::ecs::system::SystemParam;
@@ -39,7 +42,7 @@ use std::sync::atomic::Ordering;
 
 /// The techniques' parts of a view's group 1, in binding order.
 fn view_parts() -> ViewParts {
-    ViewParts(vec![primary::VIEW_PART, restir::VIEW_PART, denoise::VIEW_PART])
+    ViewParts(vec![primary::VIEW_PART, restir::VIEW_PART, denoise::VIEW_PART, upscale::VIEW_PART])
 }
 
 /// Every bind group's interface, groups 0 to 3: the layouts are built from these, and a CPU test checks the
@@ -53,6 +56,7 @@ pub fn all_passes() -> Vec<VoxelPass> {
     let mut passes = vec![primary::PRIMARY];
     passes.extend(restir::PASSES);
     passes.extend(denoise::PASSES);
+    passes.extend(upscale::PASSES);
     passes.push(gi::COMPACT_PASS);
     passes.extend(gi::STATIC_PASSES);
     passes.extend(gi::DYNAMIC_PASSES);
@@ -111,10 +115,13 @@ impl VoxelPipelines {
     }
 
     /// Whether a camera's passes are compiled for this frame's key (or the generic fallback's): the primary
-    /// pass, and ReSTIR's and the denoiser's where they run.
-    pub fn views_ready(&self, cache: &PipelineCache, restir: bool, denoise: bool) -> bool {
+    /// pass, and ReSTIR's, the denoiser's and the upscaler's where they run.
+    pub fn views_ready(&self, cache: &PipelineCache, restir: bool, denoise: bool, upscales: bool) -> bool {
         let ready = |runs: bool, passes: &[VoxelPass]| !runs || self.get(cache, passes).is_some();
-        ready(true, &[primary::PRIMARY]) && ready(restir, &restir::PASSES) && ready(denoise, &denoise::PASSES)
+        ready(true, &[primary::PRIMARY])
+            && ready(restir, &restir::PASSES)
+            && ready(denoise, &denoise::PASSES)
+            && ready(upscales, &upscale::PASSES)
     }
 
     /// Whether every GI pass is compiled for this frame's key.
@@ -227,6 +234,7 @@ fn plan_frame(
     gpu_world: Option<Res<GpuWorld>>,
     gpu_lights: Option<Res<GpuLights>>,
     objects: Option<Res<GpuObjects>>,
+    scale_in_force: Option<Res<RenderScaleInForce>>,
 ) {
     let fallback = RenderSettings::default();
     let settings = settings.as_deref().unwrap_or(&fallback);
@@ -237,12 +245,15 @@ fn plan_frame(
         tiles: settings.restir.light_tiles,
     };
     let denoise = denoise::runs(settings);
+    let render_scale = upscale::frame_scale(settings, scale_in_force.map(|s| *s), restir.shades);
     // A frame whose GI passes are not compiled yet must not use up the GI cache's first restart or its warm-up.
     // Nor must one whose cameras cannot draw yet: the cache would spend its warm-up on frames no camera drew.
     let ready = pipelines
-        .is_some_and(|p| p.gi_ready(&pipeline_cache) && p.views_ready(&pipeline_cache, restir.shades, denoise));
+        .is_some_and(|p| {
+            p.gi_ready(&pipeline_cache) && p.views_ready(&pipeline_cache, restir.shades, denoise, render_scale < 1.0)
+        });
     let gi = settings.gi.enabled;
-    *plan = FramePlan { restir, denoise, gi, compiling: gi && !ready, changes };
+    *plan = FramePlan { render_scale, restir, denoise, gi, compiling: gi && !ready, changes };
 }
 
 /// What changed in the scene this frame, as the views' histories see it.
@@ -276,8 +287,8 @@ struct PassRecorder<'a> {
 
 impl PassRecorder<'_> {
     /// Records `pass` as its own compute pass (each reads what the previous one wrote for other threads), timed
-    /// under its name when render diagnostics are on.
-    fn dispatch(&mut self, pass: &VoxelPass, pipeline: &ComputePipeline, view_size: Extent3d) {
+    /// under its name when render diagnostics are on. `sizes`: the view's render and output pixels.
+    fn dispatch(&mut self, pass: &VoxelPass, pipeline: &ComputePipeline, sizes: ViewSizes) {
         let label = Some(pass.name);
         let mut compute = self.encoder.begin_compute_pass(&ComputePassDescriptor { label, timestamp_writes: None });
         let span = self.diagnostics.pass_span(&mut compute, pass.name);
@@ -286,11 +297,14 @@ impl PassRecorder<'_> {
             compute.set_bind_group(index as u32, *group, offsets);
         }
         match pass.dispatch {
-            Dispatch::Pixels => compute.dispatch_workgroups(
-                view_size.width.div_ceil(PIXEL_WORKGROUP_EDGE),
-                view_size.height.div_ceil(PIXEL_WORKGROUP_EDGE),
-                1,
-            ),
+            Dispatch::Pixels | Dispatch::OutputPixels => {
+                let size = if pass.dispatch == Dispatch::Pixels { sizes.render } else { sizes.output };
+                compute.dispatch_workgroups(
+                    size.x.div_ceil(PIXEL_WORKGROUP_EDGE),
+                    size.y.div_ceil(PIXEL_WORKGROUP_EDGE),
+                    1,
+                )
+            }
             Dispatch::LightTiles => compute.dispatch_workgroups(restir::TILE_THREADS.div_ceil(LINEAR_WORKGROUP), 1, 1),
             Dispatch::Slots => {
                 let (slots, _) = self.gi_work.expect("GI passes are recorded with the cache's work");
@@ -303,6 +317,13 @@ impl PassRecorder<'_> {
         }
         span.end(&mut compute);
     }
+}
+
+/// A view's pixels: the lighting passes' (`render`) and the output's.
+#[derive(Clone, Copy, Debug, Default)]
+struct ViewSizes {
+    render: UVec2,
+    output: UVec2,
 }
 
 /// A technique's passes this frame.
@@ -356,14 +377,16 @@ pub fn view_frame(
     let Some(primary_pipeline) = pipelines.get(&pipeline_cache, &[primary::PRIMARY]).map(|p| p[0]) else { return };
     let restir = TechniquePipelines::of(plan.restir.shades, &pipelines, &pipeline_cache, &restir::PASSES);
     let denoise = TechniquePipelines::of(plan.denoise, &pipelines, &pipeline_cache, &denoise::PASSES);
-    if matches!(restir, TechniquePipelines::Compiling) || matches!(denoise, TechniquePipelines::Compiling) {
+    let upscale = TechniquePipelines::of(plan.upscales(), &pipelines, &pipeline_cache, &upscale::PASSES);
+    if [&restir, &denoise, &upscale].iter().any(|t| matches!(t, TechniquePipelines::Compiling)) {
         return;
     }
     let (Some(view_binding), Some(view_buffer)) = (view_uniforms.uniforms.binding(), view_uniforms.uniforms.buffer())
     else {
         return;
     };
-    let size = target.main_texture().size();
+    let output = target.main_texture().size();
+    let size = ViewSizes { render: resources.render_size(), output: UVec2::new(output.width, output.height) };
     // Last frame's G-buffer and denoiser history become the previous ones that the temporal reprojections read.
     resources.swap();
     let layout = pipeline_cache.get_bind_group_layout(&layouts.view);
@@ -384,6 +407,11 @@ pub fn view_frame(
     };
     // 1. G-buffer, GI cache entries touched; the image too unless ReSTIR shades it.
     recorder.dispatch(&primary::PRIMARY, primary_pipeline, size);
+    let upscale = upscale.dispatched();
+    // Below render scale 1: the lighting passes' G-buffer, one output texel per render pixel.
+    if let Some(pick) = upscale.first() {
+        recorder.dispatch(&upscale::PASSES[0], pick, size);
+    }
     // 2-6. Voxel ReSTIR: the light tiles (when the candidates read them), candidates, their visibility and
     // temporal reuse, spatial reuse (when there are lights to sample), shading.
     for (pass, pipeline) in restir::PASSES.iter().zip(restir.dispatched()) {
@@ -391,9 +419,14 @@ pub fn view_frame(
             recorder.dispatch(pass, pipeline, size);
         }
     }
-    // 7-12. The denoiser: temporal accumulation, then the wavelet's five iterations, the last writing the image.
+    // 7-12. The denoiser: temporal accumulation, then the wavelet's five iterations, the last writing the image
+    // (or, below render scale 1, the upscaler's input).
     for (pass, pipeline) in denoise::PASSES.iter().zip(denoise.dispatched()) {
         recorder.dispatch(pass, pipeline, size);
+    }
+    // 13. Below render scale 1: the upscaler writes the image at the output's pixels.
+    if let Some(main) = upscale.get(1) {
+        recorder.dispatch(&upscale::PASSES[1], main, size);
     }
     frames.0.fetch_add(1, Ordering::Relaxed);
 }
@@ -424,7 +457,7 @@ pub fn world_frame(
         groups: [(&world.bind_group, &[]), (&pipelines.no_view, &[]), (&lights.bind_group, &[]), (gi_group, &[])],
         gi_work: Some((cache.slots(), cache.arguments())),
     };
-    let no_view = Extent3d::default();
+    let no_view = ViewSizes::default();
     let [refresh, update_static, filter_static] = &gi::STATIC_PASSES;
     let [update_dynamic, filter_dynamic] = &gi::DYNAMIC_PASSES;
     // The work lists first; refresh before update, updates before filters (a filter reads its neighbours' new

@@ -141,7 +141,13 @@ pub struct FrameParams {
     pub restir_flags: u32,
     /// `DENOISE_*` flags: the denoiser runs; its history (last frame's) may be reused.
     pub denoise: u32,
-    pub _pad: [u32; 3],
+    /// `UPSCALE_*` flags: the lighting passes run below the output's resolution; the upscaler's history holds.
+    pub upscale: u32,
+    /// The lighting passes' pixels (the output's at render scale 1).
+    pub render_size: [u32; 2],
+    /// Where in its footprint each render pixel takes its output pixel this frame, in [0, 1) per axis.
+    pub jitter: [f32; 2],
+    pub _pad: [u32; 2],
 }
 
 /// Group 3, binding 0 (`GiParams` in `shaders/gi/cache.wgsl`).
@@ -203,6 +209,9 @@ pub struct GiEdit {
 
 /// A G-buffer texel (`vec4<f32>` in `shaders/lib/frame.wgsl`): hit point and the packed hit.
 pub const GBUFFER_TEXEL_BYTES: u64 = 16;
+/// Regions of the output's pixels in each G-buffer (`shaders/lib/frame.wgsl`): the lighting passes' texels, then
+/// the output's own and the upscaler's history (demodulated light, length) below render scale 1.
+pub const GBUFFER_REGIONS: u64 = 3;
 /// A reservoir (`Reservoir` in `shaders/restir/common.wgsl`): light slot, generation, sample, w_sum, M, W and
 /// the target at the sample.
 pub const RESERVOIR_BYTES: u64 = 32;
@@ -247,7 +256,7 @@ const _: () = assert!(size_of::<GpuObject>() == 48);
 const _: () = assert!(size_of::<GpuLight>() == 32);
 const _: () = assert!(size_of::<crate::lights::AliasEntry>() == 16);
 const _: () = assert!(size_of::<SceneLighting>() == 80);
-const _: () = assert!(size_of::<FrameParams>() == 176);
+const _: () = assert!(size_of::<FrameParams>() == 192);
 const _: () = assert!(size_of::<GiParams>() == 64);
 const _: () = assert!(size_of::<GiEntry>() == 64);
 const _: () = assert!(size_of::<GiEdit>() == 32);
@@ -367,6 +376,11 @@ pub const DENOISE_ON: u32 = 1;
 /// `FrameParams::denoise`: last frame's denoiser history is valid (same size, nothing in the scene changed).
 pub const DENOISE_HISTORY: u32 = 2;
 
+/// `FrameParams::upscale`: the lighting passes run at the render size and the upscaler writes the image.
+pub const UPSCALE_ON: u32 = 1;
+/// `FrameParams::upscale`: last frame's upscaled history is valid (nothing in the scene changed).
+pub const UPSCALE_HISTORY: u32 = 2;
+
 /// `GiParams::flags` bits.
 pub const GI_FILTER: u32 = 1;
 pub const GI_BOUNCES: u32 = 2;
@@ -477,6 +491,8 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("LIGHT_TILE_SIZE", U32(LIGHT_TILE_SIZE)),
         ("DENOISE_ON", U32(DENOISE_ON)),
         ("DENOISE_HISTORY", U32(DENOISE_HISTORY)),
+        ("UPSCALE_ON", U32(UPSCALE_ON)),
+        ("UPSCALE_HISTORY", U32(UPSCALE_HISTORY)),
         ("MAX_TAPS", U32(MAX_TAPS)),
         ("GI_FILTER", U32(GI_FILTER)),
         ("GI_BOUNCES", U32(GI_BOUNCES)),

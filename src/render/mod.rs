@@ -10,7 +10,8 @@
 //!   (`world_frame`); it owns no technique's state.
 //! - one module per technique, each owning its passes, its buffers and when its history restarts: `primary`
 //!   (the G-buffer), `restir` (Voxel ReSTIR direct light, the reservoirs), `denoise` (the denoiser's history),
-//!   `gi/` (the per-voxel-face GI cache: tables, edit log, the schedule of restarts and warm-up).
+//!   `gi/` (the per-voxel-face GI cache: tables, edit log, the schedule of restarts and warm-up), `upscale`
+//!   (the lighting passes below the output's resolution, brought back to it).
 //! - `view`: a camera's group 1, its frame parameters, and the `ViewPart` each technique implements.
 //! - `shaders`: the embedded WGSL (`shaders/lib`, `shaders/restir`, `shaders/gi`, `shaders/denoise`).
 //!
@@ -30,6 +31,7 @@ pub mod primary;
 pub mod restir;
 pub mod scene;
 pub mod shaders;
+pub mod upscale;
 pub mod view;
 
 pub use camera::VoxelCamera;
@@ -71,6 +73,7 @@ impl Plugin for VoxelRenderPlugin {
                 ExtractComponentPlugin::<VoxelCamera>::default(),
                 ExtractResourcePlugin::<RenderSettings>::default(),
                 ExtractResourcePlugin::<Highlight>::default(),
+                ExtractResourcePlugin::<upscale::RenderScaleInForce>::default(),
             ));
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
         render_app.insert_resource(handles).insert_resource(frames);

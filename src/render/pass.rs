@@ -21,8 +21,11 @@ pub struct VoxelPass {
 /// How a pass is dispatched, which also says which bind group 1 it gets.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Dispatch {
-    /// One thread per pixel of the view, in `PIXEL_WORKGROUP_EDGE`-square workgroups; group 1 is the view.
+    /// One thread per render pixel of the view (the lighting passes' pixels, `FramePlan::render_size`), in
+    /// `PIXEL_WORKGROUP_EDGE`-square workgroups; group 1 is the view.
     Pixels,
+    /// One thread per output pixel of the view (the primary pass, the upscaler), as `Pixels`.
+    OutputPixels,
     /// One thread per light of the view's light tiles (`restir::TILE_THREADS`), `LINEAR_WORKGROUP` per
     /// workgroup; group 1 is the view.
     LightTiles,
@@ -36,6 +39,6 @@ pub enum Dispatch {
 impl Dispatch {
     /// Whether the pass runs once per camera (and binds the view as group 1).
     pub fn per_view(self) -> bool {
-        matches!(self, Dispatch::Pixels | Dispatch::LightTiles)
+        matches!(self, Dispatch::Pixels | Dispatch::OutputPixels | Dispatch::LightTiles)
     }
 }

@@ -5,7 +5,7 @@
 //!
 //! Its per-view state is the G-buffer, this frame's and last frame's (`GBuffers`, swapped, never copied).
 
-use super::gpu_types::{FrameParams, GBUFFER_TEXEL_BYTES};
+use super::gpu_types::{FrameParams, GBUFFER_REGIONS, GBUFFER_TEXEL_BYTES};
 use super::interface::GpuBinding;
 use super::pass::{Dispatch, VoxelPass};
 use super::plan::FramePlan;
@@ -16,7 +16,7 @@ use bevy::render::renderer::RenderDevice;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 pub const PRIMARY: VoxelPass =
-    VoxelPass { name: "glowbrick_primary", shader: "primary.wgsl", entry_point: "main", dispatch: Dispatch::Pixels };
+    VoxelPass { name: "glowbrick_primary", shader: "primary.wgsl", entry_point: "main", dispatch: Dispatch::OutputPixels };
 
 /// The name the pass's GPU time is recorded under.
 pub const PRIMARY_PASS_NAME: &str = PRIMARY.name;
@@ -28,7 +28,8 @@ pub const VIEW_BINDINGS: [GpuBinding; 2] = [GpuBinding::read_write("gbuffer"), G
 pub const VIEW_PART: ViewPartKind =
     ViewPartKind { bindings: &VIEW_BINDINGS, new: |device, pixels| Box::new(GBuffers::new(device, pixels)) };
 
-/// A view's G-buffer: this frame's, which the primary pass writes, and last frame's,
+/// A view's G-buffer (below render scale 1 also the output's own and the upscaler's history, `GBUFFER_REGIONS`):
+/// this frame's, which the primary pass writes, and last frame's,
 /// which the temporal reprojections of ReSTIR and the denoiser read. Two buffers that swap roles each frame (the
 /// primary pass writes every pixel of this frame's), so last frame's is never copied.
 pub struct GBuffers {
@@ -42,7 +43,7 @@ impl GBuffers {
         let buffer = |label: &'static str| {
             device.create_buffer(&BufferDescriptor {
                 label: Some(label),
-                size: pixels * GBUFFER_TEXEL_BYTES,
+                size: pixels * GBUFFER_TEXEL_BYTES * GBUFFER_REGIONS,
                 usage: BufferUsages::STORAGE,
                 mapped_at_creation: false,
             })
@@ -61,7 +62,7 @@ impl ViewPart for GBuffers {
     }
 
     /// The G-buffer has no history of its own to restart: the reprojections that read last frame's test it.
-    fn begin_frame(&mut self, _: &FramePlan, _: &RenderSettings, _: &mut FrameParams) {}
+    fn begin_frame(&mut self, _: &FramePlan, _: bool, _: &RenderSettings, _: &mut FrameParams) {}
 
     /// Every frame of the primary pass: last frame's G-buffer becomes the previous one.
     fn swap(&self) {

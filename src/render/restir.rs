@@ -171,12 +171,13 @@ impl ViewPart for RestirView {
         ]
     }
 
-    /// Its parameters, and whether last frame's reservoirs are this frame's history (`prev_camera.w`).
-    fn begin_frame(&mut self, plan: &FramePlan, settings: &RenderSettings, params: &mut FrameParams) {
+    /// Its parameters, and whether last frame's reservoirs are this frame's history (`prev_camera.w`; not after
+    /// a change of render size, whose pixels they were).
+    fn begin_frame(&mut self, plan: &FramePlan, resized: bool, settings: &RenderSettings, params: &mut FrameParams) {
         let restir = RestirParams::of(settings);
         (params.candidates, params.taps, params.radius, params.restir_flags) =
             (restir.candidates, restir.taps, restir.radius, restir.flags);
-        let history = history_is_valid(self.sampled, plan.restir.samples, plan.changes.lights);
+        let history = history_is_valid(self.sampled && !resized, plan.restir.samples, plan.changes.lights);
         self.sampled = plan.restir.samples;
         params.prev_camera[3] = if history { 1.0 } else { 0.0 };
     }

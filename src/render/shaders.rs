@@ -9,7 +9,7 @@ use bevy::prelude::*;
 use bevy::shader::Shader;
 
 /// Every shader file: its path under `shaders/` and its source. Libraries first (they only define imports).
-pub const SOURCES: [(&str, &str); 24] = [
+pub const SOURCES: [(&str, &str); 25] = [
     ("lib/constants.wgsl", include_str!("../../shaders/lib/constants.wgsl")),
     ("lib/random.wgsl", include_str!("../../shaders/lib/random.wgsl")),
     ("lib/guards.wgsl", include_str!("../../shaders/lib/guards.wgsl")),
@@ -34,6 +34,7 @@ pub const SOURCES: [(&str, &str); 24] = [
     ("gi/filter.wgsl", include_str!("../../shaders/gi/filter.wgsl")),
     ("denoise/temporal.wgsl", include_str!("../../shaders/denoise/temporal.wgsl")),
     ("denoise/wavelet.wgsl", include_str!("../../shaders/denoise/wavelet.wgsl")),
+    ("upscale/upscale.wgsl", include_str!("../../shaders/upscale/upscale.wgsl")),
 ];
 
 /// Handles of every embedded shader, by its path under `shaders/`. Holding them keeps the libraries loaded.

@@ -20,8 +20,9 @@ pub trait ViewPart: Send + Sync + 'static {
     /// Its buffers, in the order of its `ViewPartKind::bindings`.
     fn resources(&self) -> Vec<BindingResource<'_>>;
     /// Starts a frame the view prepares: its fields of `params` for `settings`, and whether its history holds
-    /// under `plan`.
-    fn begin_frame(&mut self, plan: &FramePlan, settings: &RenderSettings, params: &mut FrameParams);
+    /// under `plan` (`resized`: the render size changed since last frame, so the render pixels' histories no
+    /// longer line up).
+    fn begin_frame(&mut self, plan: &FramePlan, resized: bool, settings: &RenderSettings, params: &mut FrameParams);
     /// Starts a frame the view draws: last frame's ping-pong buffers become the previous ones.
     fn swap(&self) {}
     /// Which of its ping-pong buffers is this frame's (the view's bind groups are cached by it).
@@ -74,7 +75,10 @@ pub fn frame_params(settings: &RenderSettings, highlight: &Highlight, frame: u32
         radius: 0.0,
         restir_flags: 0,
         denoise: 0,
-        _pad: [0; 3],
+        upscale: 0,
+        render_size: [0; 2],
+        jitter: [0.0; 2],
+        _pad: [0; 2],
     }
 }
 
@@ -135,6 +139,8 @@ impl ViewState {
 #[derive(Component)]
 pub struct ViewResources {
     size: UVec2,
+    /// The lighting passes' pixels this frame (`FramePlan::render_size`).
+    render_size: UVec2,
     pub view: ViewState,
     parts: Vec<Box<dyn ViewPart>>,
     /// The view's bind groups made so far, by what can change between frames (`ViewBindKey`): a handful, made
@@ -159,10 +165,16 @@ impl ViewResources {
         let pixels = (size.x.max(1) * size.y.max(1)) as u64;
         ViewResources {
             size,
+            render_size: size,
             view: ViewState::new(device, pixels),
             parts: parts.0.iter().map(|kind| (kind.new)(device, pixels)).collect(),
             bind_groups: Mutex::new(Vec::new()),
         }
+    }
+
+    /// The lighting passes' pixels this frame.
+    pub fn render_size(&self) -> UVec2 {
+        self.render_size
     }
 
     /// Starts a frame the view draws: every part's ping-pong buffers swap.
@@ -232,8 +244,12 @@ pub fn prepare_view_resources(
         let key = AccumulationKey { clip_from_world, settings: settings.clone(), highlight };
         let accumulate = settings.accumulate && !plan.changes.anything;
         resources.view.begin_frame(key, accumulate, view.world_from_view.translation(), &mut params);
+        let render_size = plan.render_size(size);
+        let resized = render_size != resources.render_size;
+        resources.render_size = render_size;
+        params.render_size = render_size.max(UVec2::ONE).to_array();
         for part in &mut resources.parts {
-            part.begin_frame(&plan, &settings, &mut params);
+            part.begin_frame(&plan, resized, &settings, &mut params);
         }
         queue.write_buffer(&resources.view.frame_params, 0, bytemuck::bytes_of(&params));
         if let Some(new) = created {

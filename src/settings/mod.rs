@@ -3,8 +3,10 @@
 //! is one entry of the table [`SETTINGS`] (`table.rs`): parsing, the error messages, `--help`, the HUD line and
 //! the F4 panel all read it, so adding a setting means adding one entry.
 
+mod scale;
 mod table;
 
+pub use scale::{FRAME_TARGET_RANGE, PANEL_SCALES, RENDER_SCALE_RANGE, RenderScale};
 pub use table::{Choice, Field, Range, SETTINGS, Section, Setting, Step, help_text, setting, valid_pairs};
 
 use bevy::prelude::Resource;
@@ -386,6 +388,11 @@ pub struct RenderSettings {
     /// and keeps at most one frame of GPU work in flight, so input shows within a frame or two
     /// (`game::frame_pacing`); off lets Bevy pipeline and the driver queue frames ahead. Only the game reads it.
     pub pacing: bool,
+    /// The lighting passes' share of the output's pixels per axis (`render::upscale` brings their light to the
+    /// output): fixed (1 by default, so `render` and the benches measure native frames), or `auto` in the game.
+    pub render_scale: RenderScale,
+    /// The GPU time per frame in milliseconds that `render_scale=auto` steers toward.
+    pub frame_target: f32,
     pub restir: RestirSettings,
     pub gi: GiSettings,
 }
@@ -405,6 +412,8 @@ impl Default for RenderSettings {
             seed: 0,
             traversal: Traversal::Auto,
             pacing: true,
+            render_scale: RenderScale::Fixed(1.0),
+            frame_target: 16.7,
             restir: RestirSettings::default(),
             gi: GiSettings::default(),
         }
@@ -412,12 +421,13 @@ impl Default for RenderSettings {
 }
 
 impl RenderSettings {
-    /// The settings `play` starts from: the defaults with the GI cache and the denoiser on (the defaults leave
-    /// them off so `render`, the bench and the thesis protocol measure raw direct light).
+    /// The settings `play` starts from: the defaults with the GI cache, the denoiser and dynamic resolution on (the
+    /// defaults leave them off so `render`, the bench and the thesis protocol measure raw direct light).
     pub fn game() -> Self {
         let mut settings = RenderSettings::default();
         settings.gi.enabled = true;
         settings.denoise = true;
+        settings.render_scale = RenderScale::Auto;
         settings
     }
 

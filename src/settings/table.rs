@@ -270,6 +270,26 @@ pub static SETTINGS: &[Setting] = &[
         field: &Choice { get: |s| s.denoise, set: |s, v| s.denoise = v },
     },
     Setting {
+        key: "render_scale",
+        section: Section::General,
+        about: "The lighting passes' share of the output's pixels per axis (ReSTIR, the GI resolve, the denoiser), \
+                upscaled by voxel-face plane with temporal accumulation at the output; auto: the game's dynamic \
+                resolution follows the GPU time toward frame_target (elsewhere auto is 1). Lit views with ReSTIR only.",
+        field: &super::scale::ScaleField,
+    },
+    Setting {
+        key: "frame_target",
+        section: Section::General,
+        about: "GPU milliseconds per frame that render_scale=auto steers toward.",
+        field: &Range {
+            range: FRAME_TARGET_RANGE,
+            step: Step::Double,
+            unit: " ms",
+            get: |s| s.frame_target,
+            set: |s, v| s.frame_target = v,
+        },
+    },
+    Setting {
         key: "candidates",
         section: Section::Restir,
         about: "Initial light candidates per pixel (M_init).",

@@ -5,10 +5,13 @@ use super::*;
 /// What `--set` accepts, split into the values to try: every name, or both ends of a range.
 fn valid_values(setting: &Setting) -> Vec<String> {
     let accepts = setting.accepts();
-    match accepts.strip_prefix('<').and_then(|r| r.strip_suffix('>')) {
-        Some(range) => range.split("..").map(String::from).collect(),
-        None => accepts.split('|').map(String::from).collect(),
-    }
+    accepts
+        .split('|')
+        .flat_map(|part| match part.strip_prefix('<').and_then(|r| r.strip_suffix('>')) {
+            Some(range) => range.split("..").map(String::from).collect(),
+            None => vec![part.to_string()],
+        })
+        .collect()
 }
 
 #[test]
@@ -19,6 +22,7 @@ fn the_messages_list_the_keys_and_values_as_before_the_table() {
         "lighting=full|emitters|nee|sun, pick=power|uniform, accumulate=on|off, \
          debug=none|albedo|normal|hit|depth|reservoir|variance|history, sun=on|off, time=<0..24>, \
          shadows=on|off, exposure=<0.001..1000>, seed=<0..1000>, traversal=auto|dda|occupancy, pacing=on|off, denoise=on|off, \
+         render_scale=auto|<0.25..1>, frame_target=<1..10000>, \
          candidates=<1..64>, taps=<0..16>, radius=<0..100>, temporal=on|off, spatial=on|off, \
          sample=area|point, reuse=biased|one-ray|unbiased, local_lights=on|off, initial_visibility=on|off, light_tiles=on|off, gi=on|off, gi_cached_rays=<4..128>, gi_update=<1..64>, \
          gi_period=<1..8>, gi_alpha=<0.001..1>, gi_table=<4096..4194304>, gi_cell=<1..16>, gi_filter=on|off, gi_bounces=on|off, gi_cached_hits=on|off, gi_qmc=on|off, gi_warm_up=on|off"
@@ -92,6 +96,41 @@ fn bad_values_are_refused_with_what_is_valid() {
         RenderSettings::default().set("radius=NaN").unwrap_err(),
         "setting radius: NaN is out of range (valid: 0..100)"
     );
+    for outside in ["0.2", "1.5", "NaN", "inf", "-1"] {
+        assert_eq!(
+            RenderSettings::default().set(&format!("render_scale={outside}")).unwrap_err(),
+            format!("setting render_scale: {outside} is out of range (valid: auto|<0.25..1>)")
+        );
+    }
+}
+
+/// `render_scale` is `auto` or a number in its range; the panel steps through auto and the listed scales.
+#[test]
+fn the_render_scale_is_auto_or_a_scale_and_the_panel_steps_through_both() {
+    let mut s = RenderSettings::default();
+    assert_eq!(s.render_scale, RenderScale::Fixed(1.0));
+    assert_eq!(RenderSettings::game().render_scale, RenderScale::Auto);
+    s.set("render_scale=0.5").unwrap();
+    assert_eq!(s.render_scale, RenderScale::Fixed(0.5));
+    let render_scale = setting("render_scale").unwrap();
+    let mut shown = Vec::new();
+    for _ in 0..6 {
+        render_scale.step(&mut s, 1);
+        shown.push(render_scale.get(&s));
+    }
+    assert_eq!(shown, ["0.33", "0.25", "auto", "1", "0.75", "0.5"]);
+    render_scale.step(&mut s, -1);
+    assert_eq!(render_scale.get(&s), "0.75");
+    s.set("render_scale=0.6").unwrap();
+    render_scale.step(&mut s, 1);
+    assert_eq!(render_scale.get(&s), "0.5", "from between two listed scales to the smaller one");
+    s.set("render_scale=0.6").unwrap();
+    render_scale.step(&mut s, -1);
+    assert_eq!(render_scale.get(&s), "0.75", "and to the larger one");
+    let from_ron = RenderSettings::default().with_ron(r#"{"render_scale": 0.5, "frame_target": 33.3}"#, "t.ron").unwrap();
+    assert_eq!((from_ron.render_scale, from_ron.frame_target), (RenderScale::Fixed(0.5), 33.3));
+    let auto = RenderSettings::default().with_ron(r#"{"render_scale": "auto"}"#, "t.ron").unwrap();
+    assert_eq!(auto.render_scale, RenderScale::Auto);
 }
 
 #[test]

@@ -190,6 +190,9 @@ fn twins() -> Vec<Twin> {
                 radius,
                 restir_flags,
                 denoise,
+                upscale,
+                render_size,
+                jitter,
             }
         ),
         sized("accumulation", None, ACCUMULATION_TEXEL_BYTES, 1),
@@ -446,7 +449,7 @@ fn every_workgroup_size_is_the_one_the_frame_dispatches() {
         let source = SOURCES.iter().find(|(p, _)| *p == pass.shader).map(|(_, s)| *s).unwrap();
         let entry = source.find(&format!("fn {}(", pass.entry_point)).expect(pass.entry_point);
         let size_at = source[..entry].rfind("@workgroup_size").unwrap();
-        let expected = if matches!(pass.dispatch, Dispatch::Pixels) { &pixels } else { &linear };
+        let expected = if matches!(pass.dispatch, Dispatch::Pixels | Dispatch::OutputPixels) { &pixels } else { &linear };
         assert!(source[size_at..].starts_with(expected.as_str()), "{}: {} is not {expected}", pass.shader, pass.name);
     }
 }
@@ -464,4 +467,19 @@ fn every_luminance_in_wgsl_weighs_as_the_cpu_does() {
         found += as_rust;
     }
     assert!(found >= 2, "the luminance weights are written {found} times in WGSL");
+}
+
+/// Lavapipe (`maxPerStageDescriptorStorageBuffers`) lets one compute stage bind 32 storage buffers, and every pass
+/// binds all four groups: one more, and creating the pipeline layout fails on that adapter, whose frames then never
+/// come (a render waits out its timeout).
+const STORAGE_BUFFERS_PER_STAGE: usize = 32;
+
+#[test]
+fn the_bind_groups_stay_within_lavapipes_storage_buffers_per_stage() {
+    let storage = bind_groups()
+        .iter()
+        .flat_map(|group| group.bindings.iter())
+        .filter(|b| matches!(b.access, Access::Read | Access::ReadWrite))
+        .count();
+    assert!(storage <= STORAGE_BUFFERS_PER_STAGE, "{storage} storage buffers in groups 0-3");
 }

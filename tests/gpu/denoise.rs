@@ -218,7 +218,7 @@ pub fn a_moving_object_keeps_its_history() {
 /// moving its mean.
 pub fn a_sliding_block_is_neither_brightened_nor_smeared() {
     use glowbrick::bench::motion::run_motion;
-    let run = run_motion((96, 64), 256).unwrap();
+    let run = run_motion((96, 64), 256, &[]).unwrap();
     let mean = |f: &dyn Fn(&glowbrick::bench::motion::MotionFrame) -> Option<f64>| {
         let v: Vec<f64> = run.frames.iter().filter_map(f).collect();
         v.iter().sum::<f64>() / v.len().max(1) as f64

@@ -43,6 +43,7 @@ mod ray_budget;
 mod restir;
 mod smoke;
 mod stress;
+mod upscale;
 #[path = "../shared/vox_scene.rs"]
 mod vox_scene;
 mod wgsl_twins;
@@ -146,6 +147,11 @@ fn tests() -> Vec<(&'static str, fn())> {
         ],
         smoke: [a_tiny_frame_matches_the_cpu_reference],
         stress: [quick_stress_run_finds_no_non_finite_value_and_no_drift],
+        upscale: [
+            at_half_scale_a_frame_is_about_as_close_to_the_reference_and_keeps_the_mean,
+            the_sky_of_an_upscaled_frame_is_the_native_frames,
+            at_half_scale_the_lighting_passes_trace_under_a_ray_per_output_pixel,
+        ],
         wgsl_twins: [
             the_light_hash_matches_the_cpu_light_index,
             the_spherical_rectangle_sampler_matches_the_cpu_reference,

@@ -1,0 +1,170 @@
+// The upscaler (render::upscale), while the lighting passes run below the output's resolution. Two passes:
+//
+// - `pick` (render pixels, after the primary pass): each render pixel takes the G-buffer texel of one output
+//   pixel of its footprint (`render_pixel_source`, jittered frame to frame), so the lighting passes light exact
+//   hit points of the output's own rays, and touches the GI cache's entry there (the primary pass does not).
+// - `main` (output pixels, last): the render pixels' demodulated light (the denoiser's filtered light, or the
+//   noisy frame over its albedo) gathered from those on the output pixel's own voxel-face plane (voxel faces are
+//   flat: an exact edge stop), blended into the output's history reprojected from last frame and clamped to the
+//   neighbourhood's spread (no ghost where the light changed), then remodulated by the output pixel's own albedo
+//   and emission, with the highlight, into the image.
+
+#import glowbrick::world::{materials, object_motion, albedo_at}
+#import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, noisy, wavelet, unpack_surface, surface_voxel, pixel_index,
+    output_texel, upscaled_texel, render_size, output_size, render_pixel_source, previous_pixel,
+    primary_ray_dir, present, draw_highlight, denoising, pixel_footprint, Surface}
+#import glowbrick::lights::{lighting_mode, background}
+#import glowbrick::gi::cache::{gi_on, gi_touch_surface, camera_level}
+#import glowbrick::constants::{LIGHTING_FULL, UPSCALE_HISTORY}
+#import glowbrick::denoise::common::{ALBEDO_FLOOR, same_plane}
+
+// The history blends new frames at no less than 1 / this.
+const MAX_UPSCALE_HISTORY: f32 = 8.0;
+// The history is clamped to the neighbourhood's mean plus or minus this many standard deviations.
+const CLAMP_SIGMAS: f32 = 1.5;
+// A render sample's weight falls to 0 this many render pixels from the output pixel.
+const TENT_RADIUS: f32 = 1.5;
+
+@compute @workgroup_size(8, 8, 1)
+fn pick(@builtin(global_invocation_id) id: vec3<u32>) {
+    if any(id.xy >= render_size()) {
+        return;
+    }
+    let texel = gbuffer[output_texel(render_pixel_source(id.xy))];
+    gbuffer[pixel_index(id.xy)] = texel;
+    // The GI cache's entries are touched where the lighting passes read them: at the render pixels.
+    let s = unpack_surface(texel);
+    if gi_on() && s.found {
+        gi_touch_surface(s.point, s.face, s.object, camera_level(pixel_footprint(s.point), s.object));
+    }
+}
+
+// A render pixel's light over its albedo, emission set aside.
+fn render_light(index: u32, s: Surface) -> vec3<f32> {
+    if denoising() {
+        return wavelet[render_size().x * render_size().y + index].rgb;
+    }
+    let lighting = max(noisy[index].rgb - materials[s.material].radiance.rgb * frame.exposure, vec3(0.0));
+    return lighting / max(albedo_at(s.material, surface_voxel(s), s.object), vec3(ALBEDO_FLOOR));
+}
+
+// What the render pixels around an output pixel say of its light: their weighted mean, and the mean and spread
+// of those on its plane (the history's clamp).
+struct Gathered {
+    light: vec3<f32>,
+    weight: f32,
+    mean: vec3<f32>,
+    sigma: vec3<f32>,
+}
+
+// The render pixels of the 3x3 around `pixel`'s footprint on its plane `s`, each by a tent on its distance in
+// render pixels; where none is on the plane, the 5x5's, and failing that the nearest faces seen at all.
+fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
+    let ratio = vec2<f32>(render_size()) / vec2<f32>(output_size());
+    let centre = vec2<i32>(floor((vec2<f32>(pixel) + 0.5) * ratio));
+    var sum = vec3(0.0);
+    var weights = 0.0;
+    var first = vec3(0.0);
+    var second = vec3(0.0);
+    var count = 0.0;
+    for (var cell = 0; cell < 9; cell++) {
+        let r = centre + vec2(cell % 3 - 1, cell / 3 - 1);
+        if any(r < vec2(0)) || any(r >= vec2<i32>(render_size())) {
+            continue;
+        }
+        let ri = pixel_index(vec2<u32>(r));
+        let sr = unpack_surface(gbuffer[ri]);
+        if !same_plane(s, sr) {
+            continue;
+        }
+        let light = render_light(ri, sr);
+        let apart = abs(vec2<f32>(render_pixel_source(vec2<u32>(r))) - vec2<f32>(pixel)) * ratio;
+        let tent = max(vec2(1.0) - apart / TENT_RADIUS, vec2(0.0));
+        let w = tent.x * tent.y + 1e-3;
+        sum += w * light;
+        weights += w;
+        first += light;
+        second += light * light;
+        count += 1.0;
+    }
+    // No render pixel of the 3x3 on this plane (a face smaller than a render pixel): a wider look, on the plane
+    // first, then the same facing, then anything seen. A loop of length 0 elsewhere.
+    let cells = select(0, 25, count == 0.0);
+    for (var cell = 0; cell < cells; cell++) {
+        let r = centre + vec2(cell % 5 - 2, cell / 5 - 2);
+        if any(r < vec2(0)) || any(r >= vec2<i32>(render_size())) {
+            continue;
+        }
+        let ri = pixel_index(vec2<u32>(r));
+        let sr = unpack_surface(gbuffer[ri]);
+        if !sr.found {
+            continue;
+        }
+        let apart = (vec2<f32>(render_pixel_source(vec2<u32>(r))) - vec2<f32>(pixel)) * ratio;
+        let likeness = select(select(1e-6, 1e-3, sr.face == s.face && sr.object == s.object), 1.0, same_plane(s, sr));
+        let w = likeness / (1.0 + dot(apart, apart));
+        let light = render_light(ri, sr);
+        sum += w * light;
+        weights += w;
+        first += light;
+        second += light * light;
+        count += 1.0;
+    }
+    let mean = first / max(count, 1.0);
+    let sigma = sqrt(max(second / max(count, 1.0) - mean * mean, vec3(0.0)));
+    return Gathered(sum / max(weights, 1e-20), weights, mean, sigma);
+}
+
+// Last frame's upscaled light where the same surface was seen (same face, object, depth within 10%, as the
+// denoiser's reprojection), or length 0.
+fn reprojected(s: Surface) -> vec4<f32> {
+    if (frame.upscale & UPSCALE_HISTORY) == 0u {
+        return vec4(0.0);
+    }
+    let then = s.point - object_motion(s.object);
+    let p = previous_pixel(then, output_size());
+    if p.z != 1 {
+        return vec4(0.0);
+    }
+    let previous = vec2<u32>(p.xy);
+    let ps = unpack_surface(prev_gbuffer[output_texel(previous)]);
+    let depth_now = distance(frame.prev_camera.xyz, then);
+    let depth_then = distance(frame.prev_camera.xyz, ps.point);
+    if !ps.found || ps.face != s.face || ps.object != s.object || abs(depth_now - depth_then) > 0.1 * depth_now {
+        return vec4(0.0);
+    }
+    return prev_gbuffer[upscaled_texel(previous)];
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if any(id.xy >= output_size()) {
+        return;
+    }
+    let s = unpack_surface(gbuffer[output_texel(id.xy)]);
+    if !s.found {
+        // The sky, at the output's own rays: the background with lighting=full, nothing with emitters only.
+        let full = lighting_mode() == LIGHTING_FULL;
+        var sky = vec3(0.0);
+        if full {
+            sky = background(primary_ray_dir(id.xy, vec2<f32>(output_size()))) * frame.exposure;
+        }
+        gbuffer[upscaled_texel(id.xy)] = vec4(0.0);
+        present(id.xy, vec4(sky, select(0.0, 1.0, full)));
+        return;
+    }
+    let g = gather(id.xy, s);
+    var history = reprojected(s);
+    history = vec4(clamp(history.rgb, g.mean - CLAMP_SIGMAS * g.sigma, g.mean + CLAMP_SIGMAS * g.sigma), history.a);
+    var light = history.rgb;
+    var length = history.a;
+    if g.weight > 0.0 {
+        length = min(length + 1.0, MAX_UPSCALE_HISTORY);
+        light = mix(history.rgb, g.light, 1.0 / length);
+    }
+    gbuffer[upscaled_texel(id.xy)] = vec4(light, length);
+    let albedo = max(albedo_at(s.material, surface_voxel(s), s.object), vec3(ALBEDO_FLOOR));
+    let colour = albedo * light + materials[s.material].radiance.rgb * frame.exposure;
+    let depth = distance(view.world_position, s.point);
+    present(id.xy, vec4(draw_highlight(colour, surface_voxel(s), s.face, s.point, depth), 1.0));
+}
