@@ -18,8 +18,11 @@
 #import glowbrick::constants::{LIGHTING_FULL, UPSCALE_HISTORY}
 #import glowbrick::denoise::common::{ALBEDO_FLOOR, same_plane}
 
-// The history blends new frames at no less than 1 / this.
-const MAX_UPSCALE_HISTORY: f32 = 8.0;
+// The history's weight is capped at this many exact samples' (a new exact sample blends at 1 / (1 + this)).
+const MAX_HISTORY_WEIGHT: f32 = 8.0;
+// The weight of the plane's spatial estimate beside this frame's nearest sample: a prior where the history is
+// new, soon outweighed by the samples that land on the pixel itself as the jitter moves.
+const PRIOR_WEIGHT: f32 = 0.1;
 // The history is clamped to the neighbourhood's mean plus or minus this many standard deviations.
 const CLAMP_SIGMAS: f32 = 1.5;
 // A render sample's weight falls to 0 this many render pixels from the output pixel.
@@ -48,11 +51,14 @@ fn render_light(index: u32, s: Surface) -> vec3<f32> {
     return lighting / max(albedo_at(s.material, surface_voxel(s), s.object), vec3(ALBEDO_FLOOR));
 }
 
-// What the render pixels around an output pixel say of its light: their weighted mean, and the mean and spread
-// of those on its plane (the history's clamp).
+// What the render pixels around an output pixel say of its light: their weighted mean (the spatial estimate),
+// the one on its plane whose point lies nearest (and how far, in output pixels), and the mean and spread of
+// those on its plane (the history's clamp).
 struct Gathered {
     light: vec3<f32>,
     weight: f32,
+    nearest: vec3<f32>,
+    nearest_distance: f32,
     mean: vec3<f32>,
     sigma: vec3<f32>,
 }
@@ -67,6 +73,8 @@ fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
     var first = vec3(0.0);
     var second = vec3(0.0);
     var count = 0.0;
+    var nearest = vec3(0.0);
+    var nearest_distance = 1e9;
     for (var cell = 0; cell < 9; cell++) {
         let r = centre + vec2(cell % 3 - 1, cell / 3 - 1);
         if any(r < vec2(0)) || any(r >= vec2<i32>(render_size())) {
@@ -78,7 +86,12 @@ fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
             continue;
         }
         let light = render_light(ri, sr);
-        let apart = abs(vec2<f32>(render_pixel_source(vec2<u32>(r))) - vec2<f32>(pixel)) * ratio;
+        let offset = vec2<f32>(render_pixel_source(vec2<u32>(r))) - vec2<f32>(pixel);
+        if length(offset) < nearest_distance {
+            nearest_distance = length(offset);
+            nearest = light;
+        }
+        let apart = abs(offset) * ratio;
         let tent = max(vec2(1.0) - apart / TENT_RADIUS, vec2(0.0));
         let w = tent.x * tent.y + 1e-3;
         sum += w * light;
@@ -112,7 +125,7 @@ fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
     }
     let mean = first / max(count, 1.0);
     let sigma = sqrt(max(second / max(count, 1.0) - mean * mean, vec3(0.0)));
-    return Gathered(sum / max(weights, 1e-20), weights, mean, sigma);
+    return Gathered(sum / max(weights, 1e-20), weights, nearest, nearest_distance, mean, sigma);
 }
 
 // Last frame's upscaled light where the same surface was seen (same face, object, depth within 10%, as the
@@ -156,13 +169,18 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let g = gather(id.xy, s);
     var history = reprojected(s);
     history = vec4(clamp(history.rgb, g.mean - CLAMP_SIGMAS * g.sigma, g.mean + CLAMP_SIGMAS * g.sigma), history.a);
+    // This frame's samples, each by its weight (TAAU's rule): the render pixel on the plane whose point is
+    // nearest, by a Gaussian of its distance (1 on the pixel, 0.14 a pixel away), and the spatial estimate as a
+    // weak prior. A still view thus converges to the samples that fell on each pixel itself: shadow edges stay
+    // as sharp as the output's pixels, not the render pixels'.
+    let near = select(0.0, exp(-2.0 * g.nearest_distance * g.nearest_distance), g.nearest_distance < 1e8);
+    let prior = select(0.0, PRIOR_WEIGHT, g.weight > 0.0);
+    let total = history.a + near + prior;
     var light = history.rgb;
-    var length = history.a;
-    if g.weight > 0.0 {
-        length = min(length + 1.0, MAX_UPSCALE_HISTORY);
-        light = mix(history.rgb, g.light, 1.0 / length);
+    if total > 0.0 {
+        light = (history.rgb * history.a + g.nearest * near + g.light * prior) / total;
     }
-    gbuffer[upscaled_texel(id.xy)] = vec4(light, length);
+    gbuffer[upscaled_texel(id.xy)] = vec4(light, min(total, MAX_HISTORY_WEIGHT));
     let albedo = max(albedo_at(s.material, surface_voxel(s), s.object), vec3(ALBEDO_FLOOR));
     let colour = albedo * light + materials[s.material].radiance.rgb * frame.exposure;
     let depth = distance(view.world_position, s.point);

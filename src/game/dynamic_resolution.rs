@@ -115,8 +115,15 @@ fn follow_gpu_time(
         return;
     }
     controller.last_seen = Some(at);
+    let (before, decided) = (controller.scale, controller.gpu_ms);
     if let Some(scale) = controller.measure(gpu_ms, f64::from(settings.frame_target), RENDER_SCALE_RANGE) {
         in_force.0 = scale;
+    }
+    if controller.gpu_ms != decided {
+        info!(
+            "dynamic resolution: GPU {:.1} ms against a target of {} ms at render scale {before:.2}, now {:.2}",
+            controller.gpu_ms, settings.frame_target, controller.scale
+        );
     }
 }
 

@@ -279,10 +279,9 @@ pub fn scale_line(
 ) -> String {
     use crate::settings::RenderScale;
     match (settings.render_scale, dynamic) {
-        (RenderScale::Auto, Some(d)) if d.gpu_ms > 0.0 => format!(
-            "render scale {:.2} (auto: GPU {:.1} ms, target {} ms)",
-            d.scale, d.gpu_ms, settings.frame_target
-        ),
+        (RenderScale::Auto, Some(d)) if d.gpu_ms > 0.0 => {
+            format!("render scale {:.2} (auto: GPU {:.1} ms, target {} ms)", d.scale, d.gpu_ms, settings.frame_target)
+        }
         (RenderScale::Auto, Some(d)) => format!("render scale {:.2} (auto: measuring)", d.scale),
         (RenderScale::Auto, None) => "render scale 1 (auto)".to_string(),
         (RenderScale::Fixed(scale), _) => format!("render scale {scale}"),

@@ -27,8 +27,8 @@ use super::scene::lights::{GpuLights, LightsLayout, lights_interface};
 use super::scene::objects::GpuObjects;
 use super::scene::world::{GpuWorld, WorldLayout, world_interface};
 use super::shaders::GlowbrickShaders;
-use super::view::{ViewParts, ViewResources, view_interface};
 use super::upscale::{self, RenderScaleInForce};
+use super::view::{ViewParts, ViewResources, view_interface};
 use super::{CameraFramesRendered, VoxelCamera, denoise, primary, restir};
 use crate::settings::{RenderSettings, Traversal};
 use bevy::ecs::system::SystemParam;
@@ -248,10 +248,9 @@ fn plan_frame(
     let render_scale = upscale::frame_scale(settings, scale_in_force.map(|s| *s), restir.shades);
     // A frame whose GI passes are not compiled yet must not use up the GI cache's first restart or its warm-up.
     // Nor must one whose cameras cannot draw yet: the cache would spend its warm-up on frames no camera drew.
-    let ready = pipelines
-        .is_some_and(|p| {
-            p.gi_ready(&pipeline_cache) && p.views_ready(&pipeline_cache, restir.shades, denoise, render_scale < 1.0)
-        });
+    let ready = pipelines.is_some_and(|p| {
+        p.gi_ready(&pipeline_cache) && p.views_ready(&pipeline_cache, restir.shades, denoise, render_scale < 1.0)
+    });
     let gi = settings.gi.enabled;
     *plan = FramePlan { render_scale, restir, denoise, gi, compiling: gi && !ready, changes };
 }

@@ -2,8 +2,8 @@
 //! any technique prepares) and read by the view's preparation, the GI cache and both frame systems. A technique
 //! reads here whether it runs and what changed; only `frame` decides.
 
-use bevy::prelude::*;
 use crate::settings::RENDER_SCALE_RANGE;
+use bevy::prelude::*;
 
 /// Runs after the frame plan is decided (the views' and the GI cache's preparation order themselves after it).
 #[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]

@@ -15,8 +15,12 @@ use bevy::render::render_resource::{BindingResource, Buffer, BufferDescriptor, B
 use bevy::render::renderer::RenderDevice;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-pub const PRIMARY: VoxelPass =
-    VoxelPass { name: "glowbrick_primary", shader: "primary.wgsl", entry_point: "main", dispatch: Dispatch::OutputPixels };
+pub const PRIMARY: VoxelPass = VoxelPass {
+    name: "glowbrick_primary",
+    shader: "primary.wgsl",
+    entry_point: "main",
+    dispatch: Dispatch::OutputPixels,
+};
 
 /// The name the pass's GPU time is recorded under.
 pub const PRIMARY_PASS_NAME: &str = PRIMARY.name;

@@ -4,7 +4,8 @@
 //! G-buffer (crisp voxel edges, per-voxel albedo and an exact same-plane test, for a tenth of the frame), then:
 //!
 //! 1. `pick` (render pixels): each render pixel takes the texel of one output pixel of its footprint, jittered
-//!    frame to frame (`jitter`), into the lighting passes' G-buffer, so they light exact hit points of the
+//!    frame to frame on raw frames (`jitter`; at the footprint's centre under the denoiser), into the lighting
+//!    passes' G-buffer, so they light exact hit points of the
 //!    output's rays and over frames every output pixel is lit by one of its own; it touches the GI cache's
 //!    entries there (where the shading reads them), which the primary pass then leaves alone.
 //! 2. `main` (output pixels, last): demodulated light gathered from render pixels on the output pixel's own
@@ -62,8 +63,13 @@ pub fn frame_scale(settings: &RenderSettings, in_force: Option<RenderScaleInForc
     }
 }
 
-/// Where in its footprint each render pixel takes its output pixel on frame `frame`: the Halton (2, 3) points,
-/// 16 of them in turn, so the footprint is covered evenly within a second of frames.
+/// Where a render pixel takes its output pixel while the denoiser runs: its footprint's centre, every frame. The
+/// denoiser's temporal pass reprojects to the nearest render pixel, so with a moving sample its history mixed
+/// points up to a render pixel apart and blurred shadow edges (docs/bench/upscale.md).
+pub const FOOTPRINT_CENTRE: [f32; 2] = [0.5, 0.5];
+
+/// Where in its footprint each render pixel takes its output pixel on frame `frame` of raw (undenoised) frames:
+/// the Halton (2, 3) points, 16 of them in turn, so the footprint is covered evenly within a second of frames.
 pub fn jitter(frame: u32) -> [f32; 2] {
     let index = frame % 16 + 1;
     [radical_inverse(index, 2), radical_inverse(index, 3)]
@@ -109,7 +115,7 @@ impl ViewPart for UpscaleView {
     fn begin_frame(&mut self, plan: &FramePlan, _: bool, _: &RenderSettings, params: &mut FrameParams) {
         let runs = plan.upscales();
         params.upscale = frame_flags(self.runs, runs, plan.changes.world);
-        params.jitter = if runs { jitter(params.frame) } else { [0.0; 2] };
+        params.jitter = if runs && !plan.denoise { jitter(params.frame) } else { FOOTPRINT_CENTRE };
         self.runs = runs;
     }
 }

@@ -1,8 +1,8 @@
 //! The render scale: the share of the output's pixels per axis that the lighting passes shade (`render::upscale`
 //! brings their light back to the output), fixed or chosen each frame by the game's dynamic resolution.
 
-use super::table::Field;
 use super::RenderSettings;
+use super::table::Field;
 
 /// `render_scale`'s range: below a quarter a render pixel spans 16 output pixels and more, and the voxel faces
 /// a render pixel misses outnumber those it sees.
@@ -75,11 +75,8 @@ impl Field for ScaleField {
         let next = match settings.render_scale {
             RenderScale::Fixed(scale) if !PANEL_SCALES.iter().any(|&s| (s - scale).abs() < 1e-3) => {
                 let mut listed = PANEL_SCALES.iter().copied();
-                let neighbour = if direction > 0 {
-                    listed.find(|&s| s < scale)
-                } else {
-                    listed.rev().find(|&s| s > scale)
-                };
+                let neighbour =
+                    if direction > 0 { listed.find(|&s| s < scale) } else { listed.rev().find(|&s| s > scale) };
                 neighbour.map_or(RenderScale::Auto, RenderScale::Fixed)
             }
             current => {

@@ -127,7 +127,8 @@ fn the_render_scale_is_auto_or_a_scale_and_the_panel_steps_through_both() {
     s.set("render_scale=0.6").unwrap();
     render_scale.step(&mut s, -1);
     assert_eq!(render_scale.get(&s), "0.75", "and to the larger one");
-    let from_ron = RenderSettings::default().with_ron(r#"{"render_scale": 0.5, "frame_target": 33.3}"#, "t.ron").unwrap();
+    let from_ron =
+        RenderSettings::default().with_ron(r#"{"render_scale": 0.5, "frame_target": 33.3}"#, "t.ron").unwrap();
     assert_eq!((from_ron.render_scale, from_ron.frame_target), (RenderScale::Fixed(0.5), 33.3));
     let auto = RenderSettings::default().with_ron(r#"{"render_scale": "auto"}"#, "t.ron").unwrap();
     assert_eq!(auto.render_scale, RenderScale::Auto);

@@ -449,7 +449,8 @@ fn every_workgroup_size_is_the_one_the_frame_dispatches() {
         let source = SOURCES.iter().find(|(p, _)| *p == pass.shader).map(|(_, s)| *s).unwrap();
         let entry = source.find(&format!("fn {}(", pass.entry_point)).expect(pass.entry_point);
         let size_at = source[..entry].rfind("@workgroup_size").unwrap();
-        let expected = if matches!(pass.dispatch, Dispatch::Pixels | Dispatch::OutputPixels) { &pixels } else { &linear };
+        let expected =
+            if matches!(pass.dispatch, Dispatch::Pixels | Dispatch::OutputPixels) { &pixels } else { &linear };
         assert!(source[size_at..].starts_with(expected.as_str()), "{}: {} is not {expected}", pass.shader, pass.name);
     }
 }
