@@ -1,13 +1,13 @@
 // The upscaler (render::upscale), while the lighting passes run below the output's resolution. Two passes:
 //
 // - `pick` (render pixels, after the primary pass): each render pixel takes the G-buffer texel of one output
-//   pixel of its footprint (`render_pixel_source`, jittered frame to frame), so the lighting passes light exact
+//   pixel of its footprint (`render_pixel_source`, jittered on raw frames), so the lighting passes light exact
 //   hit points of the output's own rays, and touches the GI cache's entry there (the primary pass does not).
 // - `main` (output pixels, last): the render pixels' demodulated light (the denoiser's filtered light, or the
 //   noisy frame over its albedo) gathered from those on the output pixel's own voxel-face plane (voxel faces are
-//   flat: an exact edge stop), blended into the output's history reprojected from last frame and clamped to the
-//   neighbourhood's spread (no ghost where the light changed), then remodulated by the output pixel's own albedo
-//   and emission, with the highlight, into the image.
+//   flat: an exact edge stop), on raw frames accumulated into the output's history reprojected from last frame
+//   (under the denoiser, whose light has a history of its own, not), then remodulated by the output pixel's own
+//   albedo and emission, with the highlight, into the image.
 
 #import glowbrick::world::{materials, object_motion, albedo_at}
 #import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, noisy, wavelet, unpack_surface, surface_voxel, pixel_index,
@@ -23,10 +23,8 @@ const MAX_HISTORY_WEIGHT: f32 = 8.0;
 // The weight of the plane's spatial estimate beside this frame's nearest sample: a prior where the history is
 // new, soon outweighed by the samples that land on the pixel itself as the jitter moves.
 const PRIOR_WEIGHT: f32 = 0.1;
-// The history is clamped to the neighbourhood's mean plus or minus this many standard deviations.
-const CLAMP_SIGMAS: f32 = 1.5;
 // A render sample's weight falls to 0 this many render pixels from the output pixel.
-const TENT_RADIUS: f32 = 1.5;
+const TENT_RADIUS: f32 = 1.0;
 
 @compute @workgroup_size(8, 8, 1)
 fn pick(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -51,16 +49,13 @@ fn render_light(index: u32, s: Surface) -> vec3<f32> {
     return lighting / max(albedo_at(s.material, surface_voxel(s), s.object), vec3(ALBEDO_FLOOR));
 }
 
-// What the render pixels around an output pixel say of its light: their weighted mean (the spatial estimate),
-// the one on its plane whose point lies nearest (and how far, in output pixels), and the mean and spread of
-// those on its plane (the history's clamp).
+// What the render pixels around an output pixel say of its light: their weighted mean (the spatial estimate)
+// and the one on its plane whose point lies nearest (and how far, in output pixels).
 struct Gathered {
     light: vec3<f32>,
     weight: f32,
     nearest: vec3<f32>,
     nearest_distance: f32,
-    mean: vec3<f32>,
-    sigma: vec3<f32>,
 }
 
 // The render pixels of the 3x3 around `pixel`'s footprint on its plane `s`, each by a tent on its distance in
@@ -70,8 +65,6 @@ fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
     let centre = vec2<i32>(floor((vec2<f32>(pixel) + 0.5) * ratio));
     var sum = vec3(0.0);
     var weights = 0.0;
-    var first = vec3(0.0);
-    var second = vec3(0.0);
     var count = 0.0;
     var nearest = vec3(0.0);
     var nearest_distance = 1e9;
@@ -96,8 +89,6 @@ fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
         let w = tent.x * tent.y + 1e-3;
         sum += w * light;
         weights += w;
-        first += light;
-        second += light * light;
         count += 1.0;
     }
     // No render pixel of the 3x3 on this plane (a face smaller than a render pixel): a wider look, on the plane
@@ -119,13 +110,9 @@ fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
         let light = render_light(ri, sr);
         sum += w * light;
         weights += w;
-        first += light;
-        second += light * light;
         count += 1.0;
     }
-    let mean = first / max(count, 1.0);
-    let sigma = sqrt(max(second / max(count, 1.0) - mean * mean, vec3(0.0)));
-    return Gathered(sum / max(weights, 1e-20), weights, nearest, nearest_distance, mean, sigma);
+    return Gathered(sum / max(weights, 1e-20), weights, nearest, nearest_distance);
 }
 
 // Last frame's upscaled light where the same surface was seen (same face, object, depth within 10%, as the
@@ -167,18 +154,27 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let g = gather(id.xy, s);
-    var history = reprojected(s);
-    history = vec4(clamp(history.rgb, g.mean - CLAMP_SIGMAS * g.sigma, g.mean + CLAMP_SIGMAS * g.sigma), history.a);
+    // No neighbourhood clamp: raw frames' light is heavy-tailed (a few bright samples among dark ones), and a
+    // clamp to this frame's neighbourhood cut the accumulated mean by 9% (docs/bench/upscale.md). The
+    // reprojection's surface test still drops a history that saw another surface.
+    let history = reprojected(s);
     // This frame's samples, each by its weight (TAAU's rule): the render pixel on the plane whose point is
     // nearest, by a Gaussian of its distance (1 on the pixel, 0.14 a pixel away), and the spatial estimate as a
     // weak prior. A still view thus converges to the samples that fell on each pixel itself: shadow edges stay
     // as sharp as the output's pixels, not the render pixels'.
     let near = select(0.0, exp(-2.0 * g.nearest_distance * g.nearest_distance), g.nearest_distance < 1e8);
     let prior = select(0.0, PRIOR_WEIGHT, g.weight > 0.0);
-    let total = history.a + near + prior;
+    var total = history.a + near + prior;
     var light = history.rgb;
     if total > 0.0 {
         light = (history.rgb * history.a + g.nearest * near + g.light * prior) / total;
+    }
+    // Under the denoiser the render pixels do not move (no jitter) and their light has a history of its own:
+    // accumulating it again here would only add lag (a ghost behind a moving block), so the plane's spatial
+    // estimate is the pixel's light.
+    if denoising() && g.weight > 0.0 {
+        light = g.light;
+        total = 0.0;
     }
     gbuffer[upscaled_texel(id.xy)] = vec4(light, min(total, MAX_HISTORY_WEIGHT));
     let albedo = max(albedo_at(s.material, surface_voxel(s), s.object), vec3(ALBEDO_FLOOR));

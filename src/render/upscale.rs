@@ -9,8 +9,9 @@
 //!    output's rays and over frames every output pixel is lit by one of its own; it touches the GI cache's
 //!    entries there (where the shading reads them), which the primary pass then leaves alone.
 //! 2. `main` (output pixels, last): demodulated light gathered from render pixels on the output pixel's own
-//!    voxel-face plane, accumulated over frames at the output's resolution (reprojected, clamped to the
-//!    neighbourhood's spread), remodulated by full-resolution albedo and emission, the highlight drawn.
+//!    voxel-face plane (bilinear on the plane), on raw frames accumulated over frames at the output's resolution
+//!    (reprojected, TAAU's weights by each sample's distance), remodulated by full-resolution albedo and emission,
+//!    the highlight drawn.
 //!
 //! Its texels (the output's G-buffer, its history) are regions of the view's G-buffers, which swap every frame;
 //! its per-view state (`UpscaleView`) is whether its history holds.

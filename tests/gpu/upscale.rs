@@ -57,7 +57,7 @@ fn one_frame_relmse(
 pub fn at_half_scale_a_frame_is_about_as_close_to_the_reference_and_keeps_the_mean() {
     // At this small size (80x48 render pixels) upscaling loses more than at a game's (docs/bench/upscale.md: within
     // 1.03-1.39x of native at 320x180 with the GI cache): the cornell box under its area light at most 4.5x
-    // native's relMSE (3.3x measured).
+    // native's relMSE (2.9x measured).
     let world = load_scene("cornell").unwrap();
     let view = world.view(Some("front")).unwrap().clone();
     let keep = common::comparable_pixels(&world, &view, W, H);
