@@ -154,27 +154,27 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let g = gather(id.xy, s);
-    // No neighbourhood clamp: raw frames' light is heavy-tailed (a few bright samples among dark ones), and a
-    // clamp to this frame's neighbourhood cut the accumulated mean by 9% (docs/bench/upscale.md). The
-    // reprojection's surface test still drops a history that saw another surface.
-    let history = reprojected(s);
-    // This frame's samples, each by its weight (TAAU's rule): the render pixel on the plane whose point is
-    // nearest, by a Gaussian of its distance (1 on the pixel, 0.14 a pixel away), and the spatial estimate as a
-    // weak prior. A still view thus converges to the samples that fell on each pixel itself: shadow edges stay
-    // as sharp as the output's pixels, not the render pixels'.
-    let near = select(0.0, exp(-2.0 * g.nearest_distance * g.nearest_distance), g.nearest_distance < 1e8);
-    let prior = select(0.0, PRIOR_WEIGHT, g.weight > 0.0);
-    var total = history.a + near + prior;
-    var light = history.rgb;
-    if total > 0.0 {
-        light = (history.rgb * history.a + g.nearest * near + g.light * prior) / total;
-    }
     // Under the denoiser the render pixels do not move (no jitter) and their light has a history of its own:
     // accumulating it again here would only add lag (a ghost behind a moving block), so the plane's spatial
-    // estimate is the pixel's light.
-    if denoising() && g.weight > 0.0 {
-        light = g.light;
-        total = 0.0;
+    // estimate is the pixel's light and last frame's upscaled light is not read.
+    var light = g.light;
+    var total = 0.0;
+    if !(denoising() && g.weight > 0.0) {
+        // No neighbourhood clamp: raw frames' light is heavy-tailed (a few bright samples among dark ones), and
+        // a clamp to this frame's neighbourhood cut the accumulated mean by 9% (docs/bench/upscale.md). The
+        // reprojection's surface test still drops a history that saw another surface.
+        let history = reprojected(s);
+        // This frame's samples, each by its weight (TAAU's rule): the render pixel on the plane whose point is
+        // nearest, by a Gaussian of its distance (1 on the pixel, 0.14 a pixel away), and the spatial estimate
+        // as a weak prior. A still view thus converges to the samples that fell on each pixel itself: shadow
+        // edges stay as sharp as the output's pixels, not the render pixels'.
+        let near = select(0.0, exp(-2.0 * g.nearest_distance * g.nearest_distance), g.nearest_distance < 1e8);
+        let prior = select(0.0, PRIOR_WEIGHT, g.weight > 0.0);
+        total = history.a + near + prior;
+        light = history.rgb;
+        if total > 0.0 {
+            light = (history.rgb * history.a + g.nearest * near + g.light * prior) / total;
+        }
     }
     gbuffer[upscaled_texel(id.xy)] = vec4(light, min(total, MAX_HISTORY_WEIGHT));
     let albedo = max(albedo_at(s.material, surface_voxel(s), s.object), vec3(ALBEDO_FLOOR));
