@@ -3,7 +3,7 @@
 
 #import glowbrick::world::{materials, object_motion, albedo_at}
 #import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, noisy, history, prev_history, wavelet, unpack_surface, surface_voxel,
-    pixel_index, render_size, previous_pixel, luminance, Surface}
+    pixel_index, render_size, previous_pixel, previous_render_pixel, upscaling, luminance, Surface}
 #import glowbrick::constants::DENOISE_HISTORY
 #import glowbrick::denoise::common::{MAX_HISTORY, ALBEDO_FLOOR, same_plane}
 
@@ -40,7 +40,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var moments = vec2(0.0);
     if (frame.denoise & DENOISE_HISTORY) != 0u {
         let then = s.point - object_motion(s.object);
-        let p = previous_pixel(then, size);
+        // Below scale 1 the render pixel whose sample lay nearest (a render pixel samples one output pixel of its
+        // footprint); at scale 1 the pixel that saw the point, as before.
+        var p = previous_pixel(then, size);
+        if upscaling() {
+            p = previous_render_pixel(then);
+        }
         if p.z == 1 {
             let pi = u32(p.x) + size.x * u32(p.y);
             let ps = unpack_surface(prev_gbuffer[pi]);

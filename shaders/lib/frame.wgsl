@@ -191,6 +191,45 @@ fn previous_pixel(point: vec3<f32>, size: vec2<u32>) -> vec3<i32> {
     return vec3(pixel, 1);
 }
 
+// Below render scale 1: last frame's render pixel whose sample (the output pixel it took, `render_pixel_source`)
+// lay nearest to where `point` was seen (xy, z = 1), or z = -1 off screen. `previous_pixel` at the render size
+// takes the render pixel whose footprint holds the point, but a render pixel samples one output pixel of its
+// footprint, not its centre: once the view moves by more than about half a render pixel a frame (a turning
+// player), the nearest sample often lies in the next footprint, and a history read from further away blurs.
+// Assumes last frame's samples sat where this frame's do (the denoiser's fixed footprint centre).
+fn previous_render_pixel(point: vec3<f32>) -> vec3<i32> {
+    let clip = frame.prev_clip_from_world * vec4(point, 1.0);
+    if clip.w <= 0.0 {
+        return vec3(-1);
+    }
+    let ndc = clip.xy / clip.w;
+    let output = vec2<f32>(output_size());
+    let at = vec2(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * output;
+    if any(at < vec2(0.0)) || any(at >= output) {
+        return vec3(-1);
+    }
+    let size = vec2<i32>(frame.render_size);
+    let per_render = output / vec2<f32>(frame.render_size);
+    let base = vec2<i32>(floor(at / per_render));
+    var best = base;
+    var best_distance = vec2(1e9);
+    // Per axis, the footprint holding the point and its two neighbours: the nearest sample is among them.
+    for (var d = -1; d <= 1; d++) {
+        let r = clamp(base + vec2(d), vec2(0), size - 1);
+        let taken = floor((vec2<f32>(r) + frame.jitter) * per_render) + 0.5;
+        let apart = abs(taken - at);
+        if apart.x < best_distance.x {
+            best_distance.x = apart.x;
+            best.x = r.x;
+        }
+        if apart.y < best_distance.y {
+            best_distance.y = apart.y;
+            best.y = r.y;
+        }
+    }
+    return vec3(best, 1);
+}
+
 // The highlight, where the shading passes write the image; the denoiser draws it after filtering instead (an
 // outline filtered along with the light would smear across its face).
 fn highlight(colour: vec3<f32>, hit_voxel: vec3<i32>, face: u32, point: vec3<f32>, distance: f32) -> vec3<f32> {

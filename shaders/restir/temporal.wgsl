@@ -13,6 +13,11 @@
 
 // Temporal history is capped at this many times M_init (DESIGN.md), so old samples cannot dominate forever.
 const HISTORY_CAP: f32 = 20.0;
+// The cap where last frame's shading point is not this frame's (a moving camera, or the upscaler's jitter). A
+// history of M_p against this frame's M_c can carry a sample's weight forward multiplied by up to M_p / M_c when
+// the sample's target was small where it was drawn and is large here (pairwise MIS with confidence weights), and
+// a moving point keeps making that happen: frame after frame the factor compounds into fireflies.
+const MOVING_HISTORY_CAP: f32 = 4.0;
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -60,10 +65,12 @@ fn temporal_pixel(id: vec3<u32>) {
             let depth_then = distance(frame.prev_camera.xyz, prev_surface.point);
             let same = prev_surface.found && prev_surface.face == surface.face && prev_surface.object == surface.object;
             if same && abs(depth_now - depth_then) <= 0.1 * depth_now {
-                var prev = validated(reservoirs_final[prev_index]);
-                prev.m = min(prev.m, HISTORY_CAP * m_init);
-                let current = r;
                 let prev_shading = shading(prev_surface);
+                // From the same point (a still camera) both inputs see with the same visibility and target.
+                let moved = any(prev_shading.point != x.point);
+                var prev = validated(reservoirs_final[prev_index]);
+                prev.m = min(prev.m, select(HISTORY_CAP, MOVING_HISTORY_CAP, moved) * m_init);
+                let current = r;
                 // Pairwise MIS with one neighbour is the balance heuristic (see pair_weight); the unbiased
                 // variant tests each sample's visibility from the other input (two rays).
                 var p_current_at_prev = target_of(x, prev);
@@ -75,8 +82,7 @@ fn temporal_pixel(id: vec3<u32>) {
                 if unbiased() && p_current_at_prev > 0.0 && prev.big_w > 0.0 && !reservoir_visible(x, prev) {
                     p_current_at_prev = 0.0;
                 }
-                // From the same point (a still camera) both inputs see with the same visibility: no ray.
-                let moved = any(prev_shading.point != x.point);
+                // From the same point both inputs see with the same visibility: no ray.
                 if own_sample_rays() && moved && p_prev_at_current > 0.0 && current.big_w > 0.0
                     && !reservoir_visible(prev_shading, current) {
                     p_prev_at_current = 0.0;

@@ -26,8 +26,12 @@ use std::time::Instant;
 /// Scenes and views: the window room, the cornell box, the letters, the apartments (first view where `None`).
 const SCENES: [(&str, Option<&str>); 4] =
     [("window-room", Some("inside")), ("cornell", Some("front")), ("letters", None), ("apartments", None)];
-/// `--scenes`: each must be one of `SCENES` (a typo would otherwise measure nothing).
-pub fn check_scenes(scenes: &[String]) -> Result<(), String> {
+/// `--scenes`: each must be one of `SCENES` (a typo would otherwise measure nothing); `--upscale` measures the
+/// frame profile's scenes instead.
+pub fn check_scenes(scenes: &[String], section: Option<DenoiseSection>) -> Result<(), String> {
+    if section == Some(DenoiseSection::Upscale) {
+        return super::upscale::pick_scenes(scenes).map(|_| ());
+    }
     match scenes.iter().find(|s| !SCENES.iter().any(|(known, _)| known == s)) {
         Some(unknown) => {
             let known: Vec<&str> = SCENES.iter().map(|(s, _)| *s).collect();
@@ -87,6 +91,8 @@ pub enum DenoiseSection {
     Cost,
     /// `--motion`: denoise-motion.md.
     Motion,
+    /// `--upscale`: upscale-frame.md (the game's frame at each render scale; `super::upscale`).
+    Upscale,
 }
 
 /// Frames for the GI cache (and the denoiser's history) to settle, frames whose changes are averaged for the
@@ -248,9 +254,16 @@ pub fn run_denoise_bench(config: &DenoiseConfig, out: &Path) -> Result<String, S
         );
         return write_report(out, "denoise-reaction.md", text);
     }
+    if only(DenoiseSection::Upscale) {
+        let cases = super::upscale::pick_scenes(&config.scenes)?;
+        let scenes = super::upscale::run_upscale(config, &cases)?;
+        return write_report(out, "upscale-frame.md", super::upscale::upscale_markdown(&scenes, config));
+    }
     let motion = || run_motion((config.width, config.height), config.reference_spp, &config.settings);
     if only(DenoiseSection::Motion) {
-        let text = format!("# The denoiser under motion\n{}", motion_markdown(&motion()?));
+        let run = motion()?;
+        super::motion::write_snapshots(&run, out)?;
+        let text = format!("# The denoiser under motion\n{}", motion_markdown(&run));
         return write_report(out, "denoise-motion.md", text);
     }
     let costs = || -> Result<Vec<CostRow>, String> {

@@ -216,7 +216,7 @@ impl FrameRow {
     }
 }
 
-fn case_world(case: &FrameCase) -> Result<(VoxelWorld, CameraView), String> {
+pub(crate) fn case_world(case: &FrameCase) -> Result<(VoxelWorld, CameraView), String> {
     let world = match case.scene {
         "generated" => generated_world(GENERATED_SEED, GENERATED_SIZE).map_err(|e| e.to_string())?,
         scene => load_bench_scene(scene)?,

@@ -30,6 +30,7 @@ pub mod reference_cache;
 pub mod same_hit;
 pub mod sweep;
 pub mod thesis;
+pub mod upscale;
 
 use crate::headless::HeadlessRenderer;
 use crate::reference::metrics::Metrics;

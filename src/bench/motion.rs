@@ -6,11 +6,12 @@
 //!
 //! Besides the whole frame, the **trail**: pixels the block covered (seen from this frame's camera) in one of the
 //! previous frames but not now. A ghost is history that still shows the block there; its signed error is the
-//! ghost's strength.
+//! ghost's strength, and split by the frames since the block left a pixel (its **age**), how long it lasts.
 
+use crate::colour::luminance;
 use crate::dynamic::{DynamicObject, Motion, ObjectClock, model_for_world, spawn_object_in};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
-use crate::image_io::LinearImage;
+use crate::image_io::{LinearImage, write_image};
 use crate::reference::metrics::{Metrics, compare};
 use crate::reference::objects::ReferenceObjects;
 use crate::reference::{ReferenceOptions, render_reference};
@@ -25,6 +26,9 @@ use std::sync::Arc;
 const SETTLE_FRAMES: u32 = 24;
 const PATH_FRAMES: u32 = 32;
 const TRAIL_FRAMES: u32 = 8;
+/// A trail age whose mean signed error over the path passes this share of the reference there still shows a
+/// ghost; the ghost's length is the oldest such age.
+pub const GHOST_THRESHOLD: f64 = 0.03;
 /// The block's motion: back and forth along x, 24 voxels each way in 1 s; one frame is 1/60 s of it.
 const ANCHOR: Vec3 = Vec3::new(54.0, 58.0, 34.0);
 const SLIDE: Vec3 = Vec3::new(24.0, 0.0, 0.0);
@@ -47,6 +51,18 @@ pub struct MotionFrame {
     pub block_mean: f64,
     pub raw_block: Option<Metrics>,
     pub denoised_block: Option<Metrics>,
+    /// The trail by age (index 0: the block left these pixels 1 frame ago, up to `TRAIL_FRAMES`).
+    pub trail_by_age: Vec<TrailAge>,
+}
+
+/// The trail pixels of one age in one frame: how many, and the luminance sums of the reference and of the raw
+/// and denoised frames' signed errors there.
+#[derive(Clone, Copy, Default, Debug)]
+pub struct TrailAge {
+    pub pixels: usize,
+    pub reference: f64,
+    pub raw_error: f64,
+    pub denoised_error: f64,
 }
 
 /// The whole path, and the last still frame before it as the baseline.
@@ -59,7 +75,12 @@ pub struct MotionRun {
     /// MAE between two references of the first path frame with different seeds.
     pub reference_noise: f64,
     pub mean: f64,
+    /// Path frames `SNAPSHOT_FRAMES`: raw, denoised and reference images, for the report's folder.
+    pub snapshots: Vec<(u32, [LinearImage; 3])>,
 }
+
+/// The path frames whose images the bench keeps.
+pub const SNAPSHOT_FRAMES: [u32; 4] = [8, 16, 24, PATH_FRAMES - 1];
 
 /// The camera of path frame `k` (frames before the path: `k` = 0): a strafe along +x of 0.25 voxels and a turn
 /// of 0.3 degrees a frame.
@@ -114,9 +135,15 @@ fn render_path(
     Ok((frames.pop().ok_or("no settle frame")?, path))
 }
 
-/// Two masks of `view` at path frame `k`: the block's pixels now, and its trail (where the block of frame
-/// `k - j`, j = 1..TRAIL_FRAMES, was in front of the world and the block of frame `k` is not).
-fn block_masks(world: &VoxelWorld, view: &CameraView, size: (u32, u32), k: u32) -> Result<[Vec<bool>; 2], String> {
+/// Two masks of `view` at path frame `k`: the block's pixels now, and its trail by age (j where the block of frame
+/// `k - j`, j = 1..TRAIL_FRAMES, was in front of the world, the smallest such j, and the block of frame `k` is not;
+/// 0 off the trail).
+fn block_masks(
+    world: &VoxelWorld,
+    view: &CameraView,
+    size: (u32, u32),
+    k: u32,
+) -> Result<(Vec<bool>, Vec<u32>), String> {
     let (w, h) = size;
     let transform = view_transform(view);
     let m = world_from_clip(&transform, view.fov_deg.to_radians(), w, h);
@@ -124,15 +151,57 @@ fn block_masks(world: &VoxelWorld, view: &CameraView, size: (u32, u32), k: u32) 
         .map(|f| ReferenceObjects::of(&world_at(world, f)))
         .collect::<Result<_, _>>()?;
     let (now, before) = blocks.split_last().ok_or("no frames")?;
-    let (mut on_block, mut trail) = (Vec::new(), Vec::new());
+    let (mut on_block, mut age) = (Vec::new(), Vec::new());
     for i in 0..w * h {
         let ray = camera_ray(m, transform.translation, UVec2::new(i % w, i / w), w, h);
         let limit = trace(&world.grid, &ray, f32::INFINITY).map_or(f32::INFINITY, |hit| hit.distance);
         let seen = now.trace(&ray, limit).is_some();
         on_block.push(seen);
-        trail.push(!seen && before.iter().any(|b| b.trace(&ray, limit).is_some()));
+        let left = before.iter().rev().position(|b| b.trace(&ray, limit).is_some()).map_or(0, |j| j as u32 + 1);
+        age.push(if seen { 0 } else { left });
     }
-    Ok([on_block, trail])
+    Ok((on_block, age))
+}
+
+/// Sums over the trail's pixels of each age (1..=TRAIL_FRAMES).
+fn trail_by_age(age: &[u32], raw: &LinearImage, denoised: &LinearImage, truth: &LinearImage) -> Vec<TrailAge> {
+    let lum = |p: &[f32; 4]| luminance([p[0], p[1], p[2]]) as f64;
+    let mut ages = vec![TrailAge::default(); TRAIL_FRAMES as usize];
+    for (i, a) in age.iter().enumerate().filter(|(_, a)| **a > 0) {
+        let t = lum(&truth.pixels[i]);
+        let slot = &mut ages[*a as usize - 1];
+        slot.pixels += 1;
+        slot.reference += t;
+        slot.raw_error += lum(&raw.pixels[i]) - t;
+        slot.denoised_error += lum(&denoised.pixels[i]) - t;
+    }
+    ages
+}
+
+/// The path's trail by age, summed over its frames: per age, pixels a frame and the raw and denoised mean signed
+/// errors as shares of the reference there.
+pub fn ghost_by_age(frames: &[MotionFrame]) -> Vec<(f64, f64, f64)> {
+    (0..TRAIL_FRAMES as usize)
+        .map(|a| {
+            let sum = frames.iter().fold(TrailAge::default(), |s, f| {
+                let t = f.trail_by_age[a];
+                TrailAge {
+                    pixels: s.pixels + t.pixels,
+                    reference: s.reference + t.reference,
+                    raw_error: s.raw_error + t.raw_error,
+                    denoised_error: s.denoised_error + t.denoised_error,
+                }
+            });
+            let r = sum.reference.max(1e-12);
+            (sum.pixels as f64 / frames.len().max(1) as f64, sum.raw_error / r, sum.denoised_error / r)
+        })
+        .collect()
+}
+
+/// The ghost's length in frames: the oldest trail age whose mean signed error passes `GHOST_THRESHOLD` of the
+/// reference there (0: none does).
+pub fn ghost_length(errors_by_age: impl Iterator<Item = f64>) -> u32 {
+    errors_by_age.enumerate().filter(|(_, e)| e.abs() > GHOST_THRESHOLD).map(|(a, _)| a as u32 + 1).max().unwrap_or(0)
 }
 
 fn masked(image: &LinearImage, keep: &[bool]) -> LinearImage {
@@ -161,9 +230,11 @@ pub fn run_motion(size: (u32, u32), reference_spp: u32, extra: &[String]) -> Res
     let still_truth = reference(0, 1)?;
     let reference_noise = compare(&reference(0, 2)?, &still_truth)?.mae;
     let mut frames = Vec::new();
+    let mut snapshots = Vec::new();
     for k in 0..PATH_FRAMES {
         let truth = if k == 0 { still_truth.clone() } else { reference(k, 1)? };
-        let [block, keep] = block_masks(&world, &camera(&base, k), size, k)?;
+        let (block, age) = block_masks(&world, &camera(&base, k), size, k)?;
+        let keep: Vec<bool> = age.iter().map(|a| *a > 0).collect();
         let trail_pixels = keep.iter().filter(|k| **k).count();
         let over = |image: &LinearImage, mask: &[bool]| -> Result<Option<Metrics>, String> {
             if !mask.contains(&true) {
@@ -173,6 +244,9 @@ pub fn run_motion(size: (u32, u32), reference_spp: u32, extra: &[String]) -> Res
         };
         let on_trail = |image: &LinearImage| over(image, &keep);
         let (r, d) = (&raw[k as usize], &denoised[k as usize]);
+        if SNAPSHOT_FRAMES.contains(&k) {
+            snapshots.push((k, [r.clone(), d.clone(), truth.clone()]));
+        }
         frames.push(MotionFrame {
             frame: k,
             raw: compare(r, &truth)?,
@@ -185,6 +259,7 @@ pub fn run_motion(size: (u32, u32), reference_spp: u32, extra: &[String]) -> Res
             block_mean: if block.contains(&true) { masked(&truth, &block).mean_luminance() } else { 0.0 },
             raw_block: over(r, &block)?,
             denoised_block: over(d, &block)?,
+            trail_by_age: trail_by_age(&age, r, d, &truth),
         });
         eprintln!("motion bench: frame {k}: raw {} / denoised {}", frames[k as usize].raw, frames[k as usize].denoised);
     }
@@ -196,7 +271,32 @@ pub fn run_motion(size: (u32, u32), reference_spp: u32, extra: &[String]) -> Res
         frames,
         reference_noise,
         mean: still_truth.mean_luminance(),
+        snapshots,
     })
+}
+
+/// Writes the snapshots into `out` as `motion-K-raw.exr`, `-denoised.exr` and `-reference.exr` (linear, for
+/// `glowbrick compare`) and one PNG strip a frame, raw | denoised | reference.
+pub fn write_snapshots(run: &MotionRun, out: &std::path::Path) -> Result<(), String> {
+    for (k, images) in &run.snapshots {
+        for (image, name) in images.iter().zip(["raw", "denoised", "reference"]) {
+            write_image(image, &out.join(format!("motion-{k}-{name}.exr")))?;
+        }
+        write_image(&side_by_side(images), &out.join(format!("motion-{k}.png")))?;
+    }
+    Ok(())
+}
+
+/// Images of one size next to each other.
+fn side_by_side(images: &[LinearImage]) -> LinearImage {
+    let (w, h) = (images[0].width, images[0].height);
+    let mut pixels = Vec::with_capacity((w * h) as usize * images.len());
+    for y in 0..h {
+        for image in images {
+            pixels.extend_from_slice(&image.pixels[(y * w) as usize..((y + 1) * w) as usize]);
+        }
+    }
+    LinearImage { width: w * images.len() as u32, height: h, pixels }
 }
 
 fn mean_of(frames: &[MotionFrame], f: impl Fn(&MotionFrame) -> Option<f64>) -> f64 {
@@ -277,6 +377,18 @@ pub fn motion_markdown(run: &MotionRun) -> String {
         100.0 * largest(f, |m| m.raw_trail.map(|t| t.bias / m.trail_mean.max(1e-12))),
         100.0 * largest(f, |m| m.denoised_trail.map(|t| t.bias / m.trail_mean.max(1e-12)))
     );
+    let ages = ghost_by_age(f);
+    text += &format!(
+        "\nThe trail by age (frames since the block left the pixel), over the path: the mean signed error as a share \
+         of the reference there. The ghost's length is the oldest age past {:.0}%: raw {} frames, denoised {} \
+         frames.\n\n| age | pixels a frame | raw | denoised |\n|---|---|---|---|\n",
+        100.0 * GHOST_THRESHOLD,
+        ghost_length(ages.iter().map(|a| a.1)),
+        ghost_length(ages.iter().map(|a| a.2))
+    );
+    for (a, (pixels, raw, denoised)) in ages.iter().enumerate() {
+        text += &format!("| {} | {pixels:.1} | {:+.2}% | {:+.2}% |\n", a + 1, 100.0 * raw, 100.0 * denoised);
+    }
     text += "\nFrame by frame (every fourth): bias is the signed mean error, over the frame and over the trail.\n\n\
              | frame | raw relMSE | denoised relMSE | raw bias | denoised bias | trail pixels | trail bias raw | \
              trail bias denoised |\n|---|---|---|---|---|---|---|---|\n";
@@ -295,4 +407,28 @@ pub fn motion_markdown(run: &MotionRun) -> String {
         );
     }
     text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The ghost's length is the oldest age past the threshold, whichever sign, even after a quiet age.
+    #[test]
+    fn the_ghost_length_is_the_oldest_age_past_the_threshold() {
+        assert_eq!(ghost_length([0.01, -0.02, 0.0].into_iter()), 0);
+        assert_eq!(ghost_length([0.2, 0.05, 0.01, 0.0].into_iter()), 2);
+        assert_eq!(ghost_length([0.2, 0.01, -0.04, 0.0, 0.0].into_iter()), 3);
+    }
+
+    /// Trail pixels are summed into their age's slot; pixels off the trail are not counted.
+    #[test]
+    fn trail_sums_go_to_their_age() {
+        let image = |v: f32| LinearImage { width: 3, height: 1, pixels: vec![[v, v, v, 1.0]; 3] };
+        let ages = trail_by_age(&[0, 1, 3], &image(2.0), &image(1.5), &image(1.0));
+        assert_eq!(ages.len(), TRAIL_FRAMES as usize);
+        assert_eq!((ages[0].pixels, ages[1].pixels, ages[2].pixels), (1, 0, 1));
+        assert!((ages[2].reference - 1.0).abs() < 1e-6 && (ages[2].raw_error - 1.0).abs() < 1e-6);
+        assert!((ages[0].denoised_error - 0.5).abs() < 1e-6);
+    }
 }

@@ -27,7 +27,8 @@ const MODES: [&str; 7] = ["thesis", "gi", "daylight", "denoise", "frame", "rays"
 #[command(group(ArgGroup::new("mode").args(MODES)))]
 pub struct BenchArgs {
     /// Comma-separated scene names (default: all thesis-like scenes, or a small set with --quick). With
-    /// --denoise: only these of its one-frame scenes (window-room, cornell, letters, apartments).
+    /// --denoise: only these of its one-frame scenes (window-room, cornell, letters, apartments); with --upscale,
+    /// of the frame profile's labels.
     #[arg(long, value_delimiter = ',', conflicts_with_all = ["thesis", "gi", "daylight", "motion", "reaction", "cost", "net"])]
     scenes: Vec<String>,
     /// A small, fast run (96x64, few frames, 256-spp references) for CI. With --frame: the test suite's run
@@ -82,6 +83,11 @@ pub struct BenchArgs {
     /// 1280x720, or at --sizes; GPU ms per pass); writes denoise-cost.md.
     #[arg(long, requires = "denoise", conflicts_with_all = ["motion", "reaction", "one_frame"])]
     cost: bool,
+    /// With --denoise: only the upscaler's table (the game's denoised frame at render scales 1, 0.75, 0.5, 0.33
+    /// and 0.25 against the reference on the frame profile's six scenes, --scenes picks by label; relMSE, FLIP,
+    /// bias, GPU ms and the equal-time view); writes upscale-frame.md.
+    #[arg(long, requires = "denoise", conflicts_with_all = ["motion", "reaction", "one_frame", "cost"])]
+    upscale: bool,
     /// With --denoise: average its one-frame and reaction measures over this many independent realisations
     /// (the `seed` setting 0, 1, ..): one realisation's GI cache carries a slow noise of its own (a room's mean
     /// moves by a percent or two between seeds, more at night), which this averages.
@@ -190,7 +196,7 @@ impl BenchArgs {
             }
             BenchMode::Denoise { spp, section, seeds, size: (width, height), set, lattice, scenes, sizes } => {
                 check_lattice(lattice, width, height)?;
-                check_scenes(&scenes)?;
+                check_scenes(&scenes, section)?;
                 let config = DenoiseConfig {
                     section,
                     seeds,
@@ -250,6 +256,8 @@ impl BenchArgs {
                 Some(DenoiseSection::Frame)
             } else if self.cost {
                 Some(DenoiseSection::Cost)
+            } else if self.upscale {
+                Some(DenoiseSection::Upscale)
             } else {
                 None
             };

@@ -243,6 +243,13 @@ fn each_bench_mode_takes_its_own_flags() {
     assert_eq!(out.status.code(), Some(1));
     let stderr = text(&out.stderr);
     assert!(stderr.contains("no scene 'mountain'") && stderr.contains("window-room, cornell"), "{stderr}");
+    // The upscaler's table measures the frame profile's scenes, and names them when given another.
+    let out = glowbrick(&["bench", "--denoise", "--upscale", "--scenes", "generated-night,mountain", "--out", NOWHERE]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("--upscale has no scene 'mountain'") && stderr.contains("generated-noon"), "{stderr}");
+    let out = glowbrick(&["bench", "--denoise", "--upscale", "--motion", "--out", NOWHERE]);
+    assert_eq!(out.status.code(), Some(2), "two sections of the denoiser bench are a usage error");
     // A setting on top of the thesis protocol is checked before the references' minutes.
     let out = glowbrick(&["bench", "--thesis", "--set", "bogus=1", "--out", NOWHERE]);
     assert_eq!(out.status.code(), Some(1));

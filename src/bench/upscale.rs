@@ -1,0 +1,247 @@
+//! The upscaler's error at each render scale (`glowbrick bench --denoise --upscale`): the game's denoised frame
+//! (`lighting=full gi=on denoise=on`) on the frame profile's scenes (the bundled rooms, the generated world at
+//! noon and at night, the thesis' letters), at render scales 1, 0.75, 0.5, 0.33 and 0.25, frame `MEASURED_FRAME`
+//! against a 32-bounce CPU reference at the output's resolution: relMSE, FLIP and bias, with the reference's own
+//! noise beside them, and the GPU time of the frame. Then the equal-time view: each scale's relMSE at native's GPU
+//! time, and a scale that spends its saving on more ReSTIR candidates (`SPENT`), measured.
+//! Writes `upscale-frame.md`.
+
+use super::denoise::DenoiseConfig;
+use super::frame::{CASES, FrameCase, case_world};
+use super::reference_cache::{Reference, ReferenceCache};
+use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::image_io::LinearImage;
+use crate::reference::REFERENCE_BOUNCES;
+use crate::reference::flip::{Encoding, flip};
+use crate::reference::metrics::{Metrics, compare};
+use crate::render::adapter::adapter_name;
+use crate::render::frame::all_passes;
+use crate::settings::RenderSettings;
+use crate::world::{CameraView, VoxelWorld};
+use std::time::Instant;
+
+/// The render scales measured, native first.
+pub const SCALES: [f32; 5] = [1.0, 0.75, 0.5, 0.33, 0.25];
+/// The frame measured (the denoiser's history and the GI cache are past their warm-up by then).
+pub const MEASURED_FRAME: u32 = 32;
+/// Frames before the measured one whose GPU time is averaged with it.
+const TIMED_FRAMES: u32 = 4;
+/// The equal-time try: a render scale that spends the time it saves on more of Voxel ReSTIR's candidates.
+pub const SPENT: (f32, &str) = (0.5, "candidates=64");
+
+/// One render scale of one scene.
+#[derive(Clone, Debug)]
+pub struct ScaleRow {
+    pub scale: f32,
+    /// The settings on top of the game's frame that this row adds (the equal-time try's), or none.
+    pub spent: Option<&'static str>,
+    pub metrics: Metrics,
+    pub flip: f64,
+    /// GPU ms of the frame's passes (mean of the last `TIMED_FRAMES`), None without timestamps.
+    pub gpu_ms: Option<f64>,
+    pub wall_ms: f64,
+}
+
+/// One scene: its reference's mean and own noise, and its rows.
+#[derive(Clone, Debug)]
+pub struct UpscaleScene {
+    pub label: &'static str,
+    pub mean: f64,
+    pub noise: Metrics,
+    pub rows: Vec<ScaleRow>,
+}
+
+/// The scenes `--scenes` names among the frame profile's (all where none is named), or an error naming the
+/// valid ones.
+pub fn pick_scenes(names: &[String]) -> Result<Vec<FrameCase>, String> {
+    if let Some(unknown) = names.iter().find(|n| !CASES.iter().any(|c| c.label == n.as_str())) {
+        let valid: Vec<&str> = CASES.iter().map(|c| c.label).collect();
+        return Err(format!("--upscale has no scene '{unknown}' (valid: {})", valid.join(", ")));
+    }
+    Ok(CASES.into_iter().filter(|c| names.is_empty() || names.iter().any(|n| n == c.label)).collect())
+}
+
+fn settings_for(case: &FrameCase, scale: f32, spent: Option<&str>, extra: &[String]) -> Result<RenderSettings, String> {
+    let pairs: Vec<String> = case
+        .settings
+        .iter()
+        .map(|p| p.to_string())
+        .chain([format!("render_scale={scale}")])
+        .chain(spent.map(str::to_string))
+        .chain(extra.iter().cloned())
+        .collect();
+    RenderSettings::game().with_pairs(&pairs)
+}
+
+/// Renders `MEASURED_FRAME` frames of one row and measures the last against `truth`.
+fn measure_row(
+    case: &FrameCase,
+    (world, view): (&VoxelWorld, &CameraView),
+    scale: f32,
+    spent: Option<&'static str>,
+    config: &DenoiseConfig,
+    truth: &LinearImage,
+) -> Result<ScaleRow, String> {
+    let settings = settings_for(case, scale, spent, &config.settings)?;
+    let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
+    let mut r = HeadlessRenderer::new(world.clone(), view, &options)?;
+    r.render(MEASURED_FRAME - TIMED_FRAMES)?;
+    r.clear_gpu_pass_times();
+    let start = Instant::now();
+    let image = r.render(TIMED_FRAMES)?;
+    let wall_ms = start.elapsed().as_secs_f64() * 1000.0 / TIMED_FRAMES as f64;
+    let times: Vec<f64> = all_passes().iter().filter_map(|p| r.gpu_pass_ms(p.name)).collect();
+    let image = if config.lattice > 1 { image.lattice(config.lattice) } else { image };
+    Ok(ScaleRow {
+        scale,
+        spent,
+        metrics: compare(&image, truth)?,
+        flip: flip(&image, Encoding::Linear, truth, Encoding::Linear)?.mean,
+        gpu_ms: (!times.is_empty()).then(|| times.iter().sum()),
+        wall_ms,
+    })
+}
+
+/// Every scale (and the equal-time try) of one scene.
+fn measure_scene(case: &FrameCase, config: &DenoiseConfig) -> Result<UpscaleScene, String> {
+    let (world, view) = case_world(case)?;
+    let settings = settings_for(case, 1.0, None, &config.settings)?;
+    let what = Reference {
+        bounces: REFERENCE_BOUNCES,
+        daylight: settings.daylight(),
+        lattice: (config.lattice > 1).then_some(config.lattice),
+    };
+    let references = ReferenceCache::new(config.width, config.height, config.reference_spp);
+    let (truth, noise) = references.two_seeds(&world, &view, &what)?;
+    let mut rows = Vec::new();
+    let tries = SCALES.iter().map(|&s| (s, None)).chain([(SPENT.0, Some(SPENT.1))]);
+    for (scale, spent) in tries {
+        let row = measure_row(case, (&world, &view), scale, spent, config, &truth)?;
+        eprintln!(
+            "upscale bench: {} at {scale}{}: {} flip={:.4} gpu={:?} ms",
+            case.label,
+            spent.map_or(String::new(), |s| format!(" {s}")),
+            row.metrics,
+            row.flip,
+            row.gpu_ms
+        );
+        rows.push(row);
+    }
+    Ok(UpscaleScene { label: case.label, mean: truth.mean_luminance(), noise, rows })
+}
+
+/// Runs every picked scene.
+pub fn run_upscale(config: &DenoiseConfig, cases: &[FrameCase]) -> Result<Vec<UpscaleScene>, String> {
+    cases.iter().map(|case| measure_scene(case, config)).collect()
+}
+
+/// relMSE at native's GPU time, taking a Monte Carlo estimate's error to fall as one over the time spent:
+/// `relmse * ms / native_ms` (lower wins). None without timestamps.
+pub fn relmse_at_native_time(row: &ScaleRow, native: &ScaleRow) -> Option<f64> {
+    Some(row.metrics.relmse * row.gpu_ms? / native.gpu_ms?.max(1e-9))
+}
+
+/// The report.
+pub fn upscale_markdown(scenes: &[UpscaleScene], config: &DenoiseConfig) -> String {
+    let lattice = if config.lattice > 1 {
+        format!(" (reference and errors at every {}th pixel each way)", config.lattice)
+    } else {
+        String::new()
+    };
+    let mut text = format!(
+        "# The upscaler at each render scale\n\n`glowbrick bench --denoise --upscale --size {w}x{h} --spp {spp} \
+         --lattice {l}` on {adapter}: the game's frame (`lighting=full gi=on denoise=on`), frame {MEASURED_FRAME} \
+         at {w}x{h} output{lattice}, against a {REFERENCE_BOUNCES}-bounce CPU reference of 2 x {spp} spp. \
+         **ratio** is relMSE over native's; **at native's time** is relMSE x (GPU ms / native's GPU ms), the \
+         error the scale would reach spending native's time if its error fell as one over the time (lower wins); \
+         the last row of each scene spends the time 0.5 saves on `{spent}` and is measured. GPU ms: the frame's \
+         passes, mean of its last {TIMED_FRAMES} frames (timestamps).\n",
+        w = config.width,
+        h = config.height,
+        spp = config.reference_spp,
+        l = config.lattice,
+        adapter = adapter_name(),
+        spent = SPENT.1,
+    );
+    let ms = |v: Option<f64>| v.map_or("-".to_string(), |ms| format!("{ms:.1}"));
+    for scene in scenes {
+        text += &format!(
+            "\n## {}\n\nReference mean {:.4}; its own noise: relMSE {:.5}, MAE {:.5}.\n\n\
+             | scale | relMSE | ratio | FLIP | FLIP ratio | bias (% of mean) | GPU ms | wall ms | relMSE at native's time |\n\
+             |---|---|---|---|---|---|---|---|---|\n",
+            scene.label, scene.mean, scene.noise.relmse, scene.noise.mae
+        );
+        let Some(native) = scene.rows.first() else { continue };
+        for row in &scene.rows {
+            let label = match row.spent {
+                Some(s) => format!("{} + {s}", row.scale),
+                None => format!("{}", row.scale),
+            };
+            text += &format!(
+                "| {label} | {:.5} | {:.2}x | {:.4} | {:.2}x | {:+.2}% | {} | {:.0} | {} |\n",
+                row.metrics.relmse,
+                row.metrics.relmse / native.metrics.relmse.max(1e-12),
+                row.flip,
+                row.flip / native.flip.max(1e-12),
+                100.0 * row.metrics.bias / scene.mean.max(1e-12),
+                ms(row.gpu_ms),
+                row.wall_ms,
+                relmse_at_native_time(row, native).map_or("-".into(), |e| format!("{e:.5}"))
+            );
+        }
+        let best = scene
+            .rows
+            .iter()
+            .filter_map(|r| relmse_at_native_time(r, native).map(|e| (r, e)))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((row, _)) = best {
+            text += &format!(
+                "\nAt equal GPU time the lowest error is at scale {}{}.\n",
+                row.scale,
+                row.spent.map_or(String::new(), |s| format!(" with {s}"))
+            );
+        }
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(scale: f32, relmse: f64, gpu_ms: Option<f64>) -> ScaleRow {
+        let metrics = Metrics { mae: 0.0, mse: 0.0, relmse, bias: 0.0, fireflies: 0 };
+        ScaleRow { scale, spent: None, metrics, flip: 0.1, gpu_ms, wall_ms: 1.0 }
+    }
+
+    /// A scale at a quarter of native's time with twice its error reaches half native's error at equal time.
+    #[test]
+    fn equal_time_scales_the_error_by_the_time_spent() {
+        let native = row(1.0, 0.01, Some(8.0));
+        assert_eq!(relmse_at_native_time(&native, &native), Some(0.01));
+        assert_eq!(relmse_at_native_time(&row(0.5, 0.02, Some(2.0)), &native), Some(0.005));
+        assert_eq!(relmse_at_native_time(&row(0.5, 0.02, None), &native), None);
+    }
+
+    /// `--scenes` picks by the frame profile's labels and refuses others.
+    #[test]
+    fn scenes_are_the_frame_profiles() {
+        assert_eq!(pick_scenes(&[]).unwrap().len(), CASES.len());
+        let picked = pick_scenes(&["generated-night".into(), "cornell".into()]).unwrap();
+        assert_eq!(picked.iter().map(|c| c.label).collect::<Vec<_>>(), ["cornell", "generated-night"]);
+        assert!(pick_scenes(&["kitchen".into()]).unwrap_err().contains("generated-noon"));
+    }
+
+    /// Every row's settings parse: the scales, the equal-time try, and the scene's own time of day.
+    #[test]
+    fn every_row_has_valid_settings() {
+        for case in CASES {
+            for scale in SCALES {
+                let s = settings_for(&case, scale, None, &[]).unwrap();
+                assert_eq!(s.render_scale, crate::settings::RenderScale::Fixed(scale));
+                assert!(s.denoise && s.gi.enabled);
+            }
+            assert_eq!(settings_for(&case, SPENT.0, Some(SPENT.1), &[]).unwrap().restir.candidates, 64);
+        }
+    }
+}
