@@ -38,12 +38,14 @@ impl PlayArgs {
     pub fn run(self) -> Result<(), String> {
         // The game lights with the GI cache and denoises unless told otherwise (`--set gi=off denoise=off`, G
         // and N in game).
-        let base = RenderSettings::game();
+        let fallback = if self.connect.is_some() { "joined" } else { "world" };
+        let save = self.save.clone().unwrap_or_else(|| self.world.default_save(fallback));
+        // What the player set in game last time (F4), beside the saves; `--config` and `--set` go over it.
+        let base =
+            crate::game::settings_file::load_over(RenderSettings::game(), &crate::game::settings_file::beside(&save))?;
         // Refused before the world loads; the world's saved time of day goes under the pairs.
         self.settings.settings_over(base.clone())?;
         let source = self.world.source();
-        let fallback = if self.connect.is_some() { "joined" } else { "world" };
-        let save = self.save.clone().unwrap_or_else(|| self.world.default_save(fallback));
         if let Some(address) = &self.connect {
             let join = crate::net::client::Join {
                 server: resolve(address)?,

@@ -11,6 +11,7 @@ pub mod models;
 pub mod objects;
 pub mod player;
 pub mod save_load;
+pub mod settings_file;
 pub mod settings_panel;
 pub mod together;
 pub mod undo;
@@ -74,6 +75,7 @@ pub fn run_game(
     app.add_plugins(plugins)
         .insert_resource(world)
         .insert_resource(settings)
+        .insert_resource(settings_file::SettingsFile(settings_file::beside(&save_path)))
         .insert_resource(save_load::SavePath(save_path))
         .add_plugins((
             crate::core_plugin::GlowbrickCorePlugin,

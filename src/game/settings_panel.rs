@@ -1,6 +1,7 @@
 //! The in-game render settings panel (F4): Up/Down choose a row, Left/Right change it. Each row is a setting of
 //! `crate::settings::SETTINGS`, which says how it steps: choices cycle, numbers step within the range `--set`
-//! accepts. L cycles the lighting mode at any time.
+//! accepts. L cycles the lighting mode at any time. What changes is kept for the next game
+//! (`super::settings_file`).
 
 use crate::settings::{RenderSettings, setting};
 use bevy::prelude::*;
@@ -54,7 +55,9 @@ pub struct SettingsPanelPlugin;
 
 impl Plugin for SettingsPanelPlugin {
     fn build(&self, app: &mut App) {
-        app.init_resource::<SettingsPanel>().add_systems(Startup, spawn_panel).add_systems(Update, panel_keys);
+        app.init_resource::<SettingsPanel>()
+            .add_systems(Startup, spawn_panel)
+            .add_systems(Update, (panel_keys, super::settings_file::keep_settings).chain());
     }
 }
 
