@@ -8,6 +8,7 @@
 
 use super::denoise::DenoiseConfig;
 use super::frame::{CASES, FrameCase, case_world};
+use super::mean_metrics;
 use super::reference_cache::{Reference, ReferenceCache};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::LinearImage;
@@ -73,16 +74,23 @@ fn settings_for(case: &FrameCase, scale: f32, spent: Option<&str>, extra: &[Stri
     RenderSettings::game().with_pairs(&pairs)
 }
 
-/// Renders `MEASURED_FRAME` frames of one row and measures the last against `truth`.
-fn measure_row(
-    case: &FrameCase,
+/// One realisation of a row (the `seed` setting): frame `MEASURED_FRAME`'s metrics and FLIP, and the GPU and
+/// wall ms of its last `TIMED_FRAMES` frames.
+struct Realisation {
+    metrics: Metrics,
+    flip: f64,
+    gpu_ms: Option<f64>,
+    wall_ms: f64,
+}
+
+fn realise(
     (world, view): (&VoxelWorld, &CameraView),
-    scale: f32,
-    spent: Option<&'static str>,
+    mut settings: RenderSettings,
+    seed: u32,
     config: &DenoiseConfig,
     truth: &LinearImage,
-) -> Result<ScaleRow, String> {
-    let settings = settings_for(case, scale, spent, &config.settings)?;
+) -> Result<Realisation, String> {
+    settings.set(&format!("seed={seed}"))?;
     let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
     let mut r = HeadlessRenderer::new(world.clone(), view, &options)?;
     r.render(MEASURED_FRAME - TIMED_FRAMES)?;
@@ -92,13 +100,37 @@ fn measure_row(
     let wall_ms = start.elapsed().as_secs_f64() * 1000.0 / TIMED_FRAMES as f64;
     let times: Vec<f64> = all_passes().iter().filter_map(|p| r.gpu_pass_ms(p.name)).collect();
     let image = if config.lattice > 1 { image.lattice(config.lattice) } else { image };
-    Ok(ScaleRow {
-        scale,
-        spent,
+    Ok(Realisation {
         metrics: compare(&image, truth)?,
         flip: flip(&image, Encoding::Linear, truth, Encoding::Linear)?.mean,
         gpu_ms: (!times.is_empty()).then(|| times.iter().sum()),
         wall_ms,
+    })
+}
+
+/// One row: the mean over the config's seeds (independent realisations: one frame's relMSE is decided by its
+/// few brightest outliers, and which frame has them is chance).
+fn measure_row(
+    case: &FrameCase,
+    scene: (&VoxelWorld, &CameraView),
+    scale: f32,
+    spent: Option<&'static str>,
+    config: &DenoiseConfig,
+    truth: &LinearImage,
+) -> Result<ScaleRow, String> {
+    let settings = settings_for(case, scale, spent, &config.settings)?;
+    let runs: Vec<Realisation> = (0..config.seeds.max(1))
+        .map(|seed| realise(scene, settings.clone(), seed, config, truth))
+        .collect::<Result<_, _>>()?;
+    let n = runs.len() as f64;
+    let gpu: Vec<f64> = runs.iter().filter_map(|r| r.gpu_ms).collect();
+    Ok(ScaleRow {
+        scale,
+        spent,
+        metrics: mean_metrics(&runs.iter().map(|r| r.metrics).collect::<Vec<_>>()),
+        flip: runs.iter().map(|r| r.flip).sum::<f64>() / n,
+        gpu_ms: (gpu.len() == runs.len()).then(|| gpu.iter().sum::<f64>() / n),
+        wall_ms: runs.iter().map(|r| r.wall_ms).sum::<f64>() / n,
     })
 }
 
@@ -132,7 +164,21 @@ fn measure_scene(case: &FrameCase, config: &DenoiseConfig) -> Result<UpscaleScen
 
 /// Runs every picked scene.
 pub fn run_upscale(config: &DenoiseConfig, cases: &[FrameCase]) -> Result<Vec<UpscaleScene>, String> {
+    check_lattice(config.lattice)?;
     cases.iter().map(|case| measure_scene(case, config)).collect()
+}
+
+/// A lattice that shares a factor with a scale's pattern of sampled output pixels measures only some of them:
+/// `--lattice 2` reads pixels `2i + 1`, exactly the ones render scale 0.5 lights with their own render pixel,
+/// and flattered that scale. 1 or a step without the factors 2 and 3 mixes every kind of pixel.
+pub fn check_lattice(lattice: u32) -> Result<(), String> {
+    if lattice > 1 && (lattice % 2 == 0 || lattice % 3 == 0) {
+        return Err(format!(
+            "--upscale --lattice {lattice}: a step with the factor 2 or 3 lines up with the render scales' sampled \
+             pixels (at 0.5 every other pixel) and measures only some kinds of pixel; use 1, 5 or 7"
+        ));
+    }
+    Ok(())
 }
 
 /// relMSE at native's GPU time, taking a Monte Carlo estimate's error to fall as one over the time spent:
@@ -144,14 +190,14 @@ pub fn relmse_at_native_time(row: &ScaleRow, native: &ScaleRow) -> Option<f64> {
 /// The report.
 pub fn upscale_markdown(scenes: &[UpscaleScene], config: &DenoiseConfig) -> String {
     let lattice = if config.lattice > 1 {
-        format!(" (reference and errors at every {}th pixel each way)", config.lattice)
+        format!(" (reference and errors on every {}-th pixel each way)", config.lattice)
     } else {
         String::new()
     };
     let mut text = format!(
         "# The upscaler at each render scale\n\n`glowbrick bench --denoise --upscale --size {w}x{h} --spp {spp} \
-         --lattice {l}` on {adapter}: the game's frame (`lighting=full gi=on denoise=on`), frame {MEASURED_FRAME} \
-         at {w}x{h} output{lattice}, against a {REFERENCE_BOUNCES}-bounce CPU reference of 2 x {spp} spp. \
+         --lattice {l} --seeds {seeds}` on {adapter}: the game's frame (`lighting=full gi=on denoise=on`), frame \
+         {MEASURED_FRAME} at {w}x{h} output{lattice}, the mean of {seeds} independent realisations, against a {REFERENCE_BOUNCES}-bounce CPU reference of 2 x {spp} spp. \
          **ratio** is relMSE over native's; **at native's time** is relMSE x (GPU ms / native's GPU ms), the \
          error the scale would reach spending native's time if its error fell as one over the time (lower wins); \
          the last row of each scene spends the time 0.5 saves on `{spent}` and is measured. GPU ms: the frame's \
@@ -160,6 +206,7 @@ pub fn upscale_markdown(scenes: &[UpscaleScene], config: &DenoiseConfig) -> Stri
         h = config.height,
         spp = config.reference_spp,
         l = config.lattice,
+        seeds = config.seeds.max(1),
         adapter = adapter_name(),
         spent = SPENT.1,
     );
@@ -230,6 +277,17 @@ mod tests {
         let picked = pick_scenes(&["generated-night".into(), "cornell".into()]).unwrap();
         assert_eq!(picked.iter().map(|c| c.label).collect::<Vec<_>>(), ["cornell", "generated-night"]);
         assert!(pick_scenes(&["kitchen".into()]).unwrap_err().contains("generated-noon"));
+    }
+
+    /// The lattice never lines up with the pixels a scale samples.
+    #[test]
+    fn lattices_that_line_up_with_a_scale_are_refused() {
+        for ok in [1, 5, 7, 11] {
+            assert!(check_lattice(ok).is_ok(), "{ok}");
+        }
+        for refused in [2, 3, 4, 6, 9] {
+            assert!(check_lattice(refused).unwrap_err().contains("use 1, 5 or 7"), "{refused}");
+        }
     }
 
     /// Every row's settings parse: the scales, the equal-time try, and the scene's own time of day.
