@@ -23,7 +23,7 @@ use std::time::Instant;
 
 /// The render scales measured, native first.
 pub const SCALES: [f32; 5] = [1.0, 0.75, 0.5, 0.33, 0.25];
-/// The frame measured (the denoiser's history and the GI cache are past their warm-up by then).
+/// The frame measured: the denoiser's history is full by then; the GI cache is still in its warm-up.
 pub const MEASURED_FRAME: u32 = 32;
 /// Frames before the measured one whose GPU time is averaged with it.
 const TIMED_FRAMES: u32 = 4;
