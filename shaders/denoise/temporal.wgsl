@@ -42,9 +42,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let then = s.point - object_motion(s.object);
         // Below scale 1 the render pixel whose sample lay nearest (a render pixel samples one output pixel of its
         // footprint); at scale 1 the pixel that saw the point, as before.
-        var p = previous_pixel(then, size);
+        var p: vec3<i32>;
         if upscaling() {
             p = previous_render_pixel(then);
+        } else {
+            p = previous_pixel(then, size);
         }
         if p.z == 1 {
             let pi = u32(p.x) + size.x * u32(p.y);

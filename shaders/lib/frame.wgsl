@@ -176,15 +176,24 @@ fn render_pixel_source(pixel: vec2<u32>) -> vec2<u32> {
     return min(vec2<u32>(floor(at)), output - 1u);
 }
 
-// Last frame's pixel that saw `point` (xy, z = 1), or z = -1 when it was off screen.
-fn previous_pixel(point: vec3<f32>, size: vec2<u32>) -> vec3<i32> {
+// Where `point` was seen last frame: its position in last frame's image as a fraction of it (xy), z = -1 when it
+// was behind the camera.
+fn previous_uv(point: vec3<f32>) -> vec3<f32> {
     let clip = frame.prev_clip_from_world * vec4(point, 1.0);
     if clip.w <= 0.0 {
-        return vec3(-1);
+        return vec3(-1.0);
     }
     let ndc = clip.xy / clip.w;
-    let uv = vec2(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-    let pixel = vec2<i32>(floor(uv * vec2<f32>(size)));
+    return vec3(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5, 1.0);
+}
+
+// Last frame's pixel that saw `point` (xy, z = 1), or z = -1 when it was off screen.
+fn previous_pixel(point: vec3<f32>, size: vec2<u32>) -> vec3<i32> {
+    let uv = previous_uv(point);
+    if uv.z < 0.0 {
+        return vec3(-1);
+    }
+    let pixel = vec2<i32>(floor(uv.xy * vec2<f32>(size)));
     if any(pixel < vec2(0)) || any(pixel >= vec2<i32>(size)) {
         return vec3(-1);
     }
@@ -198,14 +207,10 @@ fn previous_pixel(point: vec3<f32>, size: vec2<u32>) -> vec3<i32> {
 // player), the nearest sample often lies in the next footprint, and a history read from further away blurs.
 // Assumes last frame's samples sat where this frame's do (the denoiser's fixed footprint centre).
 fn previous_render_pixel(point: vec3<f32>) -> vec3<i32> {
-    let clip = frame.prev_clip_from_world * vec4(point, 1.0);
-    if clip.w <= 0.0 {
-        return vec3(-1);
-    }
-    let ndc = clip.xy / clip.w;
+    let uv = previous_uv(point);
     let output = vec2<f32>(output_size());
-    let at = vec2(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * output;
-    if any(at < vec2(0.0)) || any(at >= output) {
+    let at = uv.xy * output;
+    if uv.z < 0.0 || any(at < vec2(0.0)) || any(at >= output) {
         return vec3(-1);
     }
     let size = vec2<i32>(frame.render_size);

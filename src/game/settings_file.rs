@@ -1,7 +1,7 @@
-//! The player's settings file: what the F4 panel (and L) changed, kept for the next `play`. It lives beside the
-//! saves (`saves/settings.ron` by default: the directory of `--save`), holds the panel's rows but the time of day
-//! (the world's own) and the GI switch, and is written atomically when one of them changes. `play` applies it over the game's defaults,
-//! under `--config` and `--set`, so a command line still wins for that session.
+//! The player's settings file: what the F4 panel, L, G and N changed, kept for the next `play`. It lives beside
+//! the saves (`saves/settings.ron` by default: the directory of `--save`), holds the panel's rows but the time of
+//! day (the world's own) and the GI switch, and is written atomically when one of them changes. `play` applies it
+//! over the game's defaults, under `--config` and `--set`, so a command line still wins for that session.
 
 use super::settings_panel::ROWS;
 use crate::settings::{RenderSettings, setting};
@@ -65,18 +65,13 @@ pub fn keep_settings(
         return;
     }
     let text = to_ron(&settings);
-    match written.as_ref() {
-        // The first look is what the game started with: already on disk or the defaults, nothing to write.
-        None => *written = Some(text),
-        Some(last) if *last == text => {}
-        Some(_) => match write(&settings, &file.0) {
-            Ok(()) => *written = Some(text),
-            Err(e) => {
-                warn!("could not keep the settings in {}: {e}", file.0.display());
-                *written = Some(text);
-            }
-        },
+    // The first look is what the game started with (already on disk, or the defaults): nothing to write.
+    if written.as_ref().is_some_and(|last| *last != text)
+        && let Err(e) = write_atomically(&file.0, text.as_bytes())
+    {
+        warn!("could not keep the settings in {}: {e}", file.0.display());
     }
+    *written = Some(text);
 }
 
 #[cfg(test)]
