@@ -1,10 +1,13 @@
 //! `glowbrick serve`: a dedicated server with no window and no GPU. It owns the world, applies the players' edits
 //! in one order, and saves the world (RON, atomic, with a `.bak`) every `--save-every` seconds, on `save` typed
-//! at its console and when it stops (`quit`, or `--seconds` running out). Killed outright, it loses at most the
-//! edits since its last save.
+//! at its console and when it stops (`quit`, `--seconds` running out, or SIGTERM, SIGINT or SIGHUP: a service
+//! manager's stop, Ctrl+C, a closed terminal). A second signal while it saves stops it at once; the atomic write
+//! leaves the save or its `.bak` whole. Killed outright (SIGKILL), it loses at most the edits since its last save.
+//! The console (`net::console`) reads standard input, a terminal's or a service's.
 
 use super::args::GameWorldArgs;
-use crate::net::server::{ServerRules, ServerStats, WorldClock};
+use crate::net::console::{BanList, ConsoleCommand, HELP, parse_command};
+use crate::net::server::{Bans, ServerRules, ServerStats, WorldClock, run_console_command};
 use crate::net::{server_app, transport};
 use crate::world::VoxelWorld;
 use crate::world::format::save_with_backup;
@@ -13,6 +16,8 @@ use bevy_replicon_renet::RenetServer;
 use clap::Args;
 use std::net::{IpAddr, SocketAddr};
 use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
@@ -84,7 +89,11 @@ impl ServeArgs {
             save_every: Duration::from_secs(self.save_every),
             ..Default::default()
         };
+        let bans_path = BanList::path_beside(&save);
+        let bans = BanList::load(&bans_path)?;
+        let stop = stop_signals()?;
         let mut app = server_app(world, rules);
+        app.insert_resource(Bans { list: bans, path: Some(bans_path.clone()) });
         let bind = SocketAddr::new(self.bind, self.port);
         let local = transport::listen(&mut app, bind, self.secret.as_deref(), self.max_players as usize)?;
         println!("serving a world of {summary} on {local} (up to {} players)", self.max_players);
@@ -97,10 +106,12 @@ impl ServeArgs {
             }
         }
         println!(
-            "saving to {} every {} s; type `save` to save now, `quit` to save and stop",
+            "saving to {} every {} s and on stop (quit, SIGTERM, SIGINT, SIGHUP); bans kept in {}",
             save.display(),
-            self.save_every
+            self.save_every,
+            bans_path.display()
         );
+        println!("{HELP}");
         let console = console_lines();
         let started = Instant::now();
         let tick = Duration::from_secs_f64(1.0 / TICK_HZ);
@@ -109,15 +120,10 @@ impl ServeArgs {
             let frame = Instant::now();
             app.update();
             let mut quit = self.seconds.is_some_and(|s| started.elapsed().as_secs_f64() >= s);
-            while let Ok(line) = console.try_recv() {
-                match line.trim() {
-                    "save" => {
-                        app.world_mut().write_message(crate::net::server::SaveNow);
-                    }
-                    "quit" | "stop" | "exit" => quit = true,
-                    "" => {}
-                    other => println!("unknown command '{other}' (save, quit)"),
-                }
+            quit |= take_console_lines(&mut app, &console);
+            if stop.load(Ordering::Relaxed) {
+                println!("stopping on a signal: saving first (a second signal stops without saving)");
+                quit = true;
             }
             if quit {
                 break;
@@ -135,6 +141,7 @@ impl ServeArgs {
         let hours = app.world().resource::<WorldClock>().0;
         let mut world = app.world_mut().resource_mut::<VoxelWorld>();
         world.time_of_day = Some(hours);
+        println!("saving {} before stopping", save.display());
         save_with_backup(&world, &save).map_err(|e| format!("could not save {}: {e}", save.display()))?;
         println!("saved {}", save.display());
         Ok(())
@@ -152,6 +159,42 @@ fn report(app: &mut App) -> String {
         stats.world_bytes_sent as f64 / 1e6,
         stats.saves
     )
+}
+
+/// Carries out the lines typed at the console since the last tick; whether one asked to stop.
+fn take_console_lines(app: &mut App, console: &mpsc::Receiver<String>) -> bool {
+    let mut quit = false;
+    while let Ok(line) = console.try_recv() {
+        match parse_command(&line) {
+            Ok(ConsoleCommand::Save) => {
+                app.world_mut().write_message(crate::net::server::SaveNow);
+            }
+            Ok(ConsoleCommand::Quit) => quit = true,
+            Ok(ConsoleCommand::Help) => println!("{HELP}"),
+            Ok(command) => {
+                let said = run_console_command(app.world_mut(), &command);
+                if !said.is_empty() {
+                    println!("{said}");
+                }
+            }
+            Err(problem) => println!("{problem}"),
+        }
+    }
+    quit
+}
+
+/// A flag SIGTERM, SIGINT and SIGHUP raise (the loop then saves and stops); a second one while it is raised exits
+/// at once with 130, the atomic save keeping the last complete save and its `.bak`.
+fn stop_signals() -> Result<Arc<AtomicBool>, String> {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let stop = Arc::new(AtomicBool::new(false));
+    for signal in [SIGTERM, SIGINT, SIGHUP] {
+        // Registered first, so it sees the flag before the flag handler raises it.
+        signal_hook::flag::register_conditional_shutdown(signal, 130, stop.clone())
+            .and_then(|_| signal_hook::flag::register(signal, stop.clone()))
+            .map_err(|e| format!("cannot catch signal {signal}: {e}"))?;
+    }
+    Ok(stop)
 }
 
 /// Lines typed at the server's console (none when stdin is closed: the server then runs until `--seconds`).

@@ -199,8 +199,8 @@ fn say_when_lost(
 ) {
     let connected = *state.get() == ClientState::Connected;
     if *was && !connected {
-        let why =
-            client.error.clone().unwrap_or_else(|| "the server closed the connection or stopped answering".into());
+        let why = client.error.clone().or_else(|| client.sent_away.clone());
+        let why = why.unwrap_or_else(|| "the server closed the connection or stopped answering".into());
         status.show(format!("disconnected: {why}"));
     }
     *was = connected;
@@ -243,12 +243,18 @@ fn send_pose(
     }
 }
 
-/// The server's last refusal on the status line.
-fn show_refusals(client: Res<NetClient>, mut shown: Local<u64>, mut status: ResMut<StatusLine>) {
-    if client.refusals != *shown {
-        *shown = client.refusals;
+/// The server's last refusal, and its operator's last line, on the status line.
+fn show_refusals(client: Res<NetClient>, mut shown: Local<(u64, u64)>, mut status: ResMut<StatusLine>) {
+    if client.refusals != shown.0 {
+        shown.0 = client.refusals;
         if let Some(reason) = &client.last_refusal {
             status.show(format!("the server refused: {reason}"));
+        }
+    }
+    if client.notices != shown.1 {
+        shown.1 = client.notices;
+        if let Some(text) = &client.last_notice {
+            status.show(text.clone());
         }
     }
 }

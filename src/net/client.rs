@@ -27,6 +27,11 @@ pub struct NetClient {
     /// Requests the server refused, and the last reason.
     pub refusals: u64,
     pub last_refusal: Option<String>,
+    /// Lines from the server's operator, and how many have come.
+    pub notices: u64,
+    pub last_notice: Option<String>,
+    /// Why the server sent this client away (kicked, banned), when it did.
+    pub sent_away: Option<String>,
     /// What went wrong with the server's data, if anything (the client then disconnects).
     pub error: Option<String>,
     assembly: Assembly,
@@ -54,7 +59,7 @@ impl Plugin for NetClientPlugin {
             (
                 say_hello.run_if(in_state(ClientState::Connected)),
                 take_world_and_edits.in_set(ApplyEdits),
-                (forward_requests, take_clock, take_players, take_refusals),
+                (forward_requests, take_clock, take_players, take_refusals, take_notices),
             )
                 .chain(),
         );
@@ -212,6 +217,17 @@ fn take_refusals(mut refusals: MessageReader<Refused>, mut client: ResMut<NetCli
     for refusal in refusals.read() {
         client.refusals += 1;
         client.last_refusal = Some(refusal.reason.clone());
+    }
+}
+
+fn take_notices(mut notices: MessageReader<Notice>, mut client: ResMut<NetClient>) {
+    for notice in notices.read() {
+        let text: String = notice.text.chars().filter(|c| !c.is_control()).take(200).collect();
+        if notice.farewell {
+            client.sent_away = Some(text.clone());
+        }
+        client.notices += 1;
+        client.last_notice = Some(text);
     }
 }
 

@@ -8,6 +8,7 @@
 //! light pool end up identical to the server's (`state_hash` checks it).
 
 pub mod client;
+pub mod console;
 pub mod protocol;
 pub mod server;
 pub mod snapshot;

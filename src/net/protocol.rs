@@ -104,6 +104,14 @@ pub struct Refused {
     pub reason: String,
 }
 
+/// A line from the server's operator (`say`), or why the receiver is being disconnected (kick, ban).
+#[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Notice {
+    pub text: String,
+    /// The server disconnects the receiver after this (kicked, banned).
+    pub farewell: bool,
+}
+
 /// The time of day, after a player changed it.
 #[derive(Message, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ClockNow {
@@ -134,7 +142,8 @@ pub fn register_messages(app: &mut App) {
         .add_server_message::<EditDone>(Channel::Ordered)
         .add_server_message::<Refused>(Channel::Ordered)
         .add_server_message::<ClockNow>(Channel::Ordered)
-        .add_server_message::<Players>(Channel::Ordered);
+        .add_server_message::<Players>(Channel::Ordered)
+        .add_server_message::<Notice>(Channel::Ordered);
 }
 
 #[cfg(test)]

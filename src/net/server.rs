@@ -4,6 +4,7 @@
 //! objects' phases, and saves the world as the game does. It has no log subscriber (a headless app): what its
 //! operator should see (joins, leaves, names, saves) is printed to its console.
 
+use super::console::{BanList, ConsoleCommand, same_name};
 use super::protocol::*;
 use super::snapshot;
 use crate::world::events::{ApplyEdits, EditApplied};
@@ -12,6 +13,9 @@ use crate::world::{Edit, VoxelWorld};
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task};
 use bevy_replicon::prelude::*;
+use bevy_replicon::shared::backend::connected_client::NetworkId;
+use bevy_replicon_renet::netcode::NetcodeServerTransport;
+use std::net::IpAddr;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
@@ -65,6 +69,17 @@ pub struct Peer {
     tokens: f32,
     /// Seconds until it may be told of another refusal (a flood gets one reply a second, not one per message).
     quiet: f32,
+    /// Number of the last edit when it was authorized: the world it is sent is at least this recent.
+    joined_at: u64,
+    /// Whether its hello has arrived (its world is sent only then, so a banned name gets nothing).
+    greeted: bool,
+}
+
+/// Who may not play here, and where that list is kept (`None`: in memory only).
+#[derive(Resource, Clone, Debug, Default)]
+pub struct Bans {
+    pub list: BanList,
+    pub path: Option<PathBuf>,
 }
 
 /// The world on its way to a client.
@@ -106,6 +121,7 @@ impl Plugin for NetServerPlugin {
         let hours = app.world().get_resource::<VoxelWorld>().and_then(|w| w.time_of_day).unwrap_or(12.0);
         app.init_resource::<ServerRules>()
             .init_resource::<ServerStats>()
+            .init_resource::<Bans>()
             .init_resource::<EncodedWorld>()
             .init_resource::<Encoding>()
             .insert_resource(WorldClock(hours))
@@ -128,6 +144,16 @@ pub fn player_id(client: ClientId) -> u64 {
     client.entity().map_or(0, Entity::to_bits)
 }
 
+/// The address a client plays from, where the transport knows it (in-process test clients have none).
+fn address_of(id: Option<&NetworkId>, transport: Option<&NetcodeServerTransport>) -> Option<IpAddr> {
+    Some(transport?.client_addr(id?.get())?.ip())
+}
+
+/// `address_of` a client of `world`.
+pub fn client_address(world: &World, client: Entity) -> Option<IpAddr> {
+    address_of(world.get::<NetworkId>(client), world.get_resource::<NetcodeServerTransport>())
+}
+
 fn welcome(
     add: On<Add, AuthorizedClient>,
     mut commands: Commands,
@@ -137,9 +163,17 @@ fn welcome(
     stats.joins += 1;
     let name = format!("player {}", stats.joins);
     println!("{name} joined");
-    commands
-        .entity(add.entity)
-        .insert((Peer { name, pose: None, tokens: rules.edit_burst, quiet: 0.0 }, WantsWorld { since: stats.seq }));
+    let peer = Peer { name, pose: None, tokens: rules.edit_burst, quiet: 0.0, joined_at: stats.seq, greeted: false };
+    commands.entity(add.entity).insert(peer);
+}
+
+/// Tells one client why, then disconnects it (after the notice has left).
+pub fn send_away(world: &mut World, client: Entity, why: &str) {
+    world.write_message(ToClients {
+        targets: SendTargets::Single(client.into()),
+        message: Notice { text: why.into(), farewell: true },
+    });
+    world.write_message(DisconnectRequest { client });
 }
 
 fn farewell(remove: On<Remove, Peer>, peers: Query<&Peer>) {
@@ -166,14 +200,36 @@ pub fn clean_name(name: &str) -> Option<String> {
     (!clean.is_empty()).then_some(clean)
 }
 
-fn take_hellos(mut hellos: MessageReader<FromClient<Hello>>, mut peers: Query<&mut Peer>) {
+/// A client's hello names it; the first one also checks the ban list and starts sending it the world.
+#[allow(clippy::too_many_arguments)]
+fn take_hellos(
+    mut commands: Commands,
+    mut hellos: MessageReader<FromClient<Hello>>,
+    mut peers: Query<(&mut Peer, Option<&NetworkId>)>,
+    bans: Res<Bans>,
+    transport: Option<Res<NetcodeServerTransport>>,
+    mut notices: MessageWriter<ToClients<Notice>>,
+    mut disconnects: MessageWriter<DisconnectRequest>,
+) {
     for hello in hellos.read() {
-        let (Some(entity), Some(name)) = (hello.client_id.entity(), clean_name(&hello.name)) else { continue };
-        if let Ok(mut peer) = peers.get_mut(entity)
-            && peer.name != name
-        {
+        let Some(client) = hello.client_id.entity() else { continue };
+        let Ok((mut peer, id)) = peers.get_mut(client) else { continue };
+        if let Some(name) = clean_name(&hello.name).filter(|n| *n != peer.name) {
             println!("{} is called {name}", peer.name);
             peer.name = name;
+        }
+        if peer.greeted {
+            continue;
+        }
+        peer.greeted = true;
+        if bans.list.refuses(Some(&peer.name), address_of(id, transport.as_deref())) {
+            println!("{} is banned: sent away", peer.name);
+            let text = "you are banned from this server".to_string();
+            let message = Notice { text, farewell: true };
+            notices.write(ToClients { targets: SendTargets::Single(hello.client_id), message });
+            disconnects.write(DisconnectRequest { client });
+        } else {
+            commands.entity(client).insert(WantsWorld { since: peer.joined_at });
         }
     }
 }
@@ -326,6 +382,88 @@ fn send_world_pieces(
         if send.next >= send.pieces.len() {
             commands.entity(client).remove::<Sending>();
         }
+    }
+}
+
+/// Carries out a console command that acts on the players (`list`, `kick`, `ban`, `unban`, `say`) and says what
+/// happened, for the console. `save` and `quit` are the caller's.
+pub fn run_console_command(world: &mut World, command: &ConsoleCommand) -> String {
+    let players: Vec<(Entity, String, Option<Pose>)> = world
+        .query::<(Entity, &Peer)>()
+        .iter(world)
+        .map(|(entity, peer)| (entity, peer.name.clone(), peer.pose))
+        .collect();
+    let named = |name: &str| players.iter().filter(|p| same_name(&p.1, name)).map(|p| p.0).collect::<Vec<_>>();
+    match command {
+        ConsoleCommand::List => {
+            let mut lines = vec![format!("{} playing", players.len())];
+            for (entity, name, pose) in &players {
+                let at = pose.map_or("not seen yet".to_string(), |p| {
+                    format!("at {:.0}, {:.0}, {:.0}", p.position[0], p.position[1], p.position[2])
+                });
+                let from = client_address(world, *entity).map_or(String::new(), |a| format!(" from {a}"));
+                lines.push(format!("  {name}: {at}{from}"));
+            }
+            lines.join(
+                "
+",
+            )
+        }
+        ConsoleCommand::Kick(name) => {
+            let found = named(name);
+            for &client in &found {
+                send_away(world, client, "the server's operator sent you away (you may join again)");
+            }
+            match found.len() {
+                0 => format!("nobody called '{name}' is playing"),
+                _ => format!("kicked {name}"),
+            }
+        }
+        ConsoleCommand::Ban(name) => {
+            let found = named(name);
+            let addresses: Vec<Option<IpAddr>> = found.iter().map(|&c| client_address(world, c)).collect();
+            let mut bans = world.resource_mut::<Bans>();
+            if addresses.is_empty() {
+                bans.list.add(name, None);
+            }
+            for address in addresses {
+                bans.list.add(name, address);
+            }
+            let saved = match &bans.path {
+                Some(path) => bans.list.save(path).map(|()| format!(" (kept in {})", path.display())),
+                None => Ok(String::new()),
+            };
+            for &client in &found {
+                send_away(world, client, "you are banned from this server");
+            }
+            match saved {
+                Ok(kept) if found.is_empty() => format!("banned the name {name}, not playing now{kept}"),
+                Ok(kept) => format!("banned {name} and sent them away{kept}"),
+                Err(e) => format!("banned {name} until the server stops: {e}"),
+            }
+        }
+        ConsoleCommand::Unban(name) => {
+            let mut bans = world.resource_mut::<Bans>();
+            if !bans.list.remove(name) {
+                return format!("'{name}' is not banned");
+            }
+            match &bans.path {
+                Some(path) => match bans.list.save(path) {
+                    Ok(()) => format!("{name} may join again"),
+                    Err(e) => format!("{name} may join again until the server stops: {e}"),
+                },
+                None => format!("{name} may join again"),
+            }
+        }
+        ConsoleCommand::Say(text) => {
+            let text = format!("[server] {}", text.chars().filter(|c| !c.is_control()).take(200).collect::<String>());
+            world.write_message(ToClients {
+                targets: SendTargets::CLIENTS_ONLY,
+                message: Notice { text: text.clone(), farewell: false },
+            });
+            text
+        }
+        ConsoleCommand::Save | ConsoleCommand::Quit | ConsoleCommand::Help | ConsoleCommand::Nothing => String::new(),
     }
 }
 

@@ -16,6 +16,7 @@ mod net;
 mod reference_converges;
 mod save_survives_kill;
 mod saved_objects;
+mod server_ops;
 mod shaders_validate;
 mod smoke;
 mod traversal_matches_brute_force;

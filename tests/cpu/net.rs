@@ -30,7 +30,7 @@ impl Rng {
     }
 }
 
-fn test_world() -> VoxelWorld {
+pub(crate) fn test_world() -> VoxelWorld {
     let mut world = WorldSource::Scene("test-room".into()).load().expect("the test room loads");
     world.objects = Some(vec![SavedObject {
         model: "lantern".into(),
@@ -41,20 +41,20 @@ fn test_world() -> VoxelWorld {
     world
 }
 
-fn start_server(rules: ServerRules) -> (App, SocketAddr) {
+pub(crate) fn start_server(rules: ServerRules) -> (App, SocketAddr) {
     let mut server = server_app(test_world(), rules);
     let addr = transport::listen(&mut server, "127.0.0.1:0".parse().unwrap(), None, 16).expect("listens");
     (server, addr)
 }
 
-fn join(addr: SocketAddr, name: &str, id: u64) -> App {
+pub(crate) fn join(addr: SocketAddr, name: &str, id: u64) -> App {
     let mut client = headless_client_app(name, UndoPlugin);
     transport::dial(&mut client, addr, None, id).expect("dials");
     client
 }
 
 /// Updates every app in turn until `done` holds (or panics after `limit`).
-fn pump(apps: &mut [&mut App], limit: Duration, mut done: impl FnMut(&mut [&mut App]) -> bool) {
+pub(crate) fn pump(apps: &mut [&mut App], limit: Duration, mut done: impl FnMut(&mut [&mut App]) -> bool) {
     let start = Instant::now();
     while !done(apps) {
         assert!(start.elapsed() < limit, "timed out after {limit:?}");
@@ -65,11 +65,11 @@ fn pump(apps: &mut [&mut App], limit: Duration, mut done: impl FnMut(&mut [&mut 
     }
 }
 
-fn loaded(app: &App) -> bool {
+pub(crate) fn loaded(app: &App) -> bool {
     app.world().resource::<NetClient>().loaded
 }
 
-fn seq(app: &App) -> u64 {
+pub(crate) fn seq(app: &App) -> u64 {
     app.world().get_resource::<NetClient>().map_or_else(|| app.world().resource::<ServerStats>().seq, |c| c.seq)
 }
 
@@ -327,11 +327,11 @@ fn a_secret_keeps_strangers_out() {
 }
 
 /// A free UDP port on loopback (taken, then released for the server to take).
-fn free_port() -> u16 {
+pub(crate) fn free_port() -> u16 {
     std::net::UdpSocket::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
 }
 
-fn serve(args: &[&str], port: u16) -> std::process::Child {
+pub(crate) fn serve(args: &[&str], port: u16) -> std::process::Child {
     std::process::Command::new(env!("CARGO_BIN_EXE_glowbrick"))
         .args(["serve", "--bind", "127.0.0.1", "--port", &port.to_string()])
         .args(args)
@@ -343,7 +343,7 @@ fn serve(args: &[&str], port: u16) -> std::process::Child {
 }
 
 /// Joins the server at `port` and waits for the world, retrying while the server process starts.
-fn join_process(port: u16, id: u64) -> App {
+pub(crate) fn join_process(port: u16, id: u64) -> App {
     let addr: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
     let mut client = join(addr, "builder", id);
     pump(&mut [&mut client], Duration::from_secs(60), |apps| loaded(apps[0]));
