@@ -98,7 +98,7 @@ const GBUFFER_MATERIAL_SHIFT: u32 = #{GBUFFER_MATERIAL_SHIFT}u;
 const GBUFFER_MATERIAL_MASK: u32 = #{GBUFFER_MATERIAL_MASK}u;
 const GBUFFER_OBJECT_SHIFT: u32 = #{GBUFFER_OBJECT_SHIFT}u;
 
-// Counter indices (GpuCounter): the COUNT_GI_* to COUNT_RAYS_GI restart every frame, the rest count since the
+// Counter indices (GpuCounter): the COUNT_GI_* to COUNT_RAYS_UPSCALE restart every frame, the rest count since the
 // start.
 const COUNT_GI_UPDATED: u32 = #{COUNT_GI_UPDATED}u;
 const COUNT_GI_RETRACED: u32 = #{COUNT_GI_RETRACED}u;
@@ -117,6 +117,7 @@ const COUNT_PRIMARY_HITS: u32 = #{COUNT_PRIMARY_HITS}u;
 const COUNT_TRACE_STEPS: u32 = #{COUNT_TRACE_STEPS}u;
 const COUNT_TRACE_LOADS: u32 = #{COUNT_TRACE_LOADS}u;
 const COUNT_RAYS_GI: u32 = #{COUNT_RAYS_GI}u;
+const COUNT_RAYS_UPSCALE: u32 = #{COUNT_RAYS_UPSCALE}u;
 const COUNT_RESERVOIR_RESETS: u32 = #{COUNT_RESERVOIR_RESETS}u;
 const COUNT_GI_RESETS: u32 = #{COUNT_GI_RESETS}u;
 const COUNT_GI_FREED_TOTAL: u32 = #{COUNT_GI_FREED_TOTAL}u;

@@ -52,7 +52,7 @@ struct FrameParams {
 @group(1) @binding(3) var<storage, read_write> accumulation: array<vec4<f32>>;
 // Per pixel: hit point (xyz) and the packed hit (w, see pack_surface); this frame's and last frame's. Each holds
 // GBUFFER_REGIONS regions of the output's pixels: the lighting passes' G-buffer (at their render size), then below
-// render scale 1 the output's own G-buffer and the upscaler's history (render::upscale; in these buffers because
+// render scale 1 the output's own G-buffer and the upscaler's two histories (render::upscale; in these buffers because
 // a stage may bind no more storage buffers than lavapipe's 32, and they swap every frame as the G-buffer does).
 @group(1) @binding(4) var<storage, read_write> gbuffer: array<vec4<f32>>;
 @group(1) @binding(5) var<storage, read_write> prev_gbuffer: array<vec4<f32>>;
@@ -166,6 +166,11 @@ fn output_texel(pixel: vec2<u32>) -> u32 {
 // Where an output pixel's upscaled history (demodulated light, length) lies in `gbuffer` and `prev_gbuffer`.
 fn upscaled_texel(pixel: vec2<u32>) -> u32 {
     return 2u * u32(view.viewport.z) * u32(view.viewport.w) + output_index(pixel);
+}
+
+// Where an output pixel's history of the disk's visibility (mean, samples) lies in `gbuffer` and `prev_gbuffer`.
+fn disk_texel(pixel: vec2<u32>) -> u32 {
+    return 3u * u32(view.viewport.z) * u32(view.viewport.w) + output_index(pixel);
 }
 
 // The output pixel whose G-buffer texel render pixel `pixel` lights this frame: a point of its footprint that

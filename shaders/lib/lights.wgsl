@@ -101,23 +101,49 @@ fn frame_of(n: vec3<f32>) -> mat3x3<f32> {
     return mat3x3(vec3(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), vec3(b, sign + n.y * n.y * a, -n.y), n);
 }
 
-// One sample of the light the disk gives a diffuse surface at p (normal n): a uniform direction in its cone
-// (pdf 1 / solid angle, which cancels against the radiance's 1 / solid angle) and one shadow ray.
-fn disk_sample(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+// A uniform direction in the disk's cone (pdf 1 / solid angle). Two draws of `rng` whether or not the disk is up.
+fn disk_direction(rng: ptr<function, Rng>) -> vec3<f32> {
     let u1 = rng_next(rng);
     let u2 = rng_next(rng);
-    if scene.sun.w <= 0.0 {
-        return vec3(0.0);
-    }
     let cos_theta = 1.0 - u1 * disk_cone();
     let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
     let phi = 2.0 * PI * u2;
-    let dir = normalize(frame_of(scene.sun.xyz) * vec3(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta));
-    let cos_surface = dot(n, dir);
-    if cos_surface <= 0.0 {
+    return normalize(frame_of(scene.sun.xyz) * vec3(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta));
+}
+
+// Whether the disk is up and in front of a surface of normal n (the disk's light there is then non-zero where
+// it is not in shadow).
+fn disk_faces(n: vec3<f32>) -> bool {
+    return scene.sun.w > 0.0 && dot(n, scene.sun.xyz) > 0.0;
+}
+
+// One shadow ray toward a point of the disk from p: 1 where it reaches the sky (or shadows are off), 0 where the
+// world blocks it.
+fn disk_visible(p: vec3<f32>, n: vec3<f32>, dir: vec3<f32>) -> f32 {
+    if shadows_on() && trace_scene(p + n * RAY_OFFSET, dir, INF).found {
+        return 0.0;
+    }
+    return 1.0;
+}
+
+// The disk's light on a diffuse surface of normal n that sees all of it, over the albedo: its irradiance, the
+// cosine taken at the disk's centre (the disk is a fraction of a degree wide).
+fn disk_irradiance(n: vec3<f32>) -> vec3<f32> {
+    if !disk_faces(n) {
         return vec3(0.0);
     }
-    if shadows_on() && trace_scene(p + n * RAY_OFFSET, dir, INF).found {
+    return scene.sun_radiance.rgb * dot(n, scene.sun.xyz);
+}
+
+// One sample of the light the disk gives a diffuse surface at p (normal n): a uniform direction in its cone
+// (pdf 1 / solid angle, which cancels against the radiance's 1 / solid angle) and one shadow ray.
+fn disk_sample(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+    let dir = disk_direction(rng);
+    if scene.sun.w <= 0.0 {
+        return vec3(0.0);
+    }
+    let cos_surface = dot(n, dir);
+    if cos_surface <= 0.0 || disk_visible(p, n, dir) == 0.0 {
         return vec3(0.0);
     }
     return albedo * scene.sun_radiance.rgb * cos_surface;

@@ -8,12 +8,13 @@
 #import glowbrick::constants::COUNT_RAYS_RESTIR_SHADE
 #import glowbrick::world::materials
 #import glowbrick::frame::{debug_view, frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, render_size, highlight, write_output,
-    primary_ray_dir, pixel_footprint}
+    primary_ray_dir, pixel_footprint, upscaling}
 #import glowbrick::constants::{DEBUG_RESERVOIR, LIGHTING_FULL}
 #import glowbrick::guards::finite
 #import glowbrick::restir::common::{reservoirs_final, validated, shading, unshadowed, reservoir_visible, pixel_rng, NO_LIGHT,
     empty_reservoir}
-#import glowbrick::lights::{lighting_mode, lights, scene, background, disk_sample, sky_sample}
+#import glowbrick::lights::{lighting_mode, lights, scene, background, disk_sample, sky_sample, disk_direction, disk_faces,
+    disk_visible}
 #import glowbrick::gi::cache::{gi_on, gi_incoming, camera_level}
 
 @compute @workgroup_size(8, 8, 1)
@@ -72,9 +73,20 @@ fn shade_pixel(id: vec3<u32>) {
     if scene.light_count > 0u {
         reservoirs_final[index] = r;
     }
+    // Below render scale 1 the disk's light is the upscaler's, at the output's pixels (a sun's shadow edge is as
+    // sharp as they are): this pass leaves it out and hands on this sample's visibility in the alpha (-1 where
+    // the disk is down or behind the surface).
+    var disk_seen = -1.0;
     if full {
         var rng = pixel_rng(id.xy, 3u);
-        radiance += disk_sample(x.point, x.normal, x.albedo, &rng);
+        if upscaling() {
+            let dir = disk_direction(&rng);
+            if disk_faces(x.normal) {
+                disk_seen = disk_visible(x.point, x.normal, dir);
+            }
+        } else {
+            radiance += disk_sample(x.point, x.normal, x.albedo, &rng);
+        }
         if !gi_on() {
             radiance += sky_sample(x.point, x.normal, x.albedo, &rng);
         }
@@ -83,5 +95,6 @@ fn shade_pixel(id: vec3<u32>) {
         radiance += x.albedo * gi_incoming(x.point, surface.face, surface.object, camera_level(pixel_footprint(x.point), surface.object));
     }
     let depth = distance(view.world_position, x.point);
-    write_output(id.xy, vec4(highlight(radiance * frame.exposure, surface_voxel(surface), surface.face, x.point, depth), 1.0));
+    let alpha = select(1.0, disk_seen, upscaling());
+    write_output(id.xy, vec4(highlight(radiance * frame.exposure, surface_voxel(surface), surface.face, x.point, depth), alpha));
 }

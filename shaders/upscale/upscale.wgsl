@@ -6,14 +6,19 @@
 // - `main` (output pixels, last): the render pixels' demodulated light (the denoiser's filtered light, or the
 //   noisy frame over its albedo) gathered from those on the output pixel's own voxel-face plane (voxel faces are
 //   flat: an exact edge stop), on raw frames accumulated into the output's history reprojected from last frame
-//   (under the denoiser, whose light has a history of its own, not), then remodulated by the output pixel's own
-//   albedo and emission, with the highlight, into the image.
+//   (under the denoiser, whose light has a history of its own, not); plus the sun's (or moon's) disk at the
+//   output pixel itself: its visibility where the render pixels around it on its plane agree, one shadow ray of
+//   its own where they do not (a shadow edge); then remodulated by the output pixel's own albedo and emission,
+//   with the highlight, into the image.
 
 #import glowbrick::world::{materials, object_motion, albedo_at}
 #import glowbrick::frame::{frame, view, gbuffer, prev_gbuffer, noisy, wavelet, unpack_surface, surface_voxel, pixel_index,
-    output_texel, upscaled_texel, render_size, output_size, render_pixel_source, previous_pixel,
+    output_texel, upscaled_texel, disk_texel, render_size, output_size, render_pixel_source, previous_pixel,
     primary_ray_dir, present, draw_highlight, denoising, pixel_footprint, Surface}
-#import glowbrick::lights::{lighting_mode, background}
+#import glowbrick::lights::{lighting_mode, background, disk_direction, disk_faces, disk_visible, disk_irradiance}
+#import glowbrick::random::{Rng, pcg}
+#import glowbrick::traversal::{count_rays, face_normal}
+#import glowbrick::constants::COUNT_RAYS_UPSCALE
 #import glowbrick::gi::cache::{gi_on, gi_touch_surface, camera_level}
 #import glowbrick::constants::{LIGHTING_FULL, UPSCALE_HISTORY}
 #import glowbrick::denoise::common::{ALBEDO_FLOOR, same_plane}
@@ -56,6 +61,9 @@ struct Gathered {
     weight: f32,
     nearest: vec3<f32>,
     nearest_distance: f32,
+    // The disk's visibility at the render pixels on the plane (their shading pass's sample): its least and most.
+    disk_least: f32,
+    disk_most: f32,
 }
 
 // The render pixels of the 3x3 around `pixel`'s footprint on its plane `s`, each by a tent on its distance in
@@ -68,6 +76,8 @@ fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
     var count = 0.0;
     var nearest = vec3(0.0);
     var nearest_distance = 1e9;
+    var disk_least = 1.0;
+    var disk_most = 0.0;
     for (var cell = 0; cell < 9; cell++) {
         let r = centre + vec2(cell % 3 - 1, cell / 3 - 1);
         if any(r < vec2(0)) || any(r >= vec2<i32>(render_size())) {
@@ -79,6 +89,8 @@ fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
             continue;
         }
         let light = render_light(ri, sr);
+        disk_least = min(disk_least, noisy[ri].a);
+        disk_most = max(disk_most, noisy[ri].a);
         let offset = vec2<f32>(render_pixel_source(vec2<u32>(r))) - vec2<f32>(pixel);
         if length(offset) < nearest_distance {
             nearest_distance = length(offset);
@@ -112,32 +124,66 @@ fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
         weights += w;
         count += 1.0;
     }
-    return Gathered(sum / max(weights, 1e-20), weights, nearest, nearest_distance);
+    return Gathered(sum / max(weights, 1e-20), weights, nearest, nearest_distance, disk_least, disk_most);
 }
 
-// Last frame's upscaled light where the same surface was seen (same face, object, depth within 10%, as the
-// denoiser's reprojection), or length 0.
-fn reprojected(s: Surface) -> vec4<f32> {
+// The disk's visibility history blends a new sample at 1 / (1 + its samples), up to this many (a penumbra's
+// shade settles within a few frames; a moving shadow's edge re-traces where the render pixels disagree).
+const MAX_DISK_SAMPLES: f32 = 16.0;
+
+// The disk's light at an output pixel's surface, over its albedo (exposed), and its visibility history. Where the
+// render pixels on its plane around it all saw the disk, or all did not, theirs; otherwise (a shadow edge or a
+// penumbra passes, or no render pixel lies on the plane) one shadow ray of its own toward a point of the disk,
+// blended into its history reprojected from last frame.
+fn disk_light(pixel: vec2<u32>, s: Surface, g: Gathered, previous: vec3<i32>) -> vec3<f32> {
+    let n = face_normal(s.face);
+    if lighting_mode() != LIGHTING_FULL || !disk_faces(n) {
+        gbuffer[disk_texel(pixel)] = vec4(0.0);
+        return vec3(0.0);
+    }
+    var seen = g.disk_least;
+    var samples = 0.0;
+    if g.disk_least != g.disk_most || g.disk_least < 0.0 {
+        var rng = Rng(pcg(pixel.x + output_size().x * pixel.y) ^ pcg(frame.frame * 0x9E3779B9u + 11u));
+        seen = disk_visible(s.point, n, disk_direction(&rng));
+        var history = vec2(0.0);
+        if previous.z == 1 {
+            history = prev_gbuffer[disk_texel(vec2<u32>(previous.xy))].xy;
+        }
+        samples = min(history.y + 1.0, MAX_DISK_SAMPLES);
+        seen = mix(history.x, seen, 1.0 / samples);
+    }
+    gbuffer[disk_texel(pixel)] = vec4(seen, samples, 0.0, 0.0);
+    return disk_irradiance(n) * seen * frame.exposure;
+}
+
+// The pixel of last frame's output where the same surface was seen (same face, object, depth within 10%, as the
+// denoiser's reprojection), z = 1; z = 0 where there is none or the history restarted.
+fn previous_output_pixel(s: Surface) -> vec3<i32> {
     if (frame.upscale & UPSCALE_HISTORY) == 0u {
-        return vec4(0.0);
+        return vec3(0);
     }
     let then = s.point - object_motion(s.object);
     let p = previous_pixel(then, output_size());
     if p.z != 1 {
-        return vec4(0.0);
+        return vec3(0);
     }
-    let previous = vec2<u32>(p.xy);
-    let ps = unpack_surface(prev_gbuffer[output_texel(previous)]);
+    let ps = unpack_surface(prev_gbuffer[output_texel(vec2<u32>(p.xy))]);
     let depth_now = distance(frame.prev_camera.xyz, then);
     let depth_then = distance(frame.prev_camera.xyz, ps.point);
     if !ps.found || ps.face != s.face || ps.object != s.object || abs(depth_now - depth_then) > 0.1 * depth_now {
-        return vec4(0.0);
+        return vec3(0);
     }
-    return prev_gbuffer[upscaled_texel(previous)];
+    return p;
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    upscale_pixel(id);
+    count_rays(COUNT_RAYS_UPSCALE);
+}
+
+fn upscale_pixel(id: vec3<u32>) {
     if any(id.xy >= output_size()) {
         return;
     }
@@ -154,6 +200,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let g = gather(id.xy, s);
+    let previous = previous_output_pixel(s);
     // Under the denoiser the render pixels do not move (no jitter) and their light has a history of its own:
     // accumulating it again here would only add lag (a ghost behind a moving block), so the plane's spatial
     // estimate is the pixel's light and last frame's upscaled light is not read.
@@ -163,7 +210,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         // No neighbourhood clamp: raw frames' light is heavy-tailed (a few bright samples among dark ones), and
         // a clamp to this frame's neighbourhood cut the accumulated mean by 9% (docs/bench/upscale.md). The
         // reprojection's surface test still drops a history that saw another surface.
-        let history = reprojected(s);
+        var history = vec4(0.0);
+        if previous.z == 1 {
+            history = prev_gbuffer[upscaled_texel(vec2<u32>(previous.xy))];
+        }
         // This frame's samples, each by its weight (TAAU's rule): the render pixel on the plane whose point is
         // nearest, by a Gaussian of its distance (1 on the pixel, 0.14 a pixel away), and the spatial estimate
         // as a weak prior. A still view thus converges to the samples that fell on each pixel itself: shadow
@@ -177,6 +227,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     gbuffer[upscaled_texel(id.xy)] = vec4(light, min(total, MAX_HISTORY_WEIGHT));
+    light += disk_light(id.xy, s, g, previous);
     let albedo = max(albedo_at(s.material, surface_voxel(s), s.object), vec3(ALBEDO_FLOOR));
     let colour = albedo * light + materials[s.material].radiance.rgb * frame.exposure;
     let depth = distance(view.world_position, s.point);

@@ -142,10 +142,12 @@ impl FrameRow {
         f64::from(size.x) * f64::from(size.y)
     }
 
-    /// Brick-grid rays of the lighting passes (ReSTIR's candidates' visibility, spatial taps and shading, and the
-    /// GI cache's refresh and update rays) per output pixel: what render scale lowers.
+    /// Brick-grid rays of the lighting passes (ReSTIR's candidates' visibility, spatial taps and shading, the
+    /// GI cache's refresh and update rays, and the upscaler's shadow rays on the disk's shadow edges) per output
+    /// pixel: what render scale lowers.
     pub fn lighting_rays_per_output_pixel(&self) -> f64 {
-        (self.restir_rays() + self.count(GpuCounter::RaysGi)) / self.pixels()
+        let rays = self.restir_rays() + self.count(GpuCounter::RaysGi) + self.count(GpuCounter::RaysUpscale);
+        rays / self.pixels()
     }
 
     /// ReSTIR's rays per render pixel (the same at every scale for the same scene).

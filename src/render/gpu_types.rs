@@ -210,8 +210,9 @@ pub struct GiEdit {
 /// A G-buffer texel (`vec4<f32>` in `shaders/lib/frame.wgsl`): hit point and the packed hit.
 pub const GBUFFER_TEXEL_BYTES: u64 = 16;
 /// Regions of the output's pixels in each G-buffer (`shaders/lib/frame.wgsl`): the lighting passes' texels, then
-/// the output's own and the upscaler's history (demodulated light, length) below render scale 1.
-pub const GBUFFER_REGIONS: u64 = 3;
+/// below render scale 1 the output's own, the upscaler's history (demodulated light, length) and its history of
+/// the disk's visibility.
+pub const GBUFFER_REGIONS: u64 = 4;
 /// A reservoir (`Reservoir` in `shaders/restir/common.wgsl`): light slot, generation, sample, w_sum, M, W and
 /// the target at the sample.
 pub const RESERVOIR_BYTES: u64 = 32;
@@ -301,12 +302,14 @@ pub enum GpuCounter {
     /// Brick-grid rays the GI cache's refresh and update passes traced this frame (cached hits, fresh
     /// directions, the entries' own shadow rays).
     RaysGi = 16,
+    /// Brick-grid rays the upscaler traced this frame: the disk's shadow rays of output pixels on a shadow edge.
+    RaysUpscale = 17,
     /// Since the start: ReSTIR reservoirs read with a non-finite field (reset to empty).
-    ReservoirResets = 17,
+    ReservoirResets = 18,
     /// Since the start: GI estimates that came out non-finite (replaced by zero).
-    GiResets = 18,
+    GiResets = 19,
     /// Since the start: GI entries freed (unused, their object gone, or their face lost to an edit).
-    GiFreedTotal = 19,
+    GiFreedTotal = 20,
 }
 
 impl GpuCounter {
@@ -328,6 +331,7 @@ impl GpuCounter {
         (GpuCounter::TraceSteps, "COUNT_TRACE_STEPS"),
         (GpuCounter::TraceLoads, "COUNT_TRACE_LOADS"),
         (GpuCounter::RaysGi, "COUNT_RAYS_GI"),
+        (GpuCounter::RaysUpscale, "COUNT_RAYS_UPSCALE"),
         (GpuCounter::ReservoirResets, "COUNT_RESERVOIR_RESETS"),
         (GpuCounter::GiResets, "COUNT_GI_RESETS"),
         (GpuCounter::GiFreedTotal, "COUNT_GI_FREED_TOTAL"),
@@ -335,9 +339,9 @@ impl GpuCounter {
 }
 
 /// Words in the counters buffer, and how many of the first ones restart every frame.
-pub const COUNTERS: usize = 20;
-pub const PER_FRAME_COUNTERS: usize = 17;
-const _: () = assert!(GpuCounter::RaysGi as usize + 1 == PER_FRAME_COUNTERS);
+pub const COUNTERS: usize = 21;
+pub const PER_FRAME_COUNTERS: usize = 18;
+const _: () = assert!(GpuCounter::RaysUpscale as usize + 1 == PER_FRAME_COUNTERS);
 const _: () = assert!((GpuCounter::GiFreedTotal as usize) < COUNTERS);
 
 /// `restir_flags` bits.

@@ -10,10 +10,14 @@
 //!    entries there (where the shading reads them), which the primary pass then leaves alone.
 //! 2. `main` (output pixels, last): demodulated light gathered from render pixels on the output pixel's own
 //!    voxel-face plane (bilinear on the plane), on raw frames accumulated over frames at the output's resolution
-//!    (reprojected, TAAU's weights by each sample's distance), remodulated by full-resolution albedo and emission,
-//!    the highlight drawn.
+//!    (reprojected, TAAU's weights by each sample's distance); plus the sun's (or moon's) disk lit at the output
+//!    pixel itself: the shading pass leaves the disk out below scale 1 and hands on its sample's visibility, and
+//!    where the render pixels on the plane around an output pixel disagree (a shadow edge, a penumbra) the output
+//!    pixel traces a shadow ray of its own, blended into a visibility history at the output's resolution, so a
+//!    hard shadow is as sharp as native's (docs/bench/upscale.md); remodulated by full-resolution albedo and
+//!    emission, the highlight drawn.
 //!
-//! Its texels (the output's G-buffer, its history) are regions of the view's G-buffers, which swap every frame;
+//! Its texels (the output's G-buffer, its two histories) are regions of the view's G-buffers, which swap every frame;
 //! its per-view state (`UpscaleView`) is whether its history holds.
 //! At render scale 1 neither pass runs and every lighting pass runs at the output's pixels as before.
 
