@@ -1,5 +1,5 @@
 //! UDP sockets through renet and netcode: a server listening on a port, a client dialing it. With a shared secret
-//! both sides derive netcode's 32-byte key from it and the client makes its own connect token, so only clients
+//! both sides derive netcode's 32-byte key from it (Argon2id) and the client makes its own connect token, so only clients
 //! that know the secret get in (and their packets are encrypted); without one, netcode's unsecure mode lets
 //! anyone connect, and the server says so.
 
@@ -21,20 +21,22 @@ pub const DEFAULT_PORT: u16 = 47_800;
 /// A client that sends nothing for this long is dropped (and a client drops a silent server).
 const TIMEOUT_SECONDS: i32 = 10;
 
-/// The 32-byte key both sides derive from a shared secret (four FNV-1a passes with different seeds; the secret's
-/// own strength is what protects the server).
+/// The salt of every glowbrick secret. Not one per server: the client builds its own connect token from the key,
+/// so a salt of the server's own would have to reach it before any encrypted packet, and netcode has no place for
+/// that; a salt of our own still keeps tables made for other programs' hashes useless here.
+const SECRET_SALT: &[u8] = b"glowbrick connect secret v1";
+/// Argon2id's cost (RFC 9106's second recommended option, memory 64 MiB, three passes, one lane): each guess at a
+/// secret costs an attacker who captured a token this much memory and time (docs/bench/net/secret.md).
+pub const SECRET_MEMORY_KIB: u32 = 64 * 1024;
+pub const SECRET_PASSES: u32 = 3;
+
+/// The 32-byte key both sides derive from a shared secret: Argon2id, memory-hard, so a captured connect token
+/// lets no one test guesses at the secret quickly offline. Both sides derive it once (listen, dial).
 pub fn secret_key(secret: &str) -> [u8; 32] {
+    let params = argon2::Params::new(SECRET_MEMORY_KIB, SECRET_PASSES, 1, Some(32)).expect("valid Argon2 parameters");
+    let argon = argon2::Argon2::new(argon2::Algorithm::Argon2id, argon2::Version::V0x13, params);
     let mut key = [0u8; 32];
-    for (lane, out) in key.chunks_mut(8).enumerate() {
-        let mut h = 0xcbf2_9ce4_8422_2325_u64 ^ (lane as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-        for _ in 0..1024 {
-            for &b in secret.as_bytes() {
-                h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
-            }
-            h = (h ^ (h >> 29)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        }
-        out.copy_from_slice(&h.to_le_bytes());
-    }
+    argon.hash_password_into(secret.as_bytes(), SECRET_SALT, &mut key).expect("a 32-byte key from any secret");
     key
 }
 
@@ -148,7 +150,10 @@ mod tests {
     fn secrets_make_distinct_stable_keys() {
         assert_eq!(secret_key("lamp"), secret_key("lamp"));
         assert_ne!(secret_key("lamp"), secret_key("lamp "));
-        let key = secret_key("");
-        assert!(key.chunks(8).collect::<std::collections::HashSet<_>>().len() == 4, "the four lanes differ");
+        assert_ne!(secret_key(""), [0u8; 32], "an empty secret still makes a key");
+        // Argon2id's reference implementation (the C library, through Python's argon2-cffi) with the same salt
+        // and costs gives this key for "lamp".
+        let hex: String = secret_key("lamp").iter().map(|b| format!("{b:02x}")).collect();
+        assert_eq!(hex, "668f30459e69b515ce67802a9b3235190c1f342155993e840f46d93be9ff7bd4");
     }
 }
