@@ -41,12 +41,15 @@ fn spawn_panel(mut commands: Commands) {
     ));
 }
 
-/// When the server's world arrives, the camera moves to its first view.
+/// When the server's world arrives, the camera moves to its first view, or where the server says this player was
+/// when it last left; when it arrives again after a lost connection, the camera stays where the player is.
+#[allow(clippy::too_many_arguments)]
 fn enter_arrived_world(
     client: Res<NetClient>,
     join: Res<Join>,
     world: Res<VoxelWorld>,
     mut seen: Local<Option<u64>>,
+    mut joined_before: Local<bool>,
     mut camera: Query<(&mut Transform, &mut Player)>,
     mut settings: ResMut<crate::settings::RenderSettings>,
     mut status: ResMut<StatusLine>,
@@ -59,8 +62,16 @@ fn enter_arrived_world(
     if !client.loaded {
         return;
     }
+    if std::mem::replace(&mut *joined_before, true) {
+        status.show("joined again: the server's world as it is now".into());
+        return;
+    }
     let named = join.view.as_deref().and_then(|name| world.view(Some(name)));
-    let view = named.or(world.view(None)).cloned().unwrap_or_else(|| world.overview());
+    let mut view = named.or(world.view(None)).cloned().unwrap_or_else(|| world.overview());
+    if let Some(pose) = client.returned_to {
+        view.origin = pose.position;
+        view.direction = [pose.yaw.sin(), 0.0, pose.yaw.cos()];
+    }
     if let Ok((mut transform, mut player)) = camera.single_mut() {
         *transform = crate::world::view_transform(&view);
         *player = Player { walking: player.walking, ..Player::looking(&view) };
@@ -200,8 +211,13 @@ fn say_when_lost(
     let connected = *state.get() == ClientState::Connected;
     if *was && !connected {
         let why = client.error.clone().or_else(|| client.sent_away.clone());
+        let again = why.is_none();
         let why = why.unwrap_or_else(|| "the server closed the connection or stopped answering".into());
-        status.show(format!("disconnected: {why}"));
+        status.show(if again {
+            format!("disconnected: {why}; joining again...")
+        } else {
+            format!("disconnected: {why}")
+        });
     }
     *was = connected;
 }

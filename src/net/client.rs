@@ -32,6 +32,8 @@ pub struct NetClient {
     pub last_notice: Option<String>,
     /// Why the server sent this client away (kicked, banned), when it did.
     pub sent_away: Option<String>,
+    /// Where the server says this player was when it last left (it returns there).
+    pub returned_to: Option<Pose>,
     /// What went wrong with the server's data, if anything (the client then disconnects).
     pub error: Option<String>,
     assembly: Assembly,
@@ -44,6 +46,17 @@ impl NetClient {
         NetClient { name: name.to_string(), ..default() }
     }
 
+    /// Forgets the connection's world and numbering for a new join; the name, the players and the server's
+    /// words are kept.
+    pub fn restart_join(&mut self) {
+        self.me = None;
+        self.loaded = false;
+        self.seq = 0;
+        self.returned_to = None;
+        self.assembly = Assembly::default();
+        self.early.clear();
+    }
+
     /// Fraction of the world received.
     pub fn progress(&self) -> f32 {
         if self.loaded { 1.0 } else { self.assembly.progress() }
@@ -54,15 +67,19 @@ pub struct NetClientPlugin;
 
 impl Plugin for NetClientPlugin {
     fn build(&self, app: &mut App) {
-        app.init_resource::<NetClient>().insert_resource(EditsFromServer).add_systems(
-            Update,
-            (
-                say_hello.run_if(in_state(ClientState::Connected)),
-                take_world_and_edits.in_set(ApplyEdits),
-                (forward_requests, take_clock, take_players, take_refusals, take_notices),
+        app.init_resource::<NetClient>()
+            .insert_resource(EditsFromServer)
+            .add_systems(
+                Update,
+                (
+                    say_hello.run_if(in_state(ClientState::Connected)),
+                    take_world_and_edits.in_set(ApplyEdits),
+                    (forward_requests, take_clock, take_players, take_refusals, take_notices, take_welcome_back),
+                    rejoin_when_lost.run_if(resource_exists::<Join>),
+                )
+                    .chain(),
             )
-                .chain(),
-        );
+            .init_resource::<Rejoin>();
     }
 }
 
@@ -229,6 +246,83 @@ fn take_notices(mut notices: MessageReader<Notice>, mut client: ResMut<NetClient
         client.notices += 1;
         client.last_notice = Some(text);
     }
+}
+
+fn take_welcome_back(mut back: MessageReader<WelcomeBack>, mut client: ResMut<NetClient>) {
+    if let Some(back) = back.read().last() {
+        let finite = back.pose.position.iter().all(|c| c.is_finite()) && back.pose.yaw.is_finite();
+        client.returned_to = finite.then_some(back.pose);
+    }
+}
+
+/// Dialing the server again after the connection was lost (or the first dial failed), with a growing wait.
+#[derive(Resource, Debug, Default)]
+pub struct Rejoin {
+    /// Dials since the last join that brought the world.
+    pub attempts: u32,
+    /// Seconds until the next dial.
+    pub wait: f32,
+}
+
+/// The wait before dial `attempt` (1, 2, ...): 1, 2, 4, 8, then 15 seconds.
+pub fn rejoin_wait(attempt: u32) -> f32 {
+    (1u32 << attempt.saturating_sub(1).min(4)).min(15) as f32
+}
+
+/// While the connection is down, dials the `Join`'s server again after `rejoin_wait`, as the same name; the world
+/// then comes anew. Not after the server sent this client away or its data was bad.
+fn rejoin_when_lost(
+    mut commands: Commands,
+    state: Res<State<ClientState>>,
+    join: Res<Join>,
+    mut rejoin: ResMut<Rejoin>,
+    mut client: ResMut<NetClient>,
+    channels: Res<RepliconChannels>,
+    time: Res<Time>,
+) {
+    match state.get() {
+        ClientState::Connected => {
+            if client.loaded {
+                *rejoin = Rejoin::default();
+            }
+            return;
+        }
+        ClientState::Connecting => return,
+        ClientState::Disconnected => {}
+    }
+    if client.sent_away.is_some() || client.error.is_some() {
+        return;
+    }
+    if rejoin.wait > 0.0 {
+        rejoin.wait -= time.delta_secs();
+        if rejoin.wait > 0.0 {
+            return;
+        }
+    } else if rejoin.attempts == 0 {
+        // Just lost: wait before the first dial.
+        rejoin.attempts = 1;
+        rejoin.wait = rejoin_wait(1);
+        return;
+    }
+    match super::transport::client_transport(
+        &channels,
+        join.server,
+        join.secret.as_deref(),
+        super::transport::fresh_client_id(),
+    ) {
+        Ok((renet, transport)) => {
+            // Removed first: the transport's plugin starts connecting when the client resource is added, and a
+            // replaced one does not count as added.
+            commands.remove_resource::<bevy_replicon_renet::RenetClient>();
+            commands.remove_resource::<bevy_replicon_renet::netcode::NetcodeClientTransport>();
+            commands.insert_resource(renet);
+            commands.insert_resource(transport);
+            client.restart_join();
+        }
+        Err(e) => warn!("cannot dial {} again: {e}", join.server),
+    }
+    rejoin.attempts += 1;
+    rejoin.wait = rejoin_wait(rejoin.attempts);
 }
 
 /// Where a game joins, and as whom.

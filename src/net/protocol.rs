@@ -112,6 +112,13 @@ pub struct Notice {
     pub farewell: bool,
 }
 
+/// Where the receiver was when it last left this server (a player of its name, within the last minutes): it
+/// returns there.
+#[derive(Message, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WelcomeBack {
+    pub pose: Pose,
+}
+
 /// The time of day, after a player changed it.
 #[derive(Message, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ClockNow {
@@ -143,7 +150,8 @@ pub fn register_messages(app: &mut App) {
         .add_server_message::<Refused>(Channel::Ordered)
         .add_server_message::<ClockNow>(Channel::Ordered)
         .add_server_message::<Players>(Channel::Ordered)
-        .add_server_message::<Notice>(Channel::Ordered);
+        .add_server_message::<Notice>(Channel::Ordered)
+        .add_server_message::<WelcomeBack>(Channel::Ordered);
 }
 
 #[cfg(test)]

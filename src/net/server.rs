@@ -75,6 +75,17 @@ pub struct Peer {
     greeted: bool,
 }
 
+/// How long the server remembers where a player who left was, so that returning under the same name puts them
+/// back there.
+pub const REMEMBER_LEFT: Duration = Duration::from_secs(10 * 60);
+
+/// Most players remembered at once (the oldest are forgotten first).
+const MAX_LEFT_PLAYERS: usize = 4096;
+
+/// Where players who left were (by name, without regard to case), and when they left (server seconds).
+#[derive(Resource, Clone, Debug, Default)]
+pub struct LeftPlayers(pub Vec<(String, Pose, f64)>);
+
 /// Who may not play here, and where that list is kept (`None`: in memory only).
 #[derive(Resource, Clone, Debug, Default)]
 pub struct Bans {
@@ -122,6 +133,7 @@ impl Plugin for NetServerPlugin {
         app.init_resource::<ServerRules>()
             .init_resource::<ServerStats>()
             .init_resource::<Bans>()
+            .init_resource::<LeftPlayers>()
             .init_resource::<EncodedWorld>()
             .init_resource::<Encoding>()
             .insert_resource(WorldClock(hours))
@@ -176,10 +188,17 @@ pub fn send_away(world: &mut World, client: Entity, why: &str) {
     world.write_message(DisconnectRequest { client });
 }
 
-fn farewell(remove: On<Remove, Peer>, peers: Query<&Peer>) {
-    if let Ok(peer) = peers.get(remove.entity) {
-        println!("{} left", peer.name);
+fn farewell(remove: On<Remove, Peer>, peers: Query<&Peer>, time: Res<Time>, mut left: ResMut<LeftPlayers>) {
+    let Ok(peer) = peers.get(remove.entity) else { return };
+    println!("{} left", peer.name);
+    let now = time.elapsed_secs_f64();
+    left.0.retain(|(name, _, when)| !same_name(name, &peer.name) && now - when < REMEMBER_LEFT.as_secs_f64());
+    if let Some(pose) = peer.pose {
+        left.0.push((peer.name.clone(), pose, now));
     }
+    // A flood of short visits cannot grow it without bound.
+    let excess = left.0.len().saturating_sub(MAX_LEFT_PLAYERS);
+    left.0.drain(..excess);
 }
 
 fn refill_tokens(time: Res<Time>, rules: Res<ServerRules>, mut peers: Query<&mut Peer>) {
@@ -208,8 +227,9 @@ fn take_hellos(
     mut peers: Query<(&mut Peer, Option<&NetworkId>)>,
     bans: Res<Bans>,
     transport: Option<Res<NetcodeServerTransport>>,
-    mut notices: MessageWriter<ToClients<Notice>>,
+    (mut notices, mut welcome_back): (MessageWriter<ToClients<Notice>>, MessageWriter<ToClients<WelcomeBack>>),
     mut disconnects: MessageWriter<DisconnectRequest>,
+    (time, mut left): (Res<Time>, ResMut<LeftPlayers>),
 ) {
     for hello in hellos.read() {
         let Some(client) = hello.client_id.entity() else { continue };
@@ -222,6 +242,11 @@ fn take_hellos(
             continue;
         }
         peer.greeted = true;
+        let now = time.elapsed_secs_f64();
+        let back = left
+            .0
+            .iter()
+            .rposition(|(name, _, when)| same_name(name, &peer.name) && now - when < REMEMBER_LEFT.as_secs_f64());
         if bans.list.refuses(Some(&peer.name), address_of(id, transport.as_deref())) {
             println!("{} is banned: sent away", peer.name);
             let text = "you are banned from this server".to_string();
@@ -230,6 +255,13 @@ fn take_hellos(
             disconnects.write(DisconnectRequest { client });
         } else {
             commands.entity(client).insert(WantsWorld { since: peer.joined_at });
+            if let Some(i) = back {
+                let (_, pose, _) = left.0.remove(i);
+                println!("{} is back", peer.name);
+                peer.pose = Some(pose);
+                welcome_back
+                    .write(ToClients { targets: SendTargets::Single(hello.client_id), message: WelcomeBack { pose } });
+            }
         }
     }
 }

@@ -150,3 +150,46 @@ fn the_console_lists_kicks_bans_and_speaks_to_real_clients() {
     assert_eq!(back.world().resource::<VoxelWorld>().grid.size(), server.world().resource::<VoxelWorld>().grid.size());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+fn peer_names(server: &mut App) -> Vec<String> {
+    let mut q = server.world_mut().query::<&glowbrick::net::server::Peer>();
+    q.iter(server.world()).map(|p| p.name.clone()).collect()
+}
+
+#[test]
+fn a_lost_connection_and_a_restarted_client_come_back_as_the_same_player() {
+    use glowbrick::net::client::{Join, Rejoin};
+    use glowbrick::net::protocol::Pose;
+    let (mut server, addr) = start_server(ServerRules::default());
+    let mut ada = join(addr, "ada", 91);
+    ada.insert_resource(Join { server: addr, secret: None, name: "ada".into(), view: None });
+    pump(&mut [&mut server, &mut ada], Duration::from_secs(60), |apps| loaded(apps[1]));
+    let pose = Pose { position: [5.5, 6.0, 7.25], yaw: 0.5 };
+    ada.world_mut().write_message(pose);
+    ada.world_mut().write_message(EditRequest::player(Edit::Place { at: IVec3::new(6, 4, 6), material: 2 }));
+    pump(&mut [&mut server, &mut ada], Duration::from_secs(10), |apps| seq(apps[0]) >= 1);
+
+    // The network drops until the server has dropped the silent client (15 s): the client dials again by itself.
+    let dropped = |apps: &mut [&mut App]| peer_names(apps[0]).is_empty();
+    pump(&mut [&mut server], Duration::from_secs(40), dropped);
+    pump(&mut [&mut server, &mut ada], Duration::from_secs(60), |apps| {
+        let c = apps[1].world().resource::<NetClient>();
+        c.loaded && c.returned_to.is_some()
+    });
+    let client = ada.world().resource::<NetClient>();
+    assert_eq!(client.returned_to, Some(pose), "the server put ada back where she was");
+    assert_eq!(client.seq, 1, "the world came again with the edit in it");
+    assert_eq!(ada.world().resource::<VoxelWorld>().grid.get(IVec3::new(6, 4, 6)), 2);
+    assert_eq!(ada.world().resource::<Rejoin>().attempts, 0, "joined: the backoff restarts");
+    assert_eq!(peer_names(&mut server), ["ada"]);
+
+    // Killed (no goodbye) and started again under the same name: back where the server last had her.
+    drop(ada);
+    pump(&mut [&mut server], Duration::from_secs(40), dropped);
+    let mut again = join(addr, "ADA", 92);
+    pump(&mut [&mut server, &mut again], Duration::from_secs(60), |apps| {
+        let c = apps[1].world().resource::<NetClient>();
+        c.loaded && c.returned_to.is_some()
+    });
+    assert_eq!(again.world().resource::<NetClient>().returned_to, Some(pose));
+}
