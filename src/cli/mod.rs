@@ -4,6 +4,7 @@
 
 pub mod args;
 pub mod bench;
+pub mod bot;
 pub mod check_world;
 pub mod compare;
 pub mod generate;
@@ -48,6 +49,9 @@ enum Command {
     Serve(serve::ServeArgs),
     /// Generate the game's world for a seed and size, print what it holds and how long it took; --out saves it.
     Generate(generate::GenerateArgs),
+    /// A headless player for load tests: joins a server, flies and builds for --seconds, then prints its world's
+    /// state hash (no window, no GPU).
+    Bot(bot::BotArgs),
 }
 
 /// Runs the parsed command; the error is one line for stderr.
@@ -62,6 +66,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::CheckWorld(args) => args.run(),
         Command::Generate(args) => args.run(),
         Command::Serve(args) => args.run(),
+        Command::Bot(args) => args.run(),
     }
 }
 

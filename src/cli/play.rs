@@ -94,7 +94,7 @@ fn can_open_a_window() -> Result<crate::render::adapter::Adapter, String> {
 }
 
 /// HOST:PORT (a name or an address; the port defaults to the server's) as one socket address.
-fn resolve(address: &str) -> Result<std::net::SocketAddr, String> {
+pub(super) fn resolve(address: &str) -> Result<std::net::SocketAddr, String> {
     use std::net::ToSocketAddrs;
     let with_port = if address.rsplit_once(':').is_some_and(|(_, p)| p.parse::<u16>().is_ok()) {
         address.to_string()

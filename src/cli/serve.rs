@@ -116,9 +116,11 @@ impl ServeArgs {
         let started = Instant::now();
         let tick = Duration::from_secs_f64(1.0 / TICK_HZ);
         let mut last_report = Instant::now();
+        let mut ticks = TickTimes::default();
         loop {
             let frame = Instant::now();
             app.update();
+            ticks.add(frame.elapsed());
             let mut quit = self.seconds.is_some_and(|s| started.elapsed().as_secs_f64() >= s);
             quit |= take_console_lines(&mut app, &console);
             if stop.load(Ordering::Relaxed) {
@@ -130,14 +132,15 @@ impl ServeArgs {
             }
             if last_report.elapsed() >= Duration::from_secs(60) {
                 last_report = Instant::now();
-                println!("{}", report(&mut app));
+                println!("{}; {}", report(&mut app), ticks.take());
             }
             std::thread::sleep(tick.saturating_sub(frame.elapsed()));
         }
         // Say goodbye to the clients, then save.
         app.world_mut().resource_mut::<RenetServer>().disconnect_all();
         app.update();
-        println!("{}", report(&mut app));
+        println!("{}; {}", report(&mut app), ticks.take());
+        println!("{}", state_line(&app));
         let hours = app.world().resource::<WorldClock>().0;
         let mut world = app.world_mut().resource_mut::<VoxelWorld>();
         world.time_of_day = Some(hours);
@@ -146,6 +149,40 @@ impl ServeArgs {
         println!("saved {}", save.display());
         Ok(())
     }
+}
+
+/// The server's ticks (one `update` each) since the last report.
+#[derive(Default)]
+struct TickTimes(Vec<f64>);
+
+impl TickTimes {
+    fn add(&mut self, took: Duration) {
+        self.0.push(took.as_secs_f64() * 1e3);
+    }
+
+    /// "ticks: N, p50 .. ms, p99 .. ms, max .. ms; resident memory .. MB", and a fresh start.
+    fn take(&mut self) -> String {
+        let mut ms = std::mem::take(&mut self.0);
+        ms.sort_by(f64::total_cmp);
+        let at = |q: f64| ms.get(((ms.len() as f64 - 1.0) * q).round() as usize).copied().unwrap_or(0.0);
+        let rss =
+            crate::stress::memory::resident_bytes().map_or("unknown".into(), |b| format!("{:.1} MB", b as f64 / 1e6));
+        format!(
+            "ticks: {}, p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms; resident memory {rss}",
+            ms.len(),
+            at(0.5),
+            at(0.99),
+            at(1.0)
+        )
+    }
+}
+
+/// The world's state hash, as every client that followed the server must have it (`glowbrick bot` prints its own).
+fn state_line(app: &App) -> String {
+    let world = app.world().resource::<VoxelWorld>();
+    let seq = app.world().resource::<ServerStats>().seq;
+    let lights = crate::net::state_hash::lights_hash(app.world().resource::<crate::lights::LightPool>());
+    format!("state: seq={seq} voxels={:016x} lights={lights:016x}", crate::net::state_hash::voxels_hash(world))
 }
 
 fn report(app: &mut App) -> String {

@@ -193,3 +193,53 @@ fn a_lost_connection_and_a_restarted_client_come_back_as_the_same_player() {
     });
     assert_eq!(again.world().resource::<NetClient>().returned_to, Some(pose));
 }
+
+/// The "state: ..." line a server or bot printed.
+fn state_of(stdout: &str) -> String {
+    let line = stdout.lines().find(|l| l.contains("state: seq=")).unwrap_or_else(|| panic!("no state in: {stdout}"));
+    line[line.find("state: ").unwrap()..].to_string()
+}
+
+#[test]
+fn bots_in_their_own_processes_build_over_udp_and_end_with_the_servers_world() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let dir = std::env::temp_dir().join(format!("glowbrick-bots-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let save = dir.join("bots.ron");
+    let port = free_port();
+    let mut server = serve(&["--scene", "test-room", "--save", save.to_str().unwrap(), "--save-every", "3600"], port);
+    let address = format!("127.0.0.1:{port}");
+    let bots: Vec<Child> = (0..3)
+        .map(|i| {
+            Command::new(env!("CARGO_BIN_EXE_glowbrick"))
+                .args(["bot", "--connect", &address, "--name", &format!("bot{i}"), "--seconds", "5"])
+                .args(["--edits-per-second", "10"])
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .expect("start a bot")
+        })
+        .collect();
+    let states: Vec<String> = bots
+        .into_iter()
+        .map(|bot| {
+            let out = bot.wait_with_output().unwrap();
+            let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+            assert!(out.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+            state_of(&stdout)
+        })
+        .collect();
+    server.stdin.as_mut().unwrap().write_all(b"quit\n").unwrap();
+    let out = server.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    let expected = state_of(&stdout);
+    let seq: u64 = expected["state: seq=".len()..].split(' ').next().unwrap().parse().unwrap();
+    assert!(seq > 50, "three bots at 10 edits a second for 5 s applied {seq} edits: {stdout}");
+    for (i, state) in states.iter().enumerate() {
+        assert_eq!(state, &expected, "bot{i}'s world differs from the server's");
+    }
+    assert!(stdout.contains("ticks: ") && stdout.contains("p99 "), "the server reports its ticks: {stdout}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
