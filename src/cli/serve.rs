@@ -141,6 +141,7 @@ impl ServeArgs {
         app.update();
         println!("{}; {}", report(&mut app), ticks.take());
         println!("{}", state_line(&app));
+        crate::net::server::finish_saving(app.world_mut());
         let hours = app.world().resource::<WorldClock>().0;
         let mut world = app.world_mut().resource_mut::<VoxelWorld>();
         world.time_of_day = Some(hours);

@@ -136,6 +136,7 @@ impl Plugin for NetServerPlugin {
             .init_resource::<LeftPlayers>()
             .init_resource::<EncodedWorld>()
             .init_resource::<Encoding>()
+            .init_resource::<Saving>()
             .insert_resource(WorldClock(hours))
             .add_message::<SaveNow>()
             .add_observer(welcome)
@@ -529,33 +530,63 @@ fn advance_objects(time: Res<Time>, mut world: ResMut<VoxelWorld>) {
     }
 }
 
+/// A save being written off the server's tick (the default world's 32 MB of RON took most of a second of the
+/// tick, in which no one's edit was applied: docs/bench/net/soak.md), as of edit number `seq`.
+#[derive(Resource, Default)]
+pub struct Saving(Option<(u64, Task<std::io::Result<()>>)>);
+
+#[allow(clippy::too_many_arguments)]
 fn save_on_schedule(
     time: Res<Time>,
     mut since: Local<f32>,
     mut asks: MessageReader<SaveNow>,
     rules: Res<ServerRules>,
-    mut world: ResMut<VoxelWorld>,
+    world: Res<VoxelWorld>,
     clock: Res<WorldClock>,
     mut stats: ResMut<ServerStats>,
+    mut saving: ResMut<Saving>,
 ) {
     *since += time.delta_secs();
-    let asked = asks.read().count() > 0;
     let Some(path) = &rules.save_path else { return };
-    if !asked && *since < rules.save_every.as_secs_f32() {
+    if let Some((seq, task)) = &mut saving.0
+        && let Some(result) = bevy::tasks::futures::check_ready(task)
+    {
+        report_save(&mut stats, path, *seq, result);
+        saving.0 = None;
+    }
+    if asks.read().count() > 0 {
+        *since = f32::INFINITY;
+    }
+    // Due, and the last one written: the world as it is now, copied on the tick, written off it.
+    if *since < rules.save_every.as_secs_f32() || saving.0.is_some() {
         return;
     }
     *since = 0.0;
-    // The clock goes into the world itself: no copy of a large world just to save it.
-    world.bypass_change_detection().time_of_day = Some(clock.0);
-    match save_with_backup(&world, path) {
+    let now = world_now(&world, &clock);
+    let to = path.clone();
+    let task = AsyncComputeTaskPool::get().spawn(async move { save_with_backup(&now, &to) });
+    saving.0 = Some((stats.seq, task));
+}
+
+fn report_save(stats: &mut ServerStats, path: &std::path::Path, seq: u64, result: std::io::Result<()>) {
+    match result {
         Ok(()) => {
             stats.saves += 1;
             stats.last_save_error = None;
-            println!("saved {} (after edit {})", path.display(), stats.seq);
+            println!("saved {} (after edit {seq})", path.display());
         }
         Err(e) => {
             eprintln!("could not save {}: {e}", path.display());
             stats.last_save_error = Some(e.to_string());
         }
+    }
+}
+
+/// Waits for a save still being written (before the server writes its last one to the same file).
+pub fn finish_saving(world: &mut World) {
+    let Some((seq, task)) = world.resource_mut::<Saving>().0.take() else { return };
+    let result = bevy::tasks::block_on(task);
+    if let Some(path) = world.resource::<ServerRules>().save_path.clone() {
+        report_save(&mut world.resource_mut::<ServerStats>(), &path, seq, result);
     }
 }
