@@ -7,7 +7,7 @@
 use super::play::resolve;
 use crate::net::client::{Join, NetClient};
 use crate::net::protocol::Pose;
-use crate::net::state_hash::{lights_hash, voxels_hash};
+use crate::net::state_hash::state_line;
 use crate::net::{headless_client_app, transport};
 use crate::world::events::EditRequest;
 use crate::world::{Edit, VoxelWorld};
@@ -96,11 +96,8 @@ impl BotArgs {
         }
         let world = app.world().resource::<VoxelWorld>();
         let seq = app.world().resource::<NetClient>().seq;
-        let lights = lights_hash(app.world().resource::<crate::lights::LightPool>());
-        println!(
-            "{name}: asked for {edits} edits; state: seq={seq} voxels={:016x} lights={lights:016x}",
-            voxels_hash(world)
-        );
+        let state = state_line(seq, world, app.world().resource::<crate::lights::LightPool>());
+        println!("{name}: asked for {edits} edits; {state}");
         Ok(())
     }
 }

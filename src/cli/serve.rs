@@ -182,8 +182,7 @@ impl TickTimes {
 fn state_line(app: &App) -> String {
     let world = app.world().resource::<VoxelWorld>();
     let seq = app.world().resource::<ServerStats>().seq;
-    let lights = crate::net::state_hash::lights_hash(app.world().resource::<crate::lights::LightPool>());
-    format!("state: seq={seq} voxels={:016x} lights={lights:016x}", crate::net::state_hash::voxels_hash(world))
+    crate::net::state_hash::state_line(seq, world, app.world().resource::<crate::lights::LightPool>())
 }
 
 fn report(app: &mut App) -> String {

@@ -87,8 +87,13 @@ impl BanList {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(BanList::default()),
             Err(e) => return Err(format!("cannot read the ban list {}: {e}", path.display())),
         };
-        let list: BanList = ron::from_str(&text)
-            .map_err(|e| format!("the ban list {} is not a ban list: {}", path.display(), one_line(&e.to_string())))?;
+        let list: BanList = ron::from_str(&text).map_err(|e| {
+            format!(
+                "the ban list {} is not a ban list: {}",
+                path.display(),
+                crate::world::format::one_line(&e.to_string())
+            )
+        })?;
         if list.bans.len() > MAX_BANS {
             return Err(format!("the ban list {} holds more than {MAX_BANS} bans", path.display()));
         }
@@ -129,10 +134,6 @@ impl BanList {
         self.bans.retain(|b| !same_name(&b.name, name));
         self.bans.len() != before
     }
-}
-
-fn one_line(text: &str) -> String {
-    text.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
 #[cfg(test)]

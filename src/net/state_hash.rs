@@ -98,3 +98,9 @@ mod tests {
         assert_eq!(lights_hash(&live), lights_hash(&LightPool::from_world(&lit)), "incremental = rebuilt");
     }
 }
+
+/// The line a server (when it stops) and a bot (when it is done) print: edit number and hashes, equal on both
+/// ends when the client followed the server.
+pub fn state_line(seq: u64, world: &VoxelWorld, lights: &LightPool) -> String {
+    format!("state: seq={seq} voxels={:016x} lights={:016x}", voxels_hash(world), lights_hash(lights))
+}
