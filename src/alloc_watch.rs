@@ -85,3 +85,19 @@ impl HeapMark {
         (PEAK.try_with(Cell::get).unwrap_or(0) - self.0).max(0) as u64
     }
 }
+
+/// Hands the heap's free pages back to the system. glibc keeps what a thread's arena freed for that thread's next
+/// allocation, so a server that copies its world for each save and encodes it for each join would otherwise sit
+/// at the high-water mark of those copies for good (docs/bench/net/soak.md). Elsewhere it does nothing.
+pub fn return_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        unsafe extern "C" {
+            fn malloc_trim(pad: usize) -> i32;
+        }
+        // SAFETY: malloc_trim takes no pointers and only releases memory glibc's allocator holds free.
+        unsafe {
+            malloc_trim(0);
+        }
+    }
+}

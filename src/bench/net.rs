@@ -5,7 +5,7 @@
 //! Clients and server share this machine's cores, so the numbers are a floor for a real server.
 
 use crate::net::client::NetClient;
-use crate::net::protocol::{EditDone, NetEdit};
+use crate::net::protocol::{Change, EditDone, NetEdit};
 use crate::net::server::{ServerRules, ServerStats};
 use crate::net::{headless_client_app, server_app, transport};
 use crate::world::events::EditRequest;
@@ -65,7 +65,8 @@ pub struct NetRow {
 
 /// The size of one applied edit as it travels (its message's payload, before the transport's headers).
 pub fn payload_bytes(edit: &Edit) -> usize {
-    let done = EditDone { seq: 123_456, by: u64::MAX / 3, undoable: true, edit: NetEdit::from(edit) };
+    let change = Change::Edit(NetEdit::from(edit));
+    let done = EditDone { seq: 123_456, by: u64::MAX / 3, undoable: true, materials: Vec::new(), change };
     let mut buffer = vec![0u8; 1 << 20];
     bevy_replicon::postcard::to_slice(&done, &mut buffer).map_or(0, |b| b.len())
 }

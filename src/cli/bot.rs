@@ -73,6 +73,9 @@ impl BotArgs {
                     return Err(format!("{name}: no world from {server} after {} s", self.join_timeout));
                 }
             } else {
+                if building.is_none() {
+                    bring_colour_and_lantern(&mut app, &name);
+                }
                 let since = *building.get_or_insert_with(Instant::now);
                 let seconds = since.elapsed().as_secs_f64();
                 if seconds < self.seconds {
@@ -94,12 +97,32 @@ impl BotArgs {
             }
             std::thread::sleep(tick.saturating_sub(frame.elapsed()));
         }
+        let objects = {
+            let mut live = app.world_mut().query::<&crate::dynamic::DynamicObject>();
+            crate::dynamic::saved::saved_objects(live.iter(app.world()))
+        };
         let world = app.world().resource::<VoxelWorld>();
         let seq = app.world().resource::<NetClient>().seq;
-        let state = state_line(seq, world, app.world().resource::<crate::lights::LightPool>());
+        let state = state_line(seq, world, app.world().resource::<crate::lights::LightPool>(), &objects);
         println!("{name}: asked for {edits} edits; {state}");
         Ok(())
     }
+}
+
+/// What a player brings to a server once: a block of a colour of its own (a dropped model's) and a lantern,
+/// both at the start of its circle. The server adds the colour to everyone's palette and the lantern to
+/// everyone's objects (or refuses them when it holds its most).
+fn bring_colour_and_lantern(app: &mut bevy::app::App, name: &str) {
+    let start = Vec3::from(circle_pose(app.world().resource::<VoxelWorld>(), 0.0).position);
+    let hue = (name.bytes().fold(0u32, |h, b| h.wrapping_mul(31).wrapping_add(b as u32)) % 1000) as f32 / 1000.0;
+    let colour = crate::world::Material::solid(&format!("colour of {name}"), [hue, 1.0 - hue, 0.5]);
+    let id = app.world_mut().resource_mut::<VoxelWorld>().palette.push(colour);
+    let size = app.world().resource::<VoxelWorld>().grid.size().as_ivec3();
+    let at = (start.as_ivec3() + IVec3::new(0, -3, 0)).clamp(IVec3::ZERO, size - 1);
+    app.world_mut().write_message(EditRequest::player(Edit::Place { at, material: id }));
+    let motion = crate::dynamic::Motion::Drift { radius: 3.0, period: 8.0 };
+    let object = crate::world::objects::SavedObject::new("lantern", &motion, start, 0.0);
+    app.world_mut().write_message(crate::net::protocol::SpawnAsk { object });
 }
 
 /// Where the bot flies: a circle of a quarter of the world's width around its middle, above its middle height.

@@ -182,7 +182,8 @@ impl TickTimes {
 fn state_line(app: &App) -> String {
     let world = app.world().resource::<VoxelWorld>();
     let seq = app.world().resource::<ServerStats>().seq;
-    crate::net::state_hash::state_line(seq, world, app.world().resource::<crate::lights::LightPool>())
+    let objects = world.objects.as_deref().unwrap_or_default();
+    crate::net::state_hash::state_line(seq, world, app.world().resource::<crate::lights::LightPool>(), objects)
 }
 
 fn report(app: &mut App) -> String {

@@ -74,6 +74,11 @@ pub struct DynamicObject {
     pub age: f32,
 }
 
+/// An object whose phase follows another clock than the frame's (the server's, for a client): its age is that
+/// clock's reading minus the reading it was born at, and the frame's object clock leaves it alone.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct BornAt(pub f64);
+
 /// Ids for new objects, and the object clock's step: fixed per frame, so headless runs are reproducible.
 #[derive(Resource, Debug)]
 pub struct ObjectClock {
@@ -136,7 +141,10 @@ pub fn spawn_object_in(
 }
 
 /// Advances every object's motion by one clock step.
-pub fn animate_objects(clock: Res<ObjectClock>, mut objects: Query<(&mut DynamicObject, &mut Transform)>) {
+pub fn animate_objects(
+    clock: Res<ObjectClock>,
+    mut objects: Query<(&mut DynamicObject, &mut Transform), Without<BornAt>>,
+) {
     for (mut object, mut transform) in &mut objects {
         object.age += clock.step;
         transform.translation = object.anchor + object.motion.offset(object.age);

@@ -9,13 +9,18 @@ use std::sync::Arc;
 impl SavedObject {
     /// What to save for a live object.
     pub fn of(object: &DynamicObject) -> SavedObject {
-        let motion = match object.motion {
+        SavedObject::new(&object.model.name, &object.motion, object.anchor, object.age)
+    }
+
+    /// An object of built-in model `model`.
+    pub fn new(model: &str, motion: &Motion, anchor: Vec3, age: f32) -> SavedObject {
+        let motion = match *motion {
             Motion::Still => SavedMotion::Still,
             Motion::Drift { radius, period } => SavedMotion::Drift { radius, period },
             Motion::Swing { length, amplitude, period } => SavedMotion::Swing { length, amplitude, period },
             Motion::Slide { offset, period } => SavedMotion::Slide { offset: offset.into(), period },
         };
-        SavedObject { model: object.model.name.clone(), motion, anchor: object.anchor.into(), age: object.age }
+        SavedObject { model: model.to_string(), motion, anchor: anchor.into(), age }
     }
 
     pub fn motion(&self) -> Motion {

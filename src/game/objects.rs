@@ -64,6 +64,11 @@ pub fn spawn_saved_or_report(app_world: &mut World, saved: &[crate::world::objec
     }
 }
 
+/// Where O puts a lantern: 8 voxels in front of the camera (the model's minimum corner), drifting in a circle.
+fn lantern_in_front(camera: &Transform) -> (Vec3, Motion) {
+    (camera.translation + *camera.forward() * 8.0 - Vec3::splat(1.5), Motion::Drift { radius: 3.0, period: 8.0 })
+}
+
 /// O spawns a drifting lantern 8 voxels in front of the player.
 fn spawn_key(
     keys: Res<ButtonInput<KeyCode>>,
@@ -79,15 +84,8 @@ fn spawn_key(
     }
     let Ok(t) = camera.single() else { return };
     let result = model_for_world("lantern", &mut world).and_then(|model| {
-        let at = t.translation + *t.forward() * 8.0 - Vec3::splat(1.5);
-        spawn_object(
-            &mut commands,
-            &mut clock,
-            objects.iter().count(),
-            Arc::new(model),
-            Motion::Drift { radius: 3.0, period: 8.0 },
-            at,
-        )
+        let (at, motion) = lantern_in_front(t);
+        spawn_object(&mut commands, &mut clock, objects.iter().count(), Arc::new(model), motion, at)
     });
     match result {
         Ok(_) => status.show(format!("spawned a lantern ({} objects)", objects.iter().count() + 1)),
@@ -95,13 +93,33 @@ fn spawn_key(
     }
 }
 
+/// O on a server: the server spawns the lantern for everyone (it comes back in the edits' order).
+fn ask_spawn_key(
+    keys: Res<ButtonInput<KeyCode>>,
+    camera: Query<&Transform, With<super::player::Player>>,
+    mut asks: MessageWriter<crate::net::protocol::SpawnAsk>,
+    mut status: ResMut<StatusLine>,
+) {
+    if !keys.just_pressed(KeyCode::KeyO) {
+        return;
+    }
+    let Ok(t) = camera.single() else { return };
+    let (at, motion) = lantern_in_front(t);
+    let object = crate::world::objects::SavedObject::new("lantern", &motion, at, 0.0);
+    asks.write(crate::net::protocol::SpawnAsk { object });
+    status.show("asked the server for a lantern".into());
+}
+
 /// Default objects at start, and the spawn key (needs a window).
 pub struct GameObjectsPlugin;
 
 impl Plugin for GameObjectsPlugin {
     fn build(&self, app: &mut App) {
-        // On a server, objects are the server's: a lantern spawned here would be in no one else's world.
+        // On a server, objects are the server's: a lantern spawned here would be in no one else's world, so O asks
+        // the server.
         let local = not(resource_exists::<crate::world::events::EditsFromServer>);
-        app.add_systems(Startup, spawn_at_start).add_systems(Update, spawn_key.run_if(local));
+        let on_server = resource_exists::<crate::world::events::EditsFromServer>;
+        app.add_systems(Startup, spawn_at_start)
+            .add_systems(Update, (spawn_key.run_if(local), ask_spawn_key.run_if(on_server)));
     }
 }

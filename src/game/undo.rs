@@ -1,12 +1,12 @@
 //! Undo and redo (Ctrl+Z / Ctrl+Y) of the player's edits. Each undoable edit is one batch: the edit path hands
 //! over what the edit's box held before (`EditApplied::before`), undo writes it back with an `Edit::Restore`,
-//! redo applies the edit again. Both go through the same edit path as everything else.
+//! redo applies the edit again. Both go through the same edit path as everything else. On a server the server
+//! keeps the stacks (per player name, so they outlast a reconnect): Ctrl+Z asks it.
 
-use crate::world::events::{ApplyEdits, EditApplied, EditRequest};
-use crate::world::{Edit, Voxel, VoxelWorld};
+use crate::world::VoxelWorld;
+use crate::world::events::{ApplyEdits, EditApplied, EditRequest, EditsFromServer};
+use crate::world::history::EditHistory;
 use bevy::prelude::*;
-use std::collections::VecDeque;
-use std::sync::Arc;
 
 /// Oldest batches are dropped beyond this many voxels of history (2 bytes each: 128 MiB).
 const MAX_HISTORY_VOXELS: usize = 64 << 20;
@@ -18,30 +18,26 @@ pub enum HistoryAction {
     Redo,
 }
 
-#[derive(Clone, Debug)]
-struct Batch {
-    edit: Edit,
-    min: IVec3,
-    max: IVec3,
-    before: Arc<[Voxel]>,
+/// The player's undo and redo stacks, for the world they were recorded in.
+#[derive(Resource)]
+pub struct UndoHistory {
+    stacks: EditHistory,
+    world: Option<u64>,
 }
 
-/// The undo and redo stacks.
-#[derive(Resource, Default)]
-pub struct UndoHistory {
-    undo: VecDeque<Batch>,
-    redo: Vec<Batch>,
-    voxels: usize,
-    world: Option<u64>,
+impl Default for UndoHistory {
+    fn default() -> Self {
+        UndoHistory { stacks: EditHistory::new(MAX_HISTORY_VOXELS), world: None }
+    }
 }
 
 impl UndoHistory {
     pub fn undo_len(&self) -> usize {
-        self.undo.len()
+        self.stacks.undo_len()
     }
 
     pub fn redo_len(&self) -> usize {
-        self.redo.len()
+        self.stacks.redo_len()
     }
 }
 
@@ -49,9 +45,15 @@ pub struct UndoPlugin;
 
 impl Plugin for UndoPlugin {
     fn build(&self, app: &mut App) {
-        app.init_resource::<UndoHistory>()
-            .add_message::<HistoryAction>()
-            .add_systems(Update, (undo_or_redo.before(ApplyEdits), record_batches.after(ApplyEdits)));
+        let local = not(resource_exists::<EditsFromServer>);
+        app.init_resource::<UndoHistory>().add_message::<HistoryAction>().add_systems(
+            Update,
+            (
+                undo_or_redo.before(ApplyEdits).run_if(local.clone()),
+                record_batches.after(ApplyEdits).run_if(local),
+                ask_the_server.run_if(resource_exists::<EditsFromServer>),
+            ),
+        );
     }
 }
 
@@ -73,22 +75,12 @@ fn undo_or_redo(
     mut edits: MessageWriter<EditRequest>,
 ) {
     for action in actions.read() {
-        match action {
-            HistoryAction::Undo => {
-                if let Some(batch) = history.undo.pop_back() {
-                    history.voxels -= batch.before.len();
-                    let restore = Edit::Restore { min: batch.min, max: batch.max, voxels: batch.before.clone() };
-                    edits.write(EditRequest::unrecorded(restore));
-                    history.redo.push(batch);
-                }
-            }
-            HistoryAction::Redo => {
-                if let Some(batch) = history.redo.pop() {
-                    edits.write(EditRequest::unrecorded(batch.edit.clone()));
-                    history.voxels += batch.before.len();
-                    history.undo.push_back(batch);
-                }
-            }
+        let edit = match action {
+            HistoryAction::Undo => history.stacks.undo(),
+            HistoryAction::Redo => history.stacks.redo(),
+        };
+        if let Some(edit) = edit {
+            edits.write(EditRequest::unrecorded(edit));
         }
     }
 }
@@ -105,13 +97,16 @@ fn record_batches(
     }
     for event in applied.read() {
         let Some(before) = event.before.clone() else { continue };
-        history.voxels += before.len();
-        history.undo.push_back(Batch { edit: event.edit.clone(), min: event.min, max: event.max, before });
-        history.redo.clear();
-        while history.voxels > MAX_HISTORY_VOXELS
-            && let Some(old) = history.undo.pop_front()
-        {
-            history.voxels -= old.before.len();
-        }
+        history.stacks.record(event.edit.clone(), event.min, event.max, before);
+    }
+}
+
+/// On a server, undo and redo are the server's: it holds this player's stacks.
+fn ask_the_server(
+    mut actions: MessageReader<HistoryAction>,
+    mut asks: MessageWriter<crate::net::protocol::HistoryAsk>,
+) {
+    for action in actions.read() {
+        asks.write(crate::net::protocol::HistoryAsk { redo: *action == HistoryAction::Redo });
     }
 }

@@ -1,14 +1,17 @@
-//! The client's side: it receives the world in pieces, then applies the server's edits in the server's order
-//! (its own come back like everyone else's, marked so undo records them). Its own requests (the player's edits,
-//! undo and redo) leave as `EditAsk`s instead of changing the world directly, so every client's world follows the
-//! one order the server chose.
+//! The client's side: it receives the world in pieces, then applies the server's changes (edits, spawned objects,
+//! new materials) in the server's order, its own among everyone else's. Its own requests (edits, spawns, undo and
+//! redo) leave as asks instead of changing the world directly, so every client's world follows the one order the
+//! server chose. Moving objects follow the server's clock.
 
 use super::protocol::*;
 use super::snapshot::Assembly;
+use crate::dynamic::{BornAt, DynamicObject, model_for_world, spawn_object_in};
 use crate::world::events::{ApplyEdits, EditApplied, EditRequest, EditsFromServer};
-use crate::world::{Edit, VoxelWorld};
+use crate::world::objects::SavedObject;
+use crate::world::{Edit, Material, VoxelWorld};
 use bevy::prelude::*;
 use bevy_replicon::prelude::*;
+use std::collections::VecDeque;
 use std::sync::Arc;
 
 /// Where the client stands.
@@ -36,6 +39,11 @@ pub struct NetClient {
     pub returned_to: Option<Pose>,
     /// What went wrong with the server's data, if anything (the client then disconnects).
     pub error: Option<String>,
+    /// Ids of the server's palette as this client has it (materials past it are this client's own, not yet
+    /// sent).
+    pub palette_ids: usize,
+    /// The server's object clock as this client reads it.
+    pub clock: ServerClock,
     assembly: Assembly,
     /// Edits that arrived before the world was complete.
     early: Vec<EditDone>,
@@ -53,6 +61,8 @@ impl NetClient {
         self.loaded = false;
         self.seq = 0;
         self.returned_to = None;
+        self.palette_ids = 0;
+        self.clock = ServerClock::default();
         self.assembly = Assembly::default();
         self.early.clear();
     }
@@ -60,6 +70,36 @@ impl NetClient {
     /// Fraction of the world received.
     pub fn progress(&self) -> f32 {
         if self.loaded { 1.0 } else { self.assembly.progress() }
+    }
+}
+
+/// The server's object clock read from here: `server - local` offsets sampled when a reading arrives (each is
+/// the true offset less the message's delay, so the largest recent one is the closest), over a window short
+/// enough that two machines' clocks cannot drift apart within it.
+#[derive(Clone, Debug, Default)]
+pub struct ServerClock {
+    samples: VecDeque<(f64, f64)>,
+}
+
+/// Seconds of offset samples kept.
+const CLOCK_WINDOW: f64 = 20.0;
+
+impl ServerClock {
+    /// A reading of the server's clock, `server` seconds, arriving at local time `local`.
+    pub fn sample(&mut self, server: f64, local: f64) {
+        if !server.is_finite() {
+            return;
+        }
+        self.samples.push_back((local, server - local));
+        while self.samples.front().is_some_and(|(at, _)| local - at > CLOCK_WINDOW) {
+            self.samples.pop_front();
+        }
+    }
+
+    /// The server's clock now, at local time `local`, once a reading has come.
+    pub fn now(&self, local: f64) -> Option<f64> {
+        let offset = self.samples.iter().map(|(_, offset)| *offset).reduce(f64::max)?;
+        Some(local + offset)
     }
 }
 
@@ -75,6 +115,7 @@ impl Plugin for NetClientPlugin {
                     say_hello.run_if(in_state(ClientState::Connected)),
                     take_world_and_edits.in_set(ApplyEdits),
                     (forward_requests, take_clock, take_players, take_refusals, take_notices, take_welcome_back),
+                    (take_server_time, follow_server_clock),
                     rejoin_when_lost.run_if(resource_exists::<Join>),
                 )
                     .chain(),
@@ -92,25 +133,49 @@ fn say_hello(client: Res<NetClient>, mut hello: MessageWriter<Hello>, mut since:
     }
 }
 
+/// Applies one server change; a spawn is handed back (the object and its birth on the server's clock) for the
+/// caller to add to the app's world.
 fn apply_done(
     world: &mut VoxelWorld,
     done: &EditDone,
-    me: Option<u64>,
     applied: Option<&mut MessageWriter<EditApplied>>,
-) {
-    let edit = Edit::from(&done.edit);
+) -> Option<(SavedObject, f64)> {
+    for material in &done.materials {
+        world.palette.push(Material::from(material));
+    }
+    let edit = match &done.change {
+        Change::Edit(edit) => Edit::from(edit),
+        Change::Spawn { object, born } => return Some((object.clone(), *born)),
+    };
     let (min, max) = edit.bounds();
-    let mine = me == Some(done.by) && done.undoable;
-    let before = (mine && applied.is_some()).then(|| Arc::from(world.grid.read_box(min, max + IVec3::ONE)));
     match world.apply(edit.clone()) {
         Ok(changed) if changed > 0 => {
             if let Some(applied) = applied {
-                applied.write(EditApplied { edit, min, max, changed, before });
+                // No `before`: the server keeps the undo stacks.
+                applied.write(EditApplied { edit, min, max, changed, before: None });
             }
         }
         Ok(_) => {}
         // The server applied it to the same world: refusing it here means the worlds differ.
         Err(e) => warn!("edit {} from the server does not apply here: {e}", done.seq),
+    }
+    None
+}
+
+/// Adds objects the server spawned, each following the server's clock from its birth.
+fn spawn_from_server(app_world: &mut World, objects: &[(SavedObject, f64)]) {
+    for (object, born) in objects {
+        let spawned = {
+            let mut world = app_world.resource_mut::<VoxelWorld>();
+            model_for_world(&object.model, &mut world)
+        }
+        .and_then(|model| spawn_object_in(app_world, Arc::new(model), object.motion(), Vec3::from(object.anchor)));
+        match spawned {
+            Ok(entity) => {
+                app_world.entity_mut(entity).insert(BornAt(*born));
+            }
+            Err(e) => warn!("object not shown: {e}"),
+        }
     }
 }
 
@@ -124,14 +189,15 @@ fn take_world_and_edits(
     mut applied: MessageWriter<EditApplied>,
     renet: Option<ResMut<bevy_replicon_renet::RenetClient>>,
     gpu: Option<Res<bevy::render::renderer::RenderDevice>>,
+    real: Res<Time<Real>>,
 ) {
     let client = &mut *client;
     let mut renet = renet;
-    let mut fresh: Option<(u64, VoxelWorld)> = None;
+    let mut fresh: Option<(u64, f64, VoxelWorld)> = None;
     for piece in pieces.read() {
         client.me = Some(piece.player);
         match client.assembly.add(piece.index, piece.count, &piece.bytes) {
-            Ok(Some(world)) => fresh = Some((piece.seq, world)),
+            Ok(Some(world)) => fresh = Some((piece.seq, piece.clock, world)),
             Ok(None) => {}
             Err(e) => {
                 error!("{e}");
@@ -142,16 +208,20 @@ fn take_world_and_edits(
             }
         }
     }
-    if let Some((seq, mut world)) = fresh {
+    if let Some((seq, clock, mut world)) = fresh {
+        client.clock.sample(clock, real.elapsed_secs_f64());
+        // The world's own objects, born their age before the clock it was copied at.
+        let mut objects: Vec<(SavedObject, f64)> =
+            world.objects.iter().flatten().map(|o| (o.clone(), clock - o.age as f64)).collect();
         // Edits that came before the last piece: those after the world's own number apply now, in order.
         for done in std::mem::take(&mut client.early).iter().filter(|d| d.seq > seq) {
-            apply_done(&mut world, done, client.me, None);
+            objects.extend(apply_done(&mut world, done, None));
             client.seq = done.seq;
         }
         client.seq = client.seq.max(seq);
         for done in edits.read() {
             if done.seq > client.seq {
-                apply_done(&mut world, done, client.me, None);
+                objects.extend(apply_done(&mut world, done, None));
                 client.seq = done.seq;
             }
         }
@@ -165,21 +235,18 @@ fn take_world_and_edits(
             return;
         }
         client.loaded = true;
-        let objects = world.objects.clone().unwrap_or_default();
+        // The objects' models resolve in this palette (the server added their materials): it is the server's.
+        client.palette_ids = world.palette.id_count();
         commands.insert_resource(world);
         commands.queue(move |app_world: &mut World| {
-            let old: Vec<Entity> =
-                app_world.query_filtered::<Entity, With<crate::dynamic::DynamicObject>>().iter(app_world).collect();
+            let old: Vec<Entity> = app_world.query_filtered::<Entity, With<DynamicObject>>().iter(app_world).collect();
             old.into_iter().for_each(|e| {
                 app_world.despawn(e);
             });
-            if let Err(e) = crate::dynamic::saved::spawn_saved(app_world, &objects) {
-                warn!("objects not restored: {e}");
-            }
+            spawn_from_server(app_world, &objects);
         });
         return;
     }
-    let me = client.me;
     match (client.loaded, world) {
         (true, Some(mut world)) => {
             for done in edits.read() {
@@ -189,7 +256,15 @@ fn take_world_and_edits(
                 if done.seq != client.seq + 1 {
                     warn!("edit {} arrived after {}: edits are missing", done.seq, client.seq);
                 }
-                apply_done(&mut world, done, me, Some(&mut applied));
+                let palette_is_servers = world.palette.id_count() == client.palette_ids;
+                if let Some(spawn) = apply_done(&mut world, done, Some(&mut applied)) {
+                    commands.queue(move |app_world: &mut World| spawn_from_server(app_world, &[spawn]));
+                }
+                if palette_is_servers {
+                    client.palette_ids = world.palette.id_count();
+                } else {
+                    warn!("the palette holds materials the server did not send");
+                }
                 client.seq = done.seq;
             }
         }
@@ -197,16 +272,52 @@ fn take_world_and_edits(
     }
 }
 
-/// The player's edits (and undo's restores) go to the server instead of changing the world here.
+/// The player's edits (and undo's restores) go to the server instead of changing the world here. Materials the
+/// game added to the palette for them (a dropped model's colours) go along and leave this palette: they come
+/// back with the server's ids, in the server's order.
 fn forward_requests(
     client: Res<NetClient>,
     mut requests: MessageReader<EditRequest>,
     mut asks: MessageWriter<EditAsk>,
+    world: Option<ResMut<VoxelWorld>>,
 ) {
+    if requests.is_empty() {
+        return;
+    }
+    let mut own = Vec::new();
+    if let Some(mut world) = world
+        && client.loaded
+        && world.palette.id_count() > client.palette_ids
+    {
+        let known = client.palette_ids.max(1) - 1;
+        own = world.palette.materials.drain(known..).map(|m| NetMaterial::from(&m)).collect();
+    }
+    let first_new = if own.is_empty() { 0 } else { client.palette_ids as u16 };
     for request in requests.read() {
         if client.loaded {
-            asks.write(EditAsk { edit: NetEdit::from(&request.edit), undoable: request.undoable });
+            let edit = NetEdit::from(&request.edit);
+            asks.write(EditAsk { edit, undoable: request.undoable, first_new, materials: own.clone() });
         }
+    }
+}
+
+fn take_server_time(mut times: MessageReader<ServerTime>, mut client: ResMut<NetClient>, real: Res<Time<Real>>) {
+    let local = real.elapsed_secs_f64();
+    for time in times.read() {
+        client.clock.sample(time.seconds, local);
+    }
+}
+
+/// Places the server's objects by the server's clock, whatever this client's frame rate.
+fn follow_server_clock(
+    client: Res<NetClient>,
+    real: Res<Time<Real>>,
+    mut objects: Query<(&mut DynamicObject, &BornAt, &mut Transform)>,
+) {
+    let Some(now) = client.clock.now(real.elapsed_secs_f64()) else { return };
+    for (mut object, born, mut transform) in &mut objects {
+        object.age = (now - born.0).max(0.0) as f32;
+        transform.translation = object.anchor + object.motion.offset(object.age);
     }
 }
 

@@ -9,6 +9,7 @@
 
 pub mod client;
 pub mod console;
+pub mod materials;
 pub mod protocol;
 pub mod server;
 pub mod snapshot;
@@ -35,7 +36,8 @@ impl Plugin for NetworkingPlugin {
 
 /// A server without window or GPU: the world, its edit path and light pool, and the server's rules. Call
 /// `transport::listen` on it, then `update` it (`glowbrick serve` does, 60 times a second).
-pub fn server_app(world: VoxelWorld, rules: server::ServerRules) -> App {
+pub fn server_app(mut world: VoxelWorld, rules: server::ServerRules) -> App {
+    resolve_object_models(&mut world);
     let mut app = App::new();
     app.add_plugins((MinimalPlugins, StatesPlugin, NetworkingPlugin))
         .insert_resource(world)
@@ -44,6 +46,18 @@ pub fn server_app(world: VoxelWorld, rules: server::ServerRules) -> App {
     app.finish();
     app.cleanup();
     app
+}
+
+/// Adds the materials the world's objects' models need to its palette before anyone joins: a client resolving
+/// them itself would grow its palette where the server's did not, and the next material the server adds would
+/// take a different id there. A model that cannot be resolved is left to each client's warning.
+fn resolve_object_models(world: &mut VoxelWorld) {
+    let models: Vec<String> = world.objects.iter().flatten().map(|o| o.model.clone()).collect();
+    for model in models {
+        if let Err(e) = crate::dynamic::model_for_palette(&model, &mut world.palette) {
+            eprintln!("object model '{model}' cannot be resolved: {e}");
+        }
+    }
 }
 
 /// A client without window or GPU (tests, the bench): it receives the world and keeps its grid and light pool in

@@ -1,7 +1,8 @@
 //! What client and server say to each other. Every message is plain data (postcard on the wire); nothing a client
 //! sends names a file, a setting of the server or another player.
 
-use crate::world::{Edit, Voxel};
+use crate::world::objects::SavedObject;
+use crate::world::{Edit, Material, Voxel};
 use bevy::math::IVec3;
 use bevy::prelude::*;
 use bevy_replicon::prelude::*;
@@ -48,6 +49,40 @@ impl From<&NetEdit> for Edit {
     }
 }
 
+/// A material as it travels (`world::Material` skips zero fields in files, which postcard cannot read back).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NetMaterial {
+    pub name: String,
+    pub albedo: [f32; 3],
+    pub emission: [f32; 3],
+    pub strength: f32,
+    pub variation: f32,
+}
+
+impl From<&Material> for NetMaterial {
+    fn from(m: &Material) -> Self {
+        NetMaterial {
+            name: m.name.clone(),
+            albedo: m.albedo,
+            emission: m.emission,
+            strength: m.strength,
+            variation: m.variation,
+        }
+    }
+}
+
+impl From<&NetMaterial> for Material {
+    fn from(m: &NetMaterial) -> Self {
+        Material {
+            name: m.name.clone(),
+            albedo: m.albedo,
+            emission: m.emission,
+            strength: m.strength,
+            variation: m.variation,
+        }
+    }
+}
+
 // --- client to server ---
 
 /// The first thing a client says: who it is.
@@ -57,10 +92,36 @@ pub struct Hello {
 }
 
 /// Asks the server to apply an edit. `undoable` edits come back marked so the sender's undo records them.
+///
+/// An edit may use materials the server's palette lacks (a dropped model's colours): they travel in `materials`,
+/// and the edit names them by the ids they would take after the palette the sender has from the server, from
+/// `first_new` on. The server adds them (or finds them by name) and renumbers the edit.
 #[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EditAsk {
     pub edit: NetEdit,
     pub undoable: bool,
+    pub first_new: u16,
+    pub materials: Vec<NetMaterial>,
+}
+
+impl EditAsk {
+    /// An edit of materials the server already has.
+    pub fn plain(edit: NetEdit, undoable: bool) -> Self {
+        EditAsk { edit, undoable, first_new: 0, materials: Vec::new() }
+    }
+}
+
+/// Asks the server to undo (or redo) the sender's latest edit. The server keeps each player's stacks by name, so
+/// they outlast a reconnect.
+#[derive(Message, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HistoryAsk {
+    pub redo: bool,
+}
+
+/// Asks the server to spawn a moving object (a built-in model; its `age` is ignored: it starts now).
+#[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SpawnAsk {
+    pub object: SavedObject,
 }
 
 /// Asks the server to set the time of day (hours, 0-24).
@@ -83,19 +144,42 @@ pub struct Pose {
 #[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct WorldPiece {
     pub seq: u64,
+    /// The server's object clock (seconds) when the world was copied: its objects' ages are as of then.
+    pub clock: f64,
     pub player: u64,
     pub index: u32,
     pub count: u32,
     pub bytes: Vec<u8>,
 }
 
-/// An edit the server applied, number `seq` (1, 2, 3, ... with no gaps), asked for by player `by`.
+/// A change the server made, number `seq` (1, 2, 3, ... with no gaps), asked for by player `by`. `materials`
+/// join the end of the palette first, in order (every client's palette is the server's).
 #[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EditDone {
     pub seq: u64,
     pub by: u64,
     pub undoable: bool,
-    pub edit: NetEdit,
+    pub materials: Vec<NetMaterial>,
+    pub change: Change,
+}
+
+/// What an `EditDone` changed. Spawns travel in the edits' one numbered order, so a client joining with a world
+/// as of edit `seq` gets every object spawned after it exactly once.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Change {
+    Edit(NetEdit),
+    /// A moving object, at age 0 when the server's object clock read `born` (seconds).
+    Spawn {
+        object: SavedObject,
+        born: f64,
+    },
+}
+
+/// The server's object clock (seconds), a few times a second: moving objects' phases follow it, not the
+/// client's frame rate.
+#[derive(Message, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ServerTime {
+    pub seconds: f64,
 }
 
 /// Why the server refused the receiver's request.
@@ -145,13 +229,16 @@ pub fn register_messages(app: &mut App) {
         .add_client_message::<EditAsk>(Channel::Ordered)
         .add_client_message::<ClockAsk>(Channel::Ordered)
         .add_client_message::<Pose>(Channel::Unreliable)
+        .add_client_message::<SpawnAsk>(Channel::Ordered)
+        .add_client_message::<HistoryAsk>(Channel::Ordered)
         .add_server_message::<WorldPiece>(Channel::Ordered)
         .add_server_message::<EditDone>(Channel::Ordered)
         .add_server_message::<Refused>(Channel::Ordered)
         .add_server_message::<ClockNow>(Channel::Ordered)
         .add_server_message::<Players>(Channel::Ordered)
         .add_server_message::<Notice>(Channel::Ordered)
-        .add_server_message::<WelcomeBack>(Channel::Ordered);
+        .add_server_message::<WelcomeBack>(Channel::Ordered)
+        .add_server_message::<ServerTime>(Channel::Unreliable);
 }
 
 #[cfg(test)]

@@ -1,14 +1,17 @@
 //! The server's side: it owns the world, takes edits from clients as requests, checks them, applies them in one
 //! order and sends each applied edit to every client with its number. A joining client gets the world as it is
-//! (after edit number `seq`) in pieces, then every edit after it. The server keeps the time of day and the moving
-//! objects' phases, and saves the world as the game does. It has no log subscriber (a headless app): what its
-//! operator should see (joins, leaves, names, saves) is printed to its console.
+//! (after edit number `seq`) in pieces, then every edit after it. Spawned objects and materials clients bring ride
+//! in the same numbered order. The server keeps the time of day, the objects' clock and every player's undo
+//! history, and saves the world as the game does. It has no log subscriber (a headless app): what its operator
+//! should see (joins, leaves, names, saves) is printed to its console.
 
 use super::console::{BanList, ConsoleCommand, same_name};
+use super::materials::{Taken, take_materials};
 use super::protocol::*;
 use super::snapshot;
 use crate::world::events::{ApplyEdits, EditApplied};
 use crate::world::format::save_with_backup;
+use crate::world::objects::{MAX_SAVED_OBJECTS, SavedObject};
 use crate::world::{Edit, VoxelWorld};
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task};
@@ -33,6 +36,11 @@ pub struct ServerRules {
     /// Where and how often the world is saved (also on request and on exit); `None` keeps it in memory only.
     pub save_path: Option<PathBuf>,
     pub save_every: Duration,
+    /// Materials one connection may add to the palette, and the most ids the palette may reach.
+    pub materials_per_player: usize,
+    pub max_material_ids: usize,
+    /// What one spawn costs of a client's edit allowance (a spawn is a larger change than a block).
+    pub spawn_cost: f32,
 }
 
 impl Default for ServerRules {
@@ -44,6 +52,9 @@ impl Default for ServerRules {
             pieces_per_tick: 4,
             save_path: None,
             save_every: Duration::from_secs(60),
+            materials_per_player: 32,
+            max_material_ids: 4096,
+            spawn_cost: 10.0,
         }
     }
 }
@@ -73,6 +84,8 @@ pub struct Peer {
     joined_at: u64,
     /// Whether its hello has arrived (its world is sent only then, so a banned name gets nothing).
     greeted: bool,
+    /// Materials it has added to the palette.
+    materials_added: usize,
 }
 
 /// How long the server remembers where a player who left was, so that returning under the same name puts them
@@ -86,6 +99,103 @@ const MAX_LEFT_PLAYERS: usize = 4096;
 #[derive(Resource, Clone, Debug, Default)]
 pub struct LeftPlayers(pub Vec<(String, Pose, f64)>);
 
+/// Voxels of undo history the server keeps for one player (2 bytes each: 4 MiB), and for everyone together.
+pub const HISTORY_VOXELS_PER_PLAYER: usize = 1 << 21;
+pub const HISTORY_VOXELS: usize = 1 << 25;
+
+/// Every player's undo and redo stacks, by name without regard to case: kept while they play and for
+/// `REMEMBER_LEFT` after they leave, so a player who reconnects (or restarts the game) can still undo.
+#[derive(Resource, Default)]
+pub struct Histories {
+    players: std::collections::HashMap<String, PlayerHistory>,
+    voxels: usize,
+}
+
+struct PlayerHistory {
+    stacks: crate::world::history::EditHistory,
+    /// When the player left (server seconds); `None` while playing.
+    left: Option<f64>,
+}
+
+impl Histories {
+    /// `name`'s stacks, made empty on first use.
+    fn of(&mut self, name: &str) -> &mut PlayerHistory {
+        self.players.entry(name.to_lowercase()).or_insert_with(|| PlayerHistory {
+            stacks: crate::world::history::EditHistory::new(HISTORY_VOXELS_PER_PLAYER),
+            left: None,
+        })
+    }
+
+    /// Undo batches `name` has on the server.
+    pub fn undo_len(&self, name: &str) -> usize {
+        self.players.get(&name.to_lowercase()).map_or(0, |p| p.stacks.undo_len())
+    }
+
+    fn record(&mut self, name: &str, edit: Edit, before: Arc<[crate::world::Voxel]>) {
+        let (min, max) = edit.bounds();
+        let stacks = &mut self.of(name).stacks;
+        let held = stacks.voxels();
+        stacks.record(edit, min, max, before);
+        let now = stacks.voxels();
+        self.voxels = self.voxels + now - held;
+        self.make_room();
+    }
+
+    /// Takes back or applies again `name`'s latest batch: the edit to apply.
+    fn step(&mut self, name: &str, redo: bool) -> Option<Edit> {
+        let stacks = &mut self.players.get_mut(&name.to_lowercase())?.stacks;
+        let held = stacks.voxels();
+        let edit = if redo { stacks.redo() } else { stacks.undo() };
+        let now = stacks.voxels();
+        self.voxels = self.voxels + now - held;
+        self.make_room();
+        edit
+    }
+
+    /// Over the server's budget, the oldest batches go: those of players who left first (longest gone first),
+    /// then those of the largest history.
+    fn make_room(&mut self) {
+        while self.voxels > HISTORY_VOXELS {
+            let victim = self
+                .players
+                .iter()
+                .filter(|(_, p)| p.stacks.undo_len() > 0)
+                .max_by(|a, b| {
+                    let key = |p: &PlayerHistory| (p.left.map(|t| -t), p.stacks.voxels());
+                    key(a.1).partial_cmp(&key(b.1)).unwrap_or(std::cmp::Ordering::Equal)
+                })
+                .map(|(name, _)| name.clone());
+            let Some(stacks) = victim.and_then(|name| self.players.get_mut(&name)).map(|p| &mut p.stacks) else {
+                return;
+            };
+            let held = stacks.voxels();
+            stacks.forget_oldest();
+            self.voxels -= held - stacks.voxels();
+        }
+    }
+
+    fn left(&mut self, name: &str, now: f64) {
+        if let Some(player) = self.players.get_mut(&name.to_lowercase()) {
+            player.left = Some(now);
+        }
+        let expired: Vec<String> = (self.players.iter())
+            .filter(|(_, p)| p.left.is_some_and(|t| now - t > REMEMBER_LEFT.as_secs_f64()))
+            .map(|(name, _)| name.clone())
+            .collect();
+        for name in expired {
+            if let Some(player) = self.players.remove(&name) {
+                self.voxels -= player.stacks.voxels();
+            }
+        }
+    }
+
+    fn back(&mut self, name: &str) {
+        if let Some(player) = self.players.get_mut(&name.to_lowercase()) {
+            player.left = None;
+        }
+    }
+}
+
 /// Who may not play here, and where that list is kept (`None`: in memory only).
 #[derive(Resource, Clone, Debug, Default)]
 pub struct Bans {
@@ -97,6 +207,7 @@ pub struct Bans {
 #[derive(Component)]
 struct Sending {
     seq: u64,
+    clock: f64,
     pieces: Arc<Vec<Vec<u8>>>,
     next: usize,
 }
@@ -108,14 +219,21 @@ struct WantsWorld {
     since: u64,
 }
 
-/// The last world encoded (as of edit `seq`), reused while it is recent enough for every client waiting.
+/// A world encoded as of edit `seq` and object clock `clock`.
+struct Encoded {
+    seq: u64,
+    clock: f64,
+    pieces: Arc<Vec<Vec<u8>>>,
+}
+
+/// The last world encoded, reused while it is recent enough for every client waiting.
 #[derive(Resource, Default)]
-struct EncodedWorld(Option<(u64, Arc<Vec<Vec<u8>>>)>);
+struct EncodedWorld(Option<Encoded>);
 
 /// A world being encoded off the server's tick (the default world's 32 MB of RON take about a second), as of
-/// edit number `seq`.
+/// edit number `seq` and object clock `clock`.
 #[derive(Resource, Default)]
-struct Encoding(Option<(u64, Task<Vec<Vec<u8>>>)>);
+struct Encoding(Option<(u64, f64, Task<Vec<Vec<u8>>>)>);
 
 /// Asks the server to save now (the console's `save`, and exit).
 #[derive(Message, Clone, Copy, Debug)]
@@ -125,19 +243,37 @@ pub struct SaveNow;
 #[derive(Resource, Clone, Copy, Debug)]
 pub struct WorldClock(pub f32);
 
+/// The objects' clock: seconds the server has run them. Every object's age grows with it, and clients place
+/// objects by it (`ServerTime`), whatever their frame rate.
+#[derive(Resource, Clone, Copy, Debug, Default)]
+pub struct ObjectClockSeconds(pub f64);
+
+/// When each of the world's objects was born on the object clock (same order as `VoxelWorld::objects`; the
+/// server only appends to both). Ages are worked out from these in f64: an f32 age summed a tick at a time stops
+/// growing after some days of uptime.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct ObjectBirths(pub Vec<f64>);
+
 pub struct NetServerPlugin;
 
 impl Plugin for NetServerPlugin {
     fn build(&self, app: &mut App) {
-        let hours = app.world().get_resource::<VoxelWorld>().and_then(|w| w.time_of_day).unwrap_or(12.0);
+        let world = app.world().get_resource::<VoxelWorld>();
+        let hours = world.and_then(|w| w.time_of_day).unwrap_or(12.0);
+        let births = world
+            .and_then(|w| w.objects.as_ref())
+            .map_or_else(Vec::new, |objects| objects.iter().map(|o| -(o.age as f64)).collect());
         app.init_resource::<ServerRules>()
             .init_resource::<ServerStats>()
             .init_resource::<Bans>()
+            .init_resource::<Histories>()
             .init_resource::<LeftPlayers>()
             .init_resource::<EncodedWorld>()
             .init_resource::<Encoding>()
             .init_resource::<Saving>()
             .insert_resource(WorldClock(hours))
+            .init_resource::<ObjectClockSeconds>()
+            .insert_resource(ObjectBirths(births))
             .add_message::<SaveNow>()
             .add_observer(welcome)
             .add_observer(farewell)
@@ -145,8 +281,16 @@ impl Plugin for NetServerPlugin {
                 Update,
                 (
                     (refill_tokens, take_hellos, take_poses, take_clock_asks),
-                    apply_edit_asks.in_set(ApplyEdits),
-                    (start_sending_world, send_world_pieces, send_players, advance_objects, save_on_schedule).chain(),
+                    (apply_edit_asks, apply_history_asks, apply_spawn_asks).chain().in_set(ApplyEdits),
+                    (
+                        advance_objects,
+                        start_sending_world,
+                        send_world_pieces,
+                        send_players,
+                        send_server_time,
+                        save_on_schedule,
+                    )
+                        .chain(),
                 )
                     .chain(),
             );
@@ -176,7 +320,15 @@ fn welcome(
     stats.joins += 1;
     let name = format!("player {}", stats.joins);
     println!("{name} joined");
-    let peer = Peer { name, pose: None, tokens: rules.edit_burst, quiet: 0.0, joined_at: stats.seq, greeted: false };
+    let peer = Peer {
+        name,
+        pose: None,
+        tokens: rules.edit_burst,
+        quiet: 0.0,
+        joined_at: stats.seq,
+        greeted: false,
+        materials_added: 0,
+    };
     commands.entity(add.entity).insert(peer);
 }
 
@@ -189,10 +341,17 @@ pub fn send_away(world: &mut World, client: Entity, why: &str) {
     world.write_message(DisconnectRequest { client });
 }
 
-fn farewell(remove: On<Remove, Peer>, peers: Query<&Peer>, time: Res<Time>, mut left: ResMut<LeftPlayers>) {
+fn farewell(
+    remove: On<Remove, Peer>,
+    peers: Query<&Peer>,
+    time: Res<Time>,
+    mut left: ResMut<LeftPlayers>,
+    mut histories: ResMut<Histories>,
+) {
     let Ok(peer) = peers.get(remove.entity) else { return };
     println!("{} left", peer.name);
     let now = time.elapsed_secs_f64();
+    histories.left(&peer.name, now);
     left.0.retain(|(name, _, when)| !same_name(name, &peer.name) && now - when < REMEMBER_LEFT.as_secs_f64());
     if let Some(pose) = peer.pose {
         left.0.push((peer.name.clone(), pose, now));
@@ -230,7 +389,7 @@ fn take_hellos(
     transport: Option<Res<NetcodeServerTransport>>,
     (mut notices, mut welcome_back): (MessageWriter<ToClients<Notice>>, MessageWriter<ToClients<WelcomeBack>>),
     mut disconnects: MessageWriter<DisconnectRequest>,
-    (time, mut left): (Res<Time>, ResMut<LeftPlayers>),
+    (time, mut left, mut histories): (Res<Time>, ResMut<LeftPlayers>, ResMut<Histories>),
 ) {
     for hello in hellos.read() {
         let Some(client) = hello.client_id.entity() else { continue };
@@ -255,6 +414,7 @@ fn take_hellos(
             notices.write(ToClients { targets: SendTargets::Single(hello.client_id), message });
             disconnects.write(DisconnectRequest { client });
         } else {
+            histories.back(&peer.name);
             commands.entity(client).insert(WantsWorld { since: peer.joined_at });
             if let Some(i) = back {
                 let (_, pose, _) = left.0.remove(i);
@@ -314,43 +474,192 @@ fn apply_edit_asks(
     mut applied: MessageWriter<EditApplied>,
     mut done: MessageWriter<ToClients<EditDone>>,
     mut refused: MessageWriter<ToClients<Refused>>,
+    mut histories: ResMut<Histories>,
 ) {
     for ask in asks.read() {
         let Some(mut peer) = ask.client_id.entity().and_then(|e| peers.get_mut(e).ok()) else { continue };
-        let edit = Edit::from(&ask.edit);
         let problem = if peer.tokens < 1.0 {
             Some(format!("too many edits: the server takes {} a second", rules.edits_per_second))
         } else {
             peer.tokens -= 1.0;
-            edit_problem(&edit, &rules)
+            edit_problem(&Edit::from(&ask.edit), &rules)
         };
         let result = match problem {
             Some(problem) => Err(problem),
-            None => world.apply(edit.clone()).map_err(|e| e.to_string()),
+            None => apply_with_materials(&mut world, ask, &rules, peer.materials_added),
         };
         match result {
-            Ok(0) => {}
-            Ok(changed) => {
+            Ok(None) => {}
+            Ok(Some((taken, edit, changed, before))) => {
                 stats.seq += 1;
+                peer.materials_added += taken.added.len();
+                if let Some(before) = before {
+                    histories.record(&peer.name, edit.clone(), before);
+                }
                 let (min, max) = edit.bounds();
                 applied.write(EditApplied { edit, min, max, changed, before: None });
                 let message = EditDone {
                     seq: stats.seq,
                     by: player_id(ask.client_id),
                     undoable: ask.undoable,
-                    edit: ask.edit.clone(),
+                    materials: taken.added,
+                    change: Change::Edit(taken.edit),
                 };
                 done.write(ToClients { targets: SendTargets::CLIENTS_ONLY, message });
             }
-            Err(reason) => {
-                stats.refused += 1;
-                if peer.quiet <= 0.0 {
-                    peer.quiet = 1.0;
-                    refused
-                        .write(ToClients { targets: SendTargets::Single(ask.client_id), message: Refused { reason } });
-                }
-            }
+            Err(reason) => refuse(&mut stats, &mut peer, ask.client_id, reason, &mut refused),
         }
+    }
+}
+
+/// Tells a client why its request was refused, at most once a second.
+fn refuse(
+    stats: &mut ServerStats,
+    peer: &mut Peer,
+    client: ClientId,
+    reason: String,
+    refused: &mut MessageWriter<ToClients<Refused>>,
+) {
+    stats.refused += 1;
+    if peer.quiet <= 0.0 {
+        peer.quiet = 1.0;
+        refused.write(ToClients { targets: SendTargets::Single(client), message: Refused { reason } });
+    }
+}
+
+/// Adds the materials an ask brings (`net::materials`), then applies its edit; a refused edit takes its new
+/// materials back out of the palette, so no client is told of materials that are not the server's. `None`: the
+/// edit changed nothing. An undoable edit also hands back what its box held before.
+#[allow(clippy::type_complexity)]
+fn apply_with_materials(
+    world: &mut VoxelWorld,
+    ask: &EditAsk,
+    rules: &ServerRules,
+    added_before: usize,
+) -> Result<Option<(Taken, Edit, u64, Option<Arc<[crate::world::Voxel]>>)>, String> {
+    let palette_before = world.palette.materials.len();
+    let allowance = rules.materials_per_player.saturating_sub(added_before);
+    let taken = take_materials(
+        &mut world.palette,
+        ask.edit.clone(),
+        ask.first_new,
+        &ask.materials,
+        allowance,
+        rules.max_material_ids,
+    )?;
+    let edit = Edit::from(&taken.edit);
+    let (min, max) = edit.bounds();
+    let before = (ask.undoable && world.grid.contains(min) && world.grid.contains(max))
+        .then(|| Arc::from(world.grid.read_box(min, max + IVec3::ONE)));
+    match world.apply(edit.clone()) {
+        Ok(0) => {
+            world.palette.materials.truncate(palette_before);
+            Ok(None)
+        }
+        Ok(changed) => Ok(Some((taken, edit, changed, before))),
+        Err(e) => {
+            world.palette.materials.truncate(palette_before);
+            Err(e.to_string())
+        }
+    }
+}
+
+/// Undoes or redoes the asking player's latest batch (the server's stacks for that name).
+#[allow(clippy::too_many_arguments)]
+fn apply_history_asks(
+    mut asks: MessageReader<FromClient<HistoryAsk>>,
+    mut world: ResMut<VoxelWorld>,
+    mut stats: ResMut<ServerStats>,
+    mut peers: Query<&mut Peer>,
+    mut histories: ResMut<Histories>,
+    mut applied: MessageWriter<EditApplied>,
+    mut done: MessageWriter<ToClients<EditDone>>,
+    mut refused: MessageWriter<ToClients<Refused>>,
+) {
+    for ask in asks.read() {
+        let Some(mut peer) = ask.client_id.entity().and_then(|e| peers.get_mut(e).ok()) else { continue };
+        if peer.tokens < 1.0 {
+            let reason = "too many edits: wait a moment".to_string();
+            refuse(&mut stats, &mut peer, ask.client_id, reason, &mut refused);
+            continue;
+        }
+        peer.tokens -= 1.0;
+        let Some(edit) = histories.step(&peer.name, ask.redo) else {
+            let reason = format!("nothing to {}", if ask.redo { "redo" } else { "undo" });
+            refuse(&mut stats, &mut peer, ask.client_id, reason, &mut refused);
+            continue;
+        };
+        match world.apply(edit.clone()) {
+            Ok(0) => {}
+            Ok(changed) => {
+                stats.seq += 1;
+                let (min, max) = edit.bounds();
+                let change = Change::Edit(NetEdit::from(&edit));
+                applied.write(EditApplied { edit, min, max, changed, before: None });
+                let message = EditDone {
+                    seq: stats.seq,
+                    by: player_id(ask.client_id),
+                    undoable: false,
+                    materials: vec![],
+                    change,
+                };
+                done.write(ToClients { targets: SendTargets::CLIENTS_ONLY, message });
+            }
+            Err(e) => refuse(&mut stats, &mut peer, ask.client_id, e.to_string(), &mut refused),
+        }
+    }
+}
+
+/// Spawns the objects clients ask for, in the edits' numbered order, with the models' materials the palette
+/// lacks added first (as the game does for its own lanterns).
+#[allow(clippy::too_many_arguments)]
+fn apply_spawn_asks(
+    mut asks: MessageReader<FromClient<SpawnAsk>>,
+    mut world: ResMut<VoxelWorld>,
+    rules: Res<ServerRules>,
+    (clock, mut births): (Res<ObjectClockSeconds>, ResMut<ObjectBirths>),
+    mut stats: ResMut<ServerStats>,
+    mut peers: Query<&mut Peer>,
+    mut done: MessageWriter<ToClients<EditDone>>,
+    mut refused: MessageWriter<ToClients<Refused>>,
+) {
+    for ask in asks.read() {
+        let Some(mut peer) = ask.client_id.entity().and_then(|e| peers.get_mut(e).ok()) else { continue };
+        let object = SavedObject { age: 0.0, ..ask.object.clone() };
+        let count = world.objects.as_ref().map_or(0, Vec::len);
+        let problem = if peer.tokens < rules.spawn_cost {
+            Some("too many spawns: wait a moment".to_string())
+        } else if count >= MAX_SAVED_OBJECTS {
+            Some(format!("this world holds {MAX_SAVED_OBJECTS} moving objects, the most the renderer draws"))
+        } else {
+            let size = world.grid.size().as_vec3();
+            let inside =
+                Vec3::from(object.anchor).cmpge(Vec3::ZERO).all() && Vec3::from(object.anchor).cmplt(size).all();
+            object.check(size).err().or((!inside).then(|| "a spawn must be centred inside the world".to_string()))
+        };
+        if let Some(reason) = problem {
+            refuse(&mut stats, &mut peer, ask.client_id, reason, &mut refused);
+            continue;
+        }
+        peer.tokens -= rules.spawn_cost;
+        let palette_before = world.palette.materials.len();
+        if let Err(reason) = crate::dynamic::model_for_palette(&object.model, &mut world.palette) {
+            world.palette.materials.truncate(palette_before);
+            refuse(&mut stats, &mut peer, ask.client_id, reason, &mut refused);
+            continue;
+        }
+        let materials = world.palette.materials[palette_before..].iter().map(NetMaterial::from).collect();
+        world.objects.get_or_insert_with(Vec::new).push(object.clone());
+        births.0.push(clock.0);
+        stats.seq += 1;
+        let message = EditDone {
+            seq: stats.seq,
+            by: player_id(ask.client_id),
+            undoable: false,
+            materials,
+            change: Change::Spawn { object, born: clock.0 },
+        };
+        done.write(ToClients { targets: SendTargets::CLIENTS_ONLY, message });
     }
 }
 
@@ -368,22 +677,23 @@ fn start_sending_world(
     mut commands: Commands,
     waiting: Query<(Entity, &WantsWorld)>,
     world: Res<VoxelWorld>,
-    clock: Res<WorldClock>,
+    (clock, objects_clock): (Res<WorldClock>, Res<ObjectClockSeconds>),
     stats: Res<ServerStats>,
     mut encoded: ResMut<EncodedWorld>,
     mut encoding: ResMut<Encoding>,
 ) {
-    if let Some((seq, task)) = &mut encoding.0
+    if let Some((seq, clock, task)) = &mut encoding.0
         && let Some(pieces) = bevy::tasks::futures::check_ready(task)
     {
-        encoded.0 = Some((*seq, Arc::new(pieces)));
+        encoded.0 = Some(Encoded { seq: *seq, clock: *clock, pieces: Arc::new(pieces) });
         encoding.0 = None;
+        crate::alloc_watch::return_freed_memory();
     }
     let mut stale = false;
     for (client, wants) in &waiting {
         match &encoded.0 {
-            Some((seq, pieces)) if *seq >= wants.since => {
-                let sending = Sending { seq: *seq, pieces: pieces.clone(), next: 0 };
+            Some(world) if world.seq >= wants.since => {
+                let sending = Sending { seq: world.seq, clock: world.clock, pieces: world.pieces.clone(), next: 0 };
                 commands.entity(client).remove::<WantsWorld>().insert(sending);
             }
             _ => stale = true,
@@ -392,7 +702,7 @@ fn start_sending_world(
     if stale && encoding.0.is_none() {
         let now = world_now(&world, &clock);
         let task = AsyncComputeTaskPool::get().spawn(async move { snapshot::encode(&now) });
-        encoding.0 = Some((stats.seq, task));
+        encoding.0 = Some((stats.seq, objects_clock.0, task));
     }
 }
 
@@ -408,7 +718,14 @@ fn send_world_pieces(
         for _ in 0..rules.pieces_per_tick {
             let Some(bytes) = send.pieces.get(send.next).cloned() else { break };
             stats.world_bytes_sent += bytes.len() as u64;
-            let message = WorldPiece { seq: send.seq, player: client.to_bits(), index: send.next as u32, count, bytes };
+            let message = WorldPiece {
+                seq: send.seq,
+                clock: send.clock,
+                player: client.to_bits(),
+                index: send.next as u32,
+                count,
+                bytes,
+            };
             out.write(ToClients { targets: SendTargets::Single(client.into()), message });
             send.next += 1;
         }
@@ -523,10 +840,33 @@ fn send_players(
 }
 
 /// The objects' phases move on with the server's clock, so a joining client sees them where the others do.
-fn advance_objects(time: Res<Time>, mut world: ResMut<VoxelWorld>) {
-    let dt = time.delta_secs();
+fn advance_objects(
+    time: Res<Time>,
+    mut clock: ResMut<ObjectClockSeconds>,
+    births: Res<ObjectBirths>,
+    mut world: ResMut<VoxelWorld>,
+) {
+    clock.0 += time.delta_secs_f64();
     if let Some(objects) = world.bypass_change_detection().objects.as_mut() {
-        objects.iter_mut().for_each(|o| o.age += dt);
+        for (object, born) in objects.iter_mut().zip(&births.0) {
+            object.age = (clock.0 - born) as f32;
+        }
+    }
+}
+
+/// How often clients hear the object clock.
+const SERVER_TIME_EVERY: f32 = 0.25;
+
+fn send_server_time(
+    time: Res<Time>,
+    mut since: Local<f32>,
+    clock: Res<ObjectClockSeconds>,
+    mut out: MessageWriter<ToClients<ServerTime>>,
+) {
+    *since += time.delta_secs();
+    if *since >= SERVER_TIME_EVERY {
+        *since = 0.0;
+        out.write(ToClients { targets: SendTargets::CLIENTS_ONLY, message: ServerTime { seconds: clock.0 } });
     }
 }
 
@@ -553,6 +893,7 @@ fn save_on_schedule(
     {
         report_save(&mut stats, path, *seq, result);
         saving.0 = None;
+        crate::alloc_watch::return_freed_memory();
     }
     if asks.read().count() > 0 {
         *since = f32::INFINITY;

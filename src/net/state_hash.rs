@@ -3,7 +3,8 @@
 //! world loaded), so two equal worlds hash equal however they came to be.
 
 use crate::lights::{LightKey, LightPool};
-use crate::world::{BrickCell, VoxelWorld};
+use crate::world::objects::SavedObject;
+use crate::world::{BrickCell, Palette, VoxelWorld};
 use bevy::math::IVec3;
 
 struct Fnv(u64);
@@ -99,8 +100,38 @@ mod tests {
     }
 }
 
+/// Every moving object's model, motion and anchor, in order (not its phase, which moves on).
+pub fn objects_hash(objects: &[SavedObject]) -> u64 {
+    let mut h = Fnv::new();
+    for object in objects {
+        h.bytes(object.model.as_bytes());
+        h.bytes(format!("{:?}", object.motion).as_bytes());
+        let (x, y, z) = object.anchor;
+        h.bytes(bytemuck::cast_slice(&[x, y, z]));
+    }
+    h.0
+}
+
+/// Every material of the palette, in id order.
+pub fn palette_hash(palette: &Palette) -> u64 {
+    let mut h = Fnv::new();
+    for m in &palette.materials {
+        h.bytes(m.name.as_bytes());
+        h.bytes(bytemuck::cast_slice(&m.albedo));
+        h.bytes(bytemuck::cast_slice(&m.emission));
+        h.bytes(bytemuck::cast_slice(&[m.strength, m.variation]));
+    }
+    h.0
+}
+
 /// The line a server (when it stops) and a bot (when it is done) print: edit number and hashes, equal on both
 /// ends when the client followed the server.
-pub fn state_line(seq: u64, world: &VoxelWorld, lights: &LightPool) -> String {
-    format!("state: seq={seq} voxels={:016x} lights={:016x}", voxels_hash(world), lights_hash(lights))
+pub fn state_line(seq: u64, world: &VoxelWorld, lights: &LightPool, objects: &[SavedObject]) -> String {
+    format!(
+        "state: seq={seq} voxels={:016x} lights={:016x} palette={:016x} objects={:016x}",
+        voxels_hash(world),
+        lights_hash(lights),
+        palette_hash(&world.palette),
+        objects_hash(objects)
+    )
 }

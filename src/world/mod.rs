@@ -8,6 +8,7 @@ pub mod font;
 pub mod format;
 pub mod generate;
 pub mod grid;
+pub mod history;
 pub mod import;
 pub mod objects;
 pub mod occupancy;

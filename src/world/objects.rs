@@ -49,7 +49,7 @@ const MAX_AGE_SECONDS: f32 = 3.2e7;
 
 impl SavedObject {
     /// The first problem with this entry, for a world of `size` voxels.
-    fn check(&self, size: Vec3) -> Result<(), String> {
+    pub fn check(&self, size: Vec3) -> Result<(), String> {
         if !MODEL_NAMES.contains(&self.model.as_str()) {
             return Err(format!("model '{}' is not a built-in model ({})", self.model, MODEL_NAMES.join(", ")));
         }

@@ -18,6 +18,7 @@ mod save_survives_kill;
 mod saved_objects;
 mod server_ops;
 mod shaders_validate;
+mod shared_objects;
 mod smoke;
 mod traversal_matches_brute_force;
 #[path = "../shared/vox_scene.rs"]

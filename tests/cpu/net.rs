@@ -203,13 +203,14 @@ fn resident_bytes() -> u64 {
 #[test]
 fn hostile_messages_change_nothing_and_valid_clients_play_on() {
     use bevy_replicon::prelude::{ClientMessages, RepliconChannels};
-    use glowbrick::net::protocol::{ClockAsk, EditAsk, Hello, NetEdit};
+    use glowbrick::net::protocol::{ClockAsk, EditAsk, Hello, NetEdit, NetMaterial, SpawnAsk};
     let rules = ServerRules { edits_per_second: 50.0, edit_burst: 100.0, ..default() };
     let (mut server, addr) = start_server(rules);
     let mut good = join(addr, "good", 21);
     let mut evil = join(addr, "evil", 22);
     pump(&mut [&mut server, &mut good, &mut evil], Duration::from_secs(60), |apps| apps[1..].iter().all(|a| loaded(a)));
     let before = state(&mut server);
+    let palette_before = server.world().resource::<VoxelWorld>().palette.clone();
     // Which channels take garbage without ending the connection: garbage on replicon's own handshake channel
     // reads as another protocol's hash, and the server hangs up on that client (the others play on).
     let channels = evil.world().resource::<RepliconChannels>().client_channels().len();
@@ -258,10 +259,32 @@ fn hostile_messages_change_nothing_and_valid_clients_play_on() {
                 NetEdit::Restore { min: [0; 3], max: [1, 1, 1], voxels: vec![1; 3] },
             ];
             for edit in hostile {
-                world.write_message(EditAsk { edit, undoable: true });
+                world.write_message(EditAsk::plain(edit, true));
                 sent += 1;
                 typed += 1;
             }
+            // Materials that may not join the palette, and objects that may not be spawned.
+            let first_new = palette_before.id_count() as u16;
+            let material = |name: &str, strength: f32, albedo: f32| NetMaterial {
+                name: name.into(),
+                albedo: [albedo; 3],
+                emission: [1.0; 3],
+                strength,
+                variation: 0.0,
+            };
+            let place = NetEdit::Place { at: [4, 4, 4], material: first_new };
+            for materials in [vec![material("sun", 1e6, 0.5)], vec![material("nan", 1.0, f32::NAN)], vec![]] {
+                world.write_message(EditAsk { edit: place.clone(), undoable: false, first_new, materials });
+            }
+            let object = |model: &str, period: f32, anchor: f32| {
+                let motion = glowbrick::world::objects::SavedMotion::Drift { radius: 2.0, period };
+                SavedObject { model: model.into(), motion, anchor: (anchor, 8.0, 8.0), age: 0.0 }
+            };
+            for object in [object("dragon", 8.0, 8.0), object("lantern", 1e-30, 8.0), object("block", 8.0, f32::NAN)] {
+                world.write_message(SpawnAsk { object });
+            }
+            sent += 6;
+            typed += 6;
             world.write_message(ClockAsk { hours: f32::NAN });
             world.write_message(Hello { name: "\u{7}x".repeat(4096) });
             sent += 2;
@@ -292,6 +315,7 @@ fn hostile_messages_change_nothing_and_valid_clients_play_on() {
     assert!(stats.refused >= typed * 5 / 6, "hostile requests refused: {} of {typed}", stats.refused);
     assert_ne!(state(&mut server).0, before.0, "the good edit changed the world");
     assert_eq!(server.world().resource::<VoxelWorld>().grid.get(probe), 2);
+    assert_eq!(server.world().resource::<VoxelWorld>().palette, palette_before, "no hostile material joined");
     let grown = resident_bytes().saturating_sub(memory_before);
     println!(
         "hostile: {sent} messages ({typed} well-formed), {} refused, garbage survives on channels {survivable:?} of \

@@ -157,7 +157,7 @@ fn peer_names(server: &mut App) -> Vec<String> {
 }
 
 #[test]
-fn a_lost_connection_and_a_restarted_client_come_back_as_the_same_player() {
+fn a_lost_connection_and_a_restarted_client_come_back_as_the_same_player_with_their_undo() {
     use glowbrick::net::client::{Join, Rejoin};
     use glowbrick::net::protocol::Pose;
     let (mut server, addr) = start_server(ServerRules::default());
@@ -192,6 +192,14 @@ fn a_lost_connection_and_a_restarted_client_come_back_as_the_same_player() {
         c.loaded && c.returned_to.is_some()
     });
     assert_eq!(again.world().resource::<NetClient>().returned_to, Some(pose));
+    // Her undo history waited on the server: Ctrl+Z in the new game takes back the block she placed before.
+    let histories = server.world().resource::<glowbrick::net::server::Histories>();
+    assert_eq!(histories.undo_len("Ada"), 1);
+    again.world_mut().write_message(glowbrick::game::undo::HistoryAction::Undo);
+    pump(&mut [&mut server, &mut again], Duration::from_secs(30), |apps| seq(apps[1]) == 2);
+    for app in [&server, &again] {
+        assert_eq!(app.world().resource::<VoxelWorld>().grid.get(IVec3::new(6, 4, 6)), 0, "undone everywhere");
+    }
 }
 
 /// The "state: ..." line a server or bot printed.
