@@ -11,7 +11,7 @@
 #import glowbrick::random::{Rng, pcg}
 #import glowbrick::counters::counters
 #import glowbrick::constants::{COUNT_RAYS_PRIMARY, COUNT_PRIMARY_HITS, LIGHTING_NEE, LIGHTING_EMITTERS, LIGHTING_FULL, DEBUG_ALBEDO, DEBUG_NORMAL, DEBUG_HIT, DEBUG_DEPTH,
-    DEBUG_RESERVOIR, RAY_OFFSET}
+    DEBUG_RESERVOIR, DEBUG_INDIRECT, RAY_OFFSET}
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -75,6 +75,9 @@ fn primary_pixel(id: vec3<u32>) {
 
 // A ray that left the world: the sky (or, without emitters under lighting=full, the sky and the disk).
 fn miss_colour(dir: vec3<f32>, full: bool, nee: bool) -> vec4<f32> {
+    if debug_view() == DEBUG_INDIRECT {
+        return vec4(0.0, 0.0, 0.0, 1.0);
+    }
     if lit_view() && full {
         return vec4(background(dir) * frame.exposure, 1.0);
     } else if lit_view() && !nee {
@@ -101,6 +104,13 @@ fn hit_colour(pixel: vec2<u32>, size: vec2<u32>, point: vec3<f32>, hit: Hit, ful
         }
         case DEBUG_DEPTH: {
             return vec4(vec3(hit.distance), 1.0);
+        }
+        case DEBUG_INDIRECT: {
+            var cached = vec3(0.0);
+            if gi_on() {
+                cached = material.albedo.rgb * gi_incoming(point, hit.face, hit.object, camera_level(pixel_footprint(point), hit.object));
+            }
+            return vec4(cached * frame.exposure, 1.0);
         }
         default: {}
     }

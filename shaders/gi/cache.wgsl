@@ -86,9 +86,31 @@ const DISTANCE_SCALE: f32 = 256.0;
 @group(3) @binding(5) var<storage, read_write> gi_rays: array<u32>;
 // Edit log: pairs (min voxel xyz, epoch), (max voxel xyz exclusive, 0) of edited bricks.
 @group(3) @binding(6) var<storage, read> gi_edits: array<vec4<i32>>;
+// An entry's reservoir of light-pool samples (gi_reservoirs=on, reservoir.wgsl; seed 002): the light's slot and
+// generation (a removed or changed light fails the match), the face of its cube and the point on it
+// (pack2x16unorm), the candidates it stands for (m) and its contribution weight (big_w; 0 once its shadow ray
+// was blocked). GiReservoir in src/render/gpu_types.rs.
+struct GiReservoir {
+    slot: u32,
+    generation: u32,
+    face: u32,
+    uv: u32,
+    w_sum: f32,
+    m: f32,
+    big_w: f32,
+    _pad: f32,
+}
+
 // Per entry: the direct light its face reflects, averaged over the face and over frames (rgb), and the samples
-// blended so far (w; 0 = no value yet). Written by refresh.wgsl, read by update.wgsl at ray hits (direct.wgsl).
-@group(3) @binding(7) var<storage, read_write> gi_direct: array<vec4<f32>>;
+// blended so far (w; 0 = no value yet), written by refresh.wgsl, read by update.wgsl at ray hits (direct.wgsl);
+// and the reservoir it draws the light pool's light from. One binding: a compute stage binds at most 32 storage
+// buffers on lavapipe, and the groups hold 32. GiDirect in src/render/gpu_types.rs.
+struct GiDirect {
+    light: vec4<f32>,
+    reservoir: GiReservoir,
+}
+
+@group(3) @binding(7) var<storage, read_write> gi_direct: array<GiDirect>;
 // This frame's work (compact.wgsl): per table an indirect dispatch size (x, y, z) and the count of listed
 // entries, words WORK_STATIC.. and WORK_DYNAMIC..; and the lists, the static table's due slots from 0, the
 // dynamic table's from static_capacity.
@@ -213,7 +235,9 @@ fn claim(slot: u32, expected: u32, checksum: u32, voxel: vec3<i32>, face: u32, o
             forget_value(slot);
             gi_entries[slot].last_used = gi.frame;
             gi_entries[slot].last_seen = select(0u, gi.frame, seen);
-            gi_direct[slot] = vec4(0.0);
+            gi_direct[slot].light = vec4(0.0);
+            // No light samples of the slot's last occupant.
+            gi_direct[slot].reservoir = GiReservoir(0xffffffffu, 0u, 0u, 0u, 0.0, 0.0, 0.0, 0.0);
             atomicStore(&gi_keys[slot], checksum);
             atomicAdd(&counters[COUNT_GI_INSERTED], 1u);
             return checksum;

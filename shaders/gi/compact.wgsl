@@ -52,7 +52,7 @@ fn age_entry(slot: u32) -> bool {
     // rather than read the old light until it is freed.
     if !due && (gi.flags & GI_RESTART) != 0u && e.samples != 0u {
         forget_value(slot);
-        gi_direct[slot] = vec4(0.0);
+        gi_direct[slot].light = vec4(0.0);
     }
     return due;
 }

@@ -8,7 +8,8 @@
 #import glowbrick::lights::{lighting_mode, power_pick_on, shadows_on, scene, direct_sample, disk_sample}
 #import glowbrick::random::{Rng, pcg, rng_next, r2_point, rotation2}
 #import glowbrick::guards::finite3
-#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET, GI_RESTART, GI_RESTART_SAMPLES, GI_QMC}
+#import glowbrick::constants::{LIGHTING_SUN, LIGHTING_FULL, RAY_OFFSET, GI_RESTART, GI_RESTART_SAMPLES, GI_QMC, GI_RESERVOIRS}
+#import glowbrick::gi::reservoir::reservoir_sample
 #import glowbrick::gi::cache::{gi_setting, gi, gi_direct, tangent_axes, slot_seed, cell_of, is_surface, sequence_step, GiEntry}
 
 // The blend of an entry's direct estimate: young entries average evenly, then an exponential blend over about
@@ -78,11 +79,21 @@ fn cell_point(e: GiEntry, u: vec2<f32>) -> CellPoint {
     return CellPoint(voxel, point);
 }
 
-// One direct-light sample at point `u` of the entry's cell (cell_point).
-fn face_sample(e: GiEntry, u: vec2<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+// One direct-light sample at point `u` of the entry's cell (cell_point): the light pool's by the entry's
+// reservoir (gi_reservoirs=on, reservoir.wgsl) or by one power-drawn light (direct_at), plus the disk's.
+fn face_sample(slot: u32, e: GiEntry, u: vec2<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
     let at = cell_point(e, u);
     let albedo = albedo_at(voxel_at(at.voxel), at.voxel, 0u);
-    let estimate = direct_at(at.point, face_normal(e.face), albedo, rng);
+    let n = face_normal(e.face);
+    var estimate = vec3(0.0);
+    if gi_setting(GI_RESERVOIRS) && lighting_mode() != LIGHTING_SUN {
+        estimate = reservoir_sample(slot, at.point, n, albedo, rng);
+        if lighting_mode() == LIGHTING_FULL {
+            estimate += disk_sample(at.point, n, albedo, rng);
+        }
+    } else {
+        estimate = direct_at(at.point, n, albedo, rng);
+    }
     return select(vec3(0.0), estimate, finite3(estimate));
 }
 
@@ -100,7 +111,7 @@ fn cell_sample_point(k: u32, rotation: vec2<u32>, rng: ptr<function, Rng>) -> ve
 // the light reaches first, since every entry's bounces read them (docs/bench/why.md).
 fn update_direct(slot: u32, e: GiEntry) {
     if voxel_at(e.voxel) == 0u {
-        gi_direct[slot] = vec4(0.0);
+        gi_direct[slot].light = vec4(0.0);
         return;
     }
     var rng = Rng(pcg(slot_seed(slot) ^ pcg(gi.frame ^ 0x2545F491u)));
@@ -115,16 +126,16 @@ fn update_direct(slot: u32, e: GiEntry) {
     let first = select(sequence_step(gi.frame, e), gi.frame, restart);
     var sum = vec3(0.0);
     for (var i = 0u; i < samples; i++) {
-        sum += face_sample(e, cell_sample_point(first - i, rotation, &rng), &rng);
+        sum += face_sample(slot, e, cell_sample_point(first - i, rotation, &rng), &rng);
     }
     if restart {
-        gi_direct[slot] = vec4(sum / f32(GI_RESTART_SAMPLES), f32(GI_RESTART_SAMPLES));
+        gi_direct[slot].light = vec4(sum / f32(GI_RESTART_SAMPLES), f32(GI_RESTART_SAMPLES));
         return;
     }
     let estimate = sum;
-    let old = gi_direct[slot];
+    let old = gi_direct[slot].light;
     let count = old.w;
     let weight = max(DIRECT_ALPHA, 1.0 / (count + 1.0));
     let blended = select(mix(old.rgb, estimate, weight), estimate, count == 0.0);
-    gi_direct[slot] = vec4(blended, min(count + 1.0, 1.0e6));
+    gi_direct[slot].light = vec4(blended, min(count + 1.0, 1.0e6));
 }

@@ -126,7 +126,7 @@ fn refresh_static_entry(id: vec3<u32>) {
         if refresh(slot, e, ray_origin(e.voxel, e.face, vec3(0.0))) > 0u {
             // What it blended so far saw the old world: start over, its direct light too (an edit reached it).
             forget_value(slot);
-            gi_direct[slot] = vec4(0.0);
+            gi_direct[slot].light = vec4(0.0);
         }
     } else if e.traced_epoch != gi.epoch {
         // Fresh directions (nothing cached): an edit inside the bounds of the segments traced so far restarts the

@@ -79,8 +79,8 @@ fn hit_radiance(hit: RayHit, seen: bool, fallback: vec3<f32>, rng: ptr<function,
     // up.
     let slot = gi_probe(hit.voxel, hit.face, hit.object, hit.level, seen && bounces, false);
     var radiance = vec3(0.0);
-    if !on_object && slot != NOT_FOUND && gi_direct[slot].w > 0.0 {
-        radiance = gi_direct[slot].rgb;
+    if !on_object && slot != NOT_FOUND && gi_direct[slot].light.w > 0.0 {
+        radiance = gi_direct[slot].light.rgb;
     } else {
         // No estimate yet (new, or not in the cache), or a moving face: this ray's own sample, unbiased (counted
         // for the static world's faces).

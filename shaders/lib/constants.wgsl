@@ -56,6 +56,7 @@ const DEBUG_DEPTH: u32 = #{DEBUG_DEPTH}u;
 const DEBUG_RESERVOIR: u32 = #{DEBUG_RESERVOIR}u;
 const DEBUG_VARIANCE: u32 = #{DEBUG_VARIANCE}u;
 const DEBUG_HISTORY: u32 = #{DEBUG_HISTORY}u;
+const DEBUG_INDIRECT: u32 = #{DEBUG_INDIRECT}u;
 
 // FrameParams.restir_flags bits and the largest spatial tap count.
 const RESTIR_TEMPORAL: u32 = #{RESTIR_TEMPORAL}u;
@@ -82,6 +83,7 @@ const GI_CACHE: u32 = #{GI_CACHE}u;
 const GI_RESTART: u32 = #{GI_RESTART}u;
 const GI_EDIT_RESTART: u32 = #{GI_EDIT_RESTART}u;
 const GI_QMC: u32 = #{GI_QMC}u;
+const GI_RESERVOIRS: u32 = #{GI_RESERVOIRS}u;
 // The filtered colour of a GI entry with no value yet (shaders/gi/cache.wgsl's forget_value).
 const GI_NO_VALUE: i32 = #{GI_NO_VALUE};
 // Direct-light samples an entry starts over with after a change of light (gi/direct.wgsl).

@@ -7,7 +7,7 @@
 #import glowbrick::traversal::face_normal
 #import glowbrick::guards::finite3
 #import glowbrick::constants::{KEY_GENERIC, KEY_DEBUG_VIEW, KEY_RESTIR_FLAGS, GBUFFER_FACE_SHIFT, GBUFFER_MATERIAL_SHIFT, GBUFFER_MATERIAL_MASK, GBUFFER_OBJECT_SHIFT,
-    DENOISE_ON, UPSCALE_ON, DEBUG_NONE, DEBUG_VARIANCE, DEBUG_HISTORY}
+    DENOISE_ON, UPSCALE_ON, DEBUG_NONE, DEBUG_VARIANCE, DEBUG_HISTORY, DEBUG_INDIRECT}
 
 // FrameParams in src/render/gpu_types.rs: one view's parameters this frame (the scene's lighting, the same for
 // every view, is SceneLighting in glowbrick::lights).
@@ -72,7 +72,7 @@ fn luminance(c: vec3<f32>) -> f32 {
 // Whether the view shows the lit image (or the denoiser's view of it), as DebugView::is_lit.
 fn lit_view() -> bool {
     let shown = debug_view();
-    return shown == DEBUG_NONE || shown == DEBUG_VARIANCE || shown == DEBUG_HISTORY;
+    return shown == DEBUG_NONE || shown == DEBUG_VARIANCE || shown == DEBUG_HISTORY || shown == DEBUG_INDIRECT;
 }
 
 // The view's settings: the pipeline's own (constants.wgsl, KEY_*) or the uniform's in a generic build.

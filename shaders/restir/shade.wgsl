@@ -9,7 +9,7 @@
 #import glowbrick::world::materials
 #import glowbrick::frame::{debug_view, frame, view, output, gbuffer, unpack_surface, surface_voxel, pixel_index, render_size, highlight, write_output,
     primary_ray_dir, pixel_footprint, upscaling}
-#import glowbrick::constants::{DEBUG_RESERVOIR, LIGHTING_FULL}
+#import glowbrick::constants::{DEBUG_RESERVOIR, DEBUG_INDIRECT, LIGHTING_FULL}
 #import glowbrick::guards::finite
 #import glowbrick::restir::common::{reservoirs_final, validated, shading, unshadowed, reservoir_visible, pixel_rng, NO_LIGHT,
     empty_reservoir}
@@ -40,7 +40,8 @@ fn shade_pixel(id: vec3<u32>) {
             return;
         }
         var sky_seen = vec3(0.0);
-        if full {
+        // The sky seen straight on is not the cache's light.
+        if full && debug_view() != DEBUG_INDIRECT {
             sky_seen = background(primary_ray_dir(id.xy, vec2<f32>(size))) * frame.exposure;
         }
         write_output(id.xy, vec4(sky_seen, select(0.0, 1.0, full)));
@@ -91,8 +92,15 @@ fn shade_pixel(id: vec3<u32>) {
             radiance += sky_sample(x.point, x.normal, x.albedo, &rng);
         }
     }
+    var cached = vec3(0.0);
     if gi_on() {
-        radiance += x.albedo * gi_incoming(x.point, surface.face, surface.object, camera_level(pixel_footprint(x.point), surface.object));
+        cached = x.albedo * gi_incoming(x.point, surface.face, surface.object, camera_level(pixel_footprint(x.point), surface.object));
+    }
+    radiance += cached;
+    if debug_view() == DEBUG_INDIRECT {
+        // The cache's share alone; no disk for the upscaler to add (-1).
+        write_output(id.xy, vec4(cached * frame.exposure, select(1.0, -1.0, upscaling())));
+        return;
     }
     let depth = distance(view.world_position, x.point);
     let alpha = select(1.0, disk_seen, upscaling());

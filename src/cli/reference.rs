@@ -19,6 +19,10 @@ pub struct ReferenceArgs {
     /// Diffuse bounces after the camera hit (0: direct light only).
     #[arg(long, default_value_t = 0)]
     bounces: u32,
+    /// Only the light that reaches the camera's hits by bouncing: what `render --set debug=indirect` shows of the
+    /// GI cache (no emission, direct light or disk at the hit; the sky its bounce finds counts).
+    #[arg(long)]
+    indirect: bool,
     /// Stop after this many seconds (after a whole batch of samples).
     #[arg(long)]
     seconds: Option<f64>,
@@ -53,6 +57,7 @@ impl ReferenceArgs {
             height: self.shot.height,
             spp: self.spp,
             bounces: self.bounces,
+            indirect_only: self.indirect,
             seed: self.seed,
             candidates: self.candidates,
             time_budget: self.seconds.map(std::time::Duration::from_secs_f64),

@@ -146,7 +146,8 @@ fn lighting_toggle_keys(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<Re
     }
 }
 
-/// F6 cycles the debug views (lit, albedo, normal, depth, the denoiser's variance and history).
+/// F6 cycles the debug views (lit, albedo, normal, depth, the denoiser's variance and history, the GI cache's
+/// light).
 fn debug_view_key(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<RenderSettings>) {
     use crate::settings::DebugView;
     if keys.just_pressed(KeyCode::F6) {
@@ -156,6 +157,7 @@ fn debug_view_key(keys: Res<ButtonInput<KeyCode>>, mut settings: ResMut<RenderSe
             DebugView::Normal => DebugView::Depth,
             DebugView::Depth => DebugView::Variance,
             DebugView::Variance => DebugView::History,
+            DebugView::History => DebugView::Indirect,
             _ => DebugView::None,
         };
         info!("debug view: {:?}", settings.debug);

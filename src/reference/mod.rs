@@ -63,6 +63,11 @@ pub struct ReferenceOptions {
     pub spp: u32,
     /// Diffuse bounces after the camera hit (0 = direct light only).
     pub bounces: u32,
+    /// Only the light that reaches the camera hit by bouncing (the GI cache's share, `debug=indirect`): no
+    /// emission seen straight on, no direct light or disk at the camera hit; the sky the camera hit's own ray
+    /// finds counts, as the cache's rays bring it. The samples drawn are those of the full image, so the full
+    /// image minus this one is its direct light, sample for sample.
+    pub indirect_only: bool,
     pub seed: u64,
     /// Lights resampled per shadow ray (1 = plain next-event estimation by power, uniform points on the faces:
     /// the GPU's NEE).
@@ -87,6 +92,7 @@ impl Default for ReferenceOptions {
             height: 180,
             spp: 256,
             bounces: 0,
+            indirect_only: false,
             seed: 1,
             candidates: 16,
             time_budget: None,
@@ -334,18 +340,21 @@ impl Scene<'_> {
         rng: &mut Pcg,
         rays: &mut u64,
     ) -> Vec3 {
-        let mut radiance = first.emission;
+        // What the camera hit's own light (emission, direct, disk) counts for: nothing in the indirect image.
+        let own = if options.indirect_only { 0.0 } else { 1.0 };
+        let mut radiance = first.emission * own;
         let mut throughput = Vec3::ONE;
         let (mut p, mut n, mut albedo) = (first.position, first.normal, first.albedo);
         for bounce in 0..=options.bounces {
+            let weight = if bounce == 0 { throughput * own } else { throughput };
             let direct = if bounce == 0 {
                 self.direct_sample_near(p, n, albedo, options.candidates, first_around, rng, rays)
             } else {
                 self.direct_sample(p, n, albedo, options.candidates, rng, rays)
             };
-            radiance += throughput * direct;
+            radiance += weight * direct;
             if let Some(day) = &options.daylight {
-                radiance += throughput * self.disk_sample(day, p, n, albedo, rng, rays);
+                radiance += weight * self.disk_sample(day, p, n, albedo, rng, rays);
             }
             let last = bounce == options.bounces;
             // Without a sky (or a glowing object) the last vertex's ray could only find emitters that next-event
@@ -428,7 +437,11 @@ pub fn render_reference(
     let (out_w, out_h) = (w / step, h / step);
     let full_pixel = |x: u32, y: u32| UVec2::new(x * step + step / 2, y * step + step / 2);
     // Camera hits once per pixel: every sample of a pixel shades the same point. A miss sees the background.
-    let background = |ray: &Ray| options.daylight.map_or(Vec3::ZERO, |day| day.background(ray.dir));
+    // (Not the bounced light of the indirect image.)
+    let background = |ray: &Ray| match options.daylight {
+        Some(day) if !options.indirect_only => day.background(ray.dir),
+        _ => Vec3::ZERO,
+    };
     let (hits, backgrounds): (Vec<Option<SurfaceHit>>, Vec<Vec3>) = (0..out_w * out_h)
         .into_par_iter()
         .map(|i| {

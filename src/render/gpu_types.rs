@@ -196,6 +196,34 @@ pub struct GiEntry {
     pub level: u32,
 }
 
+/// One GI entry's reservoir of light samples (`GiReservoir` in `shaders/gi/cache.wgsl`); only the GPU writes it,
+/// Rust sizes it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GiReservoir {
+    pub slot: u32,
+    pub generation: u32,
+    pub face: u32,
+    pub uv: u32,
+    pub w_sum: f32,
+    pub m: f32,
+    pub big_w: f32,
+    pub _pad: f32,
+}
+
+const _: () = assert!(size_of::<GiReservoir>() == 32);
+
+/// One GI entry's direct light and its reservoir (`GiDirect` in `shaders/gi/cache.wgsl`, the `gi_direct`
+/// buffer).
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct GiDirect {
+    pub light: [f32; 4],
+    pub reservoir: GiReservoir,
+}
+
+const _: () = assert!(size_of::<GiDirect>() == 48);
+
 /// One edit-log record (two `vec4<i32>` in `gi_edits`): an edited brick's box and the epoch of the edit.
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
@@ -400,6 +428,9 @@ pub const GI_RESTART: u32 = 8;
 pub const GI_EDIT_RESTART: u32 = 16;
 /// `GiParams::flags`: fresh rays and direct-light points from each entry's low-discrepancy sequence (`gi_qmc`).
 pub const GI_QMC: u32 = 32;
+/// `GiParams::flags`: entries draw their light-pool light through reservoirs kept from frame to frame
+/// (`gi_reservoirs`, `shaders/gi/reservoir.wgsl`).
+pub const GI_RESERVOIRS: u32 = 64;
 /// The filtered colour of a GI entry that holds no value yet (radiance is never negative): the tables start with
 /// it and `forget_value` (`shaders/gi/cache.wgsl`) writes it back. An integer, as the shared table holds them.
 pub const GI_NO_VALUE: i32 = -1;
@@ -482,6 +513,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("DEBUG_RESERVOIR", U32(DebugView::Reservoir.shader_index())),
         ("DEBUG_VARIANCE", U32(DebugView::Variance.shader_index())),
         ("DEBUG_HISTORY", U32(DebugView::History.shader_index())),
+        ("DEBUG_INDIRECT", U32(DebugView::Indirect.shader_index())),
         // Flags.
         ("RESTIR_TEMPORAL", U32(RESTIR_TEMPORAL)),
         ("RESTIR_SPATIAL", U32(RESTIR_SPATIAL)),
@@ -504,6 +536,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("GI_RESTART", U32(GI_RESTART)),
         ("GI_EDIT_RESTART", U32(GI_EDIT_RESTART)),
         ("GI_QMC", U32(GI_QMC)),
+        ("GI_RESERVOIRS", U32(GI_RESERVOIRS)),
         ("GI_NO_VALUE", I32(GI_NO_VALUE)),
         ("GI_RESTART_SAMPLES", U32(GI_RESTART_DIRECT_SAMPLES)),
         // The GI work buffer's words.

@@ -62,6 +62,9 @@ pub enum DebugView {
     Variance,
     /// The denoiser's history length per pixel, over its cap (1 = white: a full history).
     History,
+    /// The GI cache's share of the lit image alone (each surface's albedo times the cache's incoming light), in
+    /// the image's units: what `reference --indirect` renders, pixel for pixel. Needs `gi=on` (black without).
+    Indirect,
 }
 
 impl Named for DebugView {
@@ -74,6 +77,7 @@ impl Named for DebugView {
         ("reservoir", DebugView::Reservoir),
         ("variance", DebugView::Variance),
         ("history", DebugView::History),
+        ("indirect", DebugView::Indirect),
     ];
 }
 
@@ -85,7 +89,7 @@ impl DebugView {
 
     /// Whether the view shows the lit image (or the denoiser's view of it), so every lighting pass runs.
     pub fn is_lit(self) -> bool {
-        matches!(self, DebugView::None | DebugView::Variance | DebugView::History)
+        matches!(self, DebugView::None | DebugView::Variance | DebugView::History | DebugView::Indirect)
     }
 }
 
@@ -297,6 +301,10 @@ pub struct GiSettings {
     /// frames then covers the hemisphere and the cell evenly: the slow swing a few half-lit cells gave a whole
     /// room's bounce light falls (docs/bench/gi.md, "Low-discrepancy rays").
     pub qmc: bool,
+    /// Draw an entry's light-pool light through a reservoir it keeps from frame to frame (seed 002): 8 lights by
+    /// power a sample, resampled by their unshadowed light, merged with the entry's reservoir of the frames
+    /// before, one shadow ray; off, one light by power a sample (docs/bench/gi.md, "Reservoirs per entry").
+    pub reservoirs: bool,
     /// Run four update iterations a frame in a fresh cache's first 64 frames (and after a reset): a room lit
     /// over many bounces is then bright within a second instead of brightening for hundreds of frames
     /// (docs/bench/gi.md, "A fresh cache warms up"); off, one a frame from the start.
@@ -329,6 +337,7 @@ impl Default for GiSettings {
             bounces: true,
             cache: false,
             qmc: true,
+            reservoirs: false,
             warm_up: true,
             table: GI_TABLE_DEFAULT,
             cell_pixels: 4,

@@ -480,6 +480,13 @@ pub static SETTINGS: &[Setting] = &[
         field: &Choice { get: |s| s.gi.qmc, set: |s, v| s.gi.qmc = v },
     },
     Setting {
+        key: "gi_reservoirs",
+        section: Section::Gi,
+        about: "Each entry draws its light-pool light through a reservoir kept from frame to frame (8 lights by \
+                power a sample, resampled, merged with its past ones; seed 002); off, one light by power a sample.",
+        field: &Choice { get: |s| s.gi.reservoirs, set: |s, v| s.gi.reservoirs = v },
+    },
+    Setting {
         key: "gi_warm_up",
         section: Section::Gi,
         about: "Four update iterations a frame in a fresh cache's first 64 frames, so a room lit over many bounces \

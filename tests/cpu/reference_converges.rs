@@ -13,7 +13,8 @@ use glowbrick::world::{Edit, Material, Palette, VoxelWorld};
 /// A closed room whose every wall glows with radiance 1 and reflects half of what it receives: every surface
 /// sees emitters over its whole hemisphere, so a path's vertex k adds 0.5^(k+1) through next-event estimation and
 /// the radiance leaving a wall with `bounces` bounces is 1 + 0.5 + ... + 0.5^(bounces + 1), 2 with every bounce.
-/// The 32-bounce path ends by Russian roulette after its second bounce, and still meets 2 (unbiased).
+/// The 32-bounce path ends by Russian roulette after its second bounce, and still meets 2 (unbiased). Its
+/// indirect part alone is the sum less the wall's emission and direct light.
 #[test]
 fn a_glowing_room_sums_its_bounces_with_russian_roulette() {
     let palette = Palette::new(vec![Material::emissive("glow", [0.5; 3], [1.0; 3], 1.0)]);
@@ -39,6 +40,16 @@ fn a_glowing_room_sums_its_bounces_with_russian_roulette() {
         }
         let mean = (sum / f64::from(samples)) as f32;
         assert!((mean - expected).abs() < 0.02 * expected, "{bounces} bounces: {mean}, expected {expected}");
+        // The indirect image (debug=indirect's truth) leaves out the wall's own emission (1) and the direct light
+        // at it (0.5): 0.25 with one bounce, 0.5 with all of them.
+        let indirect = ReferenceOptions { indirect_only: true, ..options };
+        let mut sum = 0.0f64;
+        for _ in 0..samples {
+            sum += f64::from(scene.path_sample(&floor, &indirect, &mut rng, &mut rays).x);
+        }
+        let mean = (sum / f64::from(samples)) as f32;
+        let expected = expected - 1.5;
+        assert!((mean - expected).abs() < 0.03 * expected, "{bounces} bounces, indirect: {mean}, expected {expected}");
     }
 }
 

@@ -120,6 +120,40 @@ pub fn the_gi_cache_converges_with_per_voxel_detail() {
     check_world_against_reference("varied window-room", world, "inside", &["lighting=nee"], &BOUNCE_CASES[1..]);
 }
 
+/// `debug=indirect` shows the cache's share of the image alone, in the image's units: converged, it meets the
+/// path tracer's indirect light (`ReferenceOptions::indirect_only`, 32 bounces) under the bounds the full image
+/// meets (|bias| < 3% of the indirect mean, relMSE < 0.03); the window room by NEE, one seed. And the lit image
+/// less the indirect one is the direct light: its mean meets the direct-only reference's within 3%.
+pub fn the_indirect_view_is_the_caches_share_of_the_image() {
+    let world = load_scene("window-room").unwrap();
+    let view = world.view(Some("inside")).unwrap().clone();
+    let keep = common::comparable_pixels(&world, &view, W, H);
+    let options = ReferenceOptions { width: W, height: H, spp: 1024, bounces: 32, seed: 17, ..Default::default() };
+    let truth =
+        |options: ReferenceOptions| common::masked(&render_reference(&world, &view, &options).unwrap().image, &keep);
+    let indirect_truth = truth(ReferenceOptions { indirect_only: true, ..options.clone() });
+    let direct_truth = truth(ReferenceOptions { bounces: 0, spp: 256, ..options });
+    let shown = |debug: &str| {
+        let pairs = ["lighting=nee", "gi=on", "gi_alpha=0.1", debug];
+        common::masked(&converged(&mut renderer(&world, &view, &pairs), 100, 128), &keep)
+    };
+    let indirect = shown("debug=indirect");
+    let lit = shown("debug=none");
+    let m = compare(&indirect, &indirect_truth).unwrap();
+    let mean = indirect_truth.mean_luminance();
+    eprintln!(
+        "debug=indirect vs the reference's indirect light: {m} (bias {:+.1}% of its mean {mean:.4})",
+        100.0 * m.bias / mean
+    );
+    assert!(mean > 0.15 * lit.mean_luminance(), "the room's indirect light is worth measuring ({mean})");
+    assert!(m.bias.abs() < 0.03 * mean, "bias {} of the indirect mean {mean}", m.bias);
+    assert!(m.relmse < 0.03, "relMSE {}", m.relmse);
+    let direct = lit.mean_luminance() - indirect.mean_luminance();
+    let direct_mean = direct_truth.mean_luminance();
+    eprintln!("lit less indirect: {direct:.4}, the direct-only reference: {direct_mean:.4}");
+    assert!((direct - direct_mean).abs() < 0.03 * direct_mean, "direct {direct} against {direct_mean}");
+}
+
 /// A closed 18 x 10 x 18 room whose only light is the noon sun and sky through a one-voxel hole in its ceiling.
 /// Seen from a face of the room, the hole and the sunlit spot below it cover a few hundredths of the hemisphere:
 /// a fixed set of 64 directions per entry (the static visibility cache, `gi_cached_hits=on`) finds them through none,

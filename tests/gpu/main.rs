@@ -99,6 +99,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             the_gi_cache_converges_to_the_path_traced_reference_in_the_cornell_box,
             the_gi_cache_converges_to_the_path_traced_reference_in_the_window_room,
             the_gi_cache_converges_with_per_voxel_detail,
+            the_indirect_view_is_the_caches_share_of_the_image,
             two_cameras_update_the_cache_once_per_frame,
             settled_entries_update_one_frame_in_their_period_unless_an_object_moves_near,
             freeing_entries_keeps_the_rest_of_their_probe_chains_reachable,

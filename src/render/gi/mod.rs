@@ -21,7 +21,9 @@ mod tables;
 pub use schedule::{RESTART_ITERATIONS, WARM_UP_FRAMES};
 pub use tables::{DYNAMIC_CAPACITY, ENTRY_BYTES, RAY_BYTES, cache_bytes, static_capacity};
 
-use super::gpu_types::{GI_BOUNCES, GI_CACHE, GI_EDIT_RESTART, GI_FILTER, GI_QMC, GI_RESTART, GiEdit, GiParams};
+use super::gpu_types::{
+    GI_BOUNCES, GI_CACHE, GI_EDIT_RESTART, GI_FILTER, GI_QMC, GI_RESERVOIRS, GI_RESTART, GiEdit, GiParams,
+};
 use super::interface::{GpuBinding, GroupInterface};
 use super::pass::{Dispatch, VoxelPass};
 use super::plan::{FramePlan, FramePlanned};
@@ -269,7 +271,11 @@ pub fn init_gi_cache(mut commands: Commands, device: Res<RenderDevice>) {
 /// The `GiParams.flags` bits the settings decide (the rest are this frame's restarts).
 pub fn setting_flags(gi: &GiSettings) -> u32 {
     let flag = |on: bool, bit: u32| if on { bit } else { 0 };
-    flag(gi.filter, GI_FILTER) | flag(gi.bounces, GI_BOUNCES) | flag(gi.cache, GI_CACHE) | flag(gi.qmc, GI_QMC)
+    flag(gi.filter, GI_FILTER)
+        | flag(gi.bounces, GI_BOUNCES)
+        | flag(gi.cache, GI_CACHE)
+        | flag(gi.qmc, GI_QMC)
+        | flag(gi.reservoirs, GI_RESERVOIRS)
 }
 
 /// Sizes the tables for the settings, logs this frame's edits, plans the frame and writes the parameters (Render

@@ -3,7 +3,7 @@
 
 use crate::render::gpu_types::{
     GI_EMPTY_WORK, GI_KEY_BYTES, GI_NO_VALUE, GI_RADIANCE_BYTES, GI_RAY_BYTES, GI_WORK_DYNAMIC_WORD,
-    GI_WORK_STATIC_WORD, GI_WORK_WORDS, GiEntry,
+    GI_WORK_STATIC_WORD, GI_WORK_WORDS, GiDirect, GiEntry,
 };
 use crate::settings::GiSettings;
 use bevy::render::render_resource::{Buffer, BufferDescriptor, BufferInitDescriptor, BufferUsages};
@@ -11,9 +11,10 @@ use bevy::render::renderer::RenderDevice;
 
 /// Entries in the moving objects' table (a power of two; the static world's is the `gi_table` setting).
 pub const DYNAMIC_CAPACITY: u32 = 1 << 12;
-/// GPU bytes per entry besides its rays: key, payload, blended and filtered radiance, direct light, its place in
-/// the work list.
-pub const ENTRY_BYTES: u64 = GI_KEY_BYTES + size_of::<GiEntry>() as u64 + 3 * GI_RADIANCE_BYTES + 4;
+/// GPU bytes per entry besides its rays: key, payload, blended and filtered radiance, direct light and its light
+/// reservoir, its place in the work list.
+pub const ENTRY_BYTES: u64 =
+    GI_KEY_BYTES + size_of::<GiEntry>() as u64 + 2 * GI_RADIANCE_BYTES + size_of::<GiDirect>() as u64 + 4;
 /// Bytes per cached ray (face and distance packed in a u32).
 pub const RAY_BYTES: u64 = GI_RAY_BYTES;
 /// Where the static and the dynamic table's dispatch sizes lie in the work buffer (x, y, z, then the count).
@@ -80,6 +81,7 @@ pub struct Tables {
     pub irradiance: Buffer,
     pub filtered: Buffer,
     pub rays: Buffer,
+    /// Each entry's direct light and light reservoir (`gi_direct`).
     pub direct: Buffer,
     /// This frame's work: dispatch sizes and counts (`gi_work`), and the listed slots (`gi_list`).
     pub work: Buffer,
@@ -107,7 +109,7 @@ impl Tables {
             irradiance: storage("glowbrick_gi_irradiance", n * GI_RADIANCE_BYTES),
             filtered: no_values(device, n),
             rays: storage("glowbrick_gi_rays", n * shape.rays as u64 * RAY_BYTES),
-            direct: storage("glowbrick_gi_direct", n * GI_RADIANCE_BYTES),
+            direct: storage("glowbrick_gi_direct", n * size_of::<GiDirect>() as u64),
             work: buffer("glowbrick_gi_work", WORK_BYTES, BufferUsages::COPY_SRC),
             list: storage("glowbrick_gi_list", n * 4),
             arguments: device.create_buffer(&BufferDescriptor {

@@ -1,0 +1,168 @@
+// The GI cache's direct light from the light pool by resampling (gi_reservoirs=on; seed 002, Boissé 2021, whose
+// world-space cells keep reservoirs that every path vertex in them shares): each entry keeps a reservoir of light
+// samples (gi_direct's reservoir), carried from frame to frame. Per sample it draws GI_CANDIDATES lights by power, each
+// a point on one of its cube's faces that looks at the entry's point, resamples them by their unshadowed
+// reflected light (RIS), merges the entry's reservoir of the frames before (its M capped at GI_HISTORY
+// frames' worth), and traces one shadow ray to the sample kept. A lamp inside a house, one of thousands, is drawn
+// once in many frames, but once drawn it stays in the house's entries. Without it (gi_reservoirs=off) an entry
+// draws one light by power a frame (direct.wgsl).
+#define_import_path glowbrick::gi::reservoir
+
+#import glowbrick::lights::{Light, lights, scene, pick_light, power_pick_on, light_size, face_exposed, light_contains}
+#import glowbrick::traversal::{trace_scene, face_normal}
+#import glowbrick::random::{Rng, rng_next, rng_next_u32}
+#import glowbrick::guards::finite
+#import glowbrick::constants::{RAY_OFFSET, PI}
+#import glowbrick::gi::cache::{gi_direct, GiReservoir}
+
+// Candidates per sample, and the frames' worth of candidates a reservoir may carry (its M at most
+// GI_HISTORY x GI_CANDIDATES): enough to keep a rare light, few enough to let a new one in within a few frames.
+const GI_CANDIDATES: u32 = 8u;
+const GI_HISTORY: f32 = 20.0;
+const NO_LIGHT: u32 = 0xffffffffu;
+
+fn empty_gi_reservoir() -> GiReservoir {
+    return GiReservoir(NO_LIGHT, 0u, 0u, 0u, 0.0, 0.0, 0.0, 0.0);
+}
+
+fn luminance_of(c: vec3<f32>) -> f32 {
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
+
+// The point (u, v) on face `face` of the light's cube.
+fn point_on_face(light: Light, face: u32, uv: vec2<f32>) -> vec3<f32> {
+    let lo = vec3<f32>(light.min);
+    let size = f32(light_size(light));
+    let axis = face / 2u;
+    var q = lo;
+    q[axis] = select(lo[axis], lo[axis] + size, (face & 1u) == 0u);
+    q[(axis + 1u) % 3u] += uv.x * size;
+    q[(axis + 2u) % 3u] += uv.y * size;
+    return q;
+}
+
+// Unshadowed radiance a diffuse surface at p (normal n) reflects from the point (u, v) of the light's face, per
+// unit of the face's area: albedo/pi Le cos cos / d^2.
+fn reflected(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, light: Light, face: u32, uv: vec2<f32>) -> vec3<f32> {
+    let to_light = point_on_face(light, face, uv) - p;
+    let d2 = dot(to_light, to_light);
+    if d2 <= 1e-8 {
+        return vec3(0.0);
+    }
+    let wi = to_light * inverseSqrt(d2);
+    let cos_surface = dot(n, wi);
+    let cos_light = -dot(face_normal(face), wi);
+    if cos_surface <= 0.0 || cos_light <= 0.0 {
+        return vec3(0.0);
+    }
+    return albedo * light.radiance * (cos_surface * cos_light / (d2 * PI));
+}
+
+// A reservoir read back is used only if its light is still the one it sampled (slot and generation) and its
+// fields are sane; one that holds no light keeps its M (its candidates found nothing: evidence all the same).
+fn validated_gi(r: GiReservoir) -> GiReservoir {
+    if !finite(r.w_sum) || !finite(r.m) || !finite(r.big_w) || r.m < 0.0 || r.big_w < 0.0 {
+        return empty_gi_reservoir();
+    }
+    var none = empty_gi_reservoir();
+    none.m = r.m;
+    if r.slot == NO_LIGHT {
+        return none;
+    }
+    if r.slot >= arrayLength(&lights) || r.face > 5u {
+        return empty_gi_reservoir();
+    }
+    let light = lights[r.slot];
+    if light_size(light) == 0 || light.generation != r.generation {
+        return none;
+    }
+    return r;
+}
+
+// Streams one weighted input into r: kept with probability weight / w_sum.
+fn stream_gi(r: ptr<function, GiReservoir>, input: GiReservoir, weight: f32, m: f32, u: f32) {
+    let w = select(0.0, weight, finite(weight) && weight > 0.0);
+    (*r).w_sum += w;
+    (*r).m += m;
+    if w > 0.0 && u * (*r).w_sum < w {
+        (*r).slot = input.slot;
+        (*r).generation = input.generation;
+        (*r).face = input.face;
+        (*r).uv = input.uv;
+    }
+}
+
+// One candidate into r: a light by power (or uniformly), one of its exposed faces that look at p uniformly, a
+// point on it uniform in area; resampling weight target / pdf.
+fn stream_candidate(r: ptr<function, GiReservoir>, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) {
+    let picked = pick_light(scene.light_count, power_pick_on(), rng_next_u32(rng), rng_next(rng));
+    let u_face = rng_next(rng);
+    let uv = vec2(rng_next(rng), rng_next(rng));
+    let u_keep = rng_next(rng);
+    let light = lights[picked.slot];
+    let size = f32(light_size(light));
+    let lo = vec3<f32>(light.min);
+    var faces: array<u32, 3>;
+    var count = 0u;
+    for (var a = 0u; a < 3u; a++) {
+        if p[a] > lo[a] + size && face_exposed(light, a * 2u) {
+            faces[count] = a * 2u;
+            count++;
+        } else if p[a] < lo[a] && face_exposed(light, a * 2u + 1u) {
+            faces[count] = a * 2u + 1u;
+            count++;
+        }
+    }
+    if light_size(light) == 0 || count == 0u {
+        (*r).m += 1.0;
+        return;
+    }
+    let face = faces[min(u32(u_face * f32(count)), count - 1u)];
+    let pdf = picked.pdf / (f32(count) * size * size);
+    let target_value = luminance_of(reflected(p, n, albedo, light, face, uv));
+    let candidate = GiReservoir(picked.slot, light.generation, face, pack2x16unorm(uv), 0.0, 0.0, 0.0, 0.0);
+    stream_gi(r, candidate, target_value / pdf, 1.0, u_keep);
+}
+
+// One estimate of the light-pool light a diffuse surface at p (normal n) reflects, for the entry in `slot`: new
+// candidates, the entry's reservoir so far, one shadow ray. Writes the reservoir back (a blocked sample with W 0,
+// so the next frames look elsewhere; its M stays).
+fn reservoir_sample(slot: u32, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+    if scene.light_count == 0u {
+        return vec3(0.0);
+    }
+    var r = empty_gi_reservoir();
+    for (var i = 0u; i < GI_CANDIDATES; i++) {
+        stream_candidate(&r, p, n, albedo, rng);
+    }
+    let before = validated_gi(gi_direct[slot].reservoir);
+    let carried = min(before.m, GI_HISTORY * f32(GI_CANDIDATES));
+    var weight = 0.0;
+    if before.slot != NO_LIGHT {
+        let target_before = luminance_of(reflected(p, n, albedo, lights[before.slot], before.face, unpack2x16unorm(before.uv)));
+        weight = target_before * before.big_w * carried;
+    }
+    stream_gi(&r, before, weight, carried, rng_next(rng));
+    var estimate = vec3(0.0);
+    r.big_w = 0.0;
+    if r.slot != NO_LIGHT && r.m > 0.0 {
+        let light = lights[r.slot];
+        let uv = unpack2x16unorm(r.uv);
+        let unshadowed = reflected(p, n, albedo, light, r.face, uv);
+        let target_value = luminance_of(unshadowed);
+        if target_value > 0.0 {
+            r.big_w = r.w_sum / (r.m * target_value);
+            let origin = p + n * RAY_OFFSET;
+            let to_light = point_on_face(light, r.face, uv) - origin;
+            let d = length(to_light);
+            let hit = trace_scene(origin, to_light / max(d, 1e-6), d + 1.0);
+            if hit.found && hit.object == 0u && light_contains(light, hit.voxel) && finite(r.big_w) {
+                estimate = unshadowed * r.big_w;
+            } else {
+                r.big_w = 0.0;
+            }
+        }
+    }
+    gi_direct[slot].reservoir = r;
+    return estimate;
+}
