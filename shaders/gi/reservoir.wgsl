@@ -1,11 +1,15 @@
 // The GI cache's direct light from the light pool by resampling (gi_reservoirs=on; seed 002, Boissé 2021, whose
 // world-space cells keep reservoirs that every path vertex in them shares): each entry keeps a reservoir of light
-// samples (gi_direct's reservoir), carried from frame to frame. Per sample it draws GI_CANDIDATES lights by power, each
-// a point on one of its cube's faces that looks at the entry's point, resamples them by their unshadowed
-// reflected light (RIS), merges the entry's reservoir of the frames before (its M capped at GI_HISTORY
-// frames' worth), and traces one shadow ray to the sample kept. A lamp inside a house, one of thousands, is drawn
-// once in many frames, but once drawn it stays in the house's entries. Without it (gi_reservoirs=off) an entry
-// draws one light by power a frame (direct.wgsl).
+// samples (gi_direct's reservoir), carried from frame to frame. Per sample it draws GI_CANDIDATES lights by power,
+// each a point on one of its cube's faces, resamples them by their unshadowed reflected light (RIS), merges the
+// entry's reservoir of the frames before (its M capped at GI_HISTORY frames' worth), and traces one shadow ray to
+// the sample kept. A lamp inside a house, one of thousands, is drawn once in many frames, but once drawn it stays
+// in the house's entries. Without it (gi_reservoirs=off) an entry draws one light by power a sample (direct.wgsl).
+//
+// Candidates and targets are those of the cell's centre, the same every frame, so merging frames is resampling
+// one target; the sample is shaded and its shadow ray traced at this frame's point of the cell. A blocked sample
+// keeps its weight: zeroing it (ReSTIR's visibility reuse) darkened a house at night by 5% more than the cache
+// without reservoirs, and dropping its history instead brightened it threefold (docs/bench/gi.md).
 #define_import_path glowbrick::gi::reservoir
 
 #import glowbrick::lights::{Light, lights, scene, pick_light, power_pick_on, light_size, face_exposed, light_contains}
@@ -124,22 +128,21 @@ fn stream_candidate(r: ptr<function, GiReservoir>, p: vec3<f32>, n: vec3<f32>, a
     stream_gi(r, candidate, target_value / pdf, 1.0, u_keep);
 }
 
-// One estimate of the light-pool light a diffuse surface at p (normal n) reflects, for the entry in `slot`: new
-// candidates, the entry's reservoir so far, one shadow ray. Writes the reservoir back (a blocked sample with W 0,
-// so the next frames look elsewhere; its M stays).
-fn reservoir_sample(slot: u32, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+// One estimate of the light-pool light a diffuse surface at p (normal n) reflects, for the entry in `slot` whose
+// cell's centre is c: new candidates, the entry's reservoir so far, one shadow ray. Writes the reservoir back.
+fn reservoir_sample(slot: u32, c: vec3<f32>, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
     if scene.light_count == 0u {
         return vec3(0.0);
     }
     var r = empty_gi_reservoir();
     for (var i = 0u; i < GI_CANDIDATES; i++) {
-        stream_candidate(&r, p, n, albedo, rng);
+        stream_candidate(&r, c, n, albedo, rng);
     }
     let before = validated_gi(gi_direct[slot].reservoir);
     let carried = min(before.m, GI_HISTORY * f32(GI_CANDIDATES));
     var weight = 0.0;
     if before.slot != NO_LIGHT {
-        let target_before = luminance_of(reflected(p, n, albedo, lights[before.slot], before.face, unpack2x16unorm(before.uv)));
+        let target_before = luminance_of(reflected(c, n, albedo, lights[before.slot], before.face, unpack2x16unorm(before.uv)));
         weight = target_before * before.big_w * carried;
     }
     stream_gi(&r, before, weight, carried, rng_next(rng));
@@ -149,7 +152,7 @@ fn reservoir_sample(slot: u32, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rn
         let light = lights[r.slot];
         let uv = unpack2x16unorm(r.uv);
         let unshadowed = reflected(p, n, albedo, light, r.face, uv);
-        let target_value = luminance_of(unshadowed);
+        let target_value = luminance_of(reflected(c, n, albedo, light, r.face, uv));
         if target_value > 0.0 {
             r.big_w = r.w_sum / (r.m * target_value);
             let origin = p + n * RAY_OFFSET;
@@ -158,8 +161,6 @@ fn reservoir_sample(slot: u32, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rn
             let hit = trace_scene(origin, to_light / max(d, 1e-6), d + 1.0);
             if hit.found && hit.object == 0u && light_contains(light, hit.voxel) && finite(r.big_w) {
                 estimate = unshadowed * r.big_w;
-            } else {
-                r.big_w = 0.0;
             }
         }
     }

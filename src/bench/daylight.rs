@@ -93,7 +93,7 @@ fn measure(
     config: &DaylightConfig,
 ) -> Result<DaylightRow, String> {
     let day = Some(Daylight::at(hours, true));
-    let reference = Reference { bounces: REFERENCE_BOUNCES, daylight: day, lattice: None };
+    let reference = Reference { bounces: REFERENCE_BOUNCES, daylight: day, lattice: None, indirect: false };
     let references = ReferenceCache::new(config.width, config.height, config.reference_spp);
     let truth = references.image(world, view, &reference)?;
     let noise = references.noise(world, view, &reference, &truth)?.mae;

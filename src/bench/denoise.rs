@@ -199,6 +199,7 @@ fn measure_scene(scene: &'static str, view: Option<&str>, config: &DenoiseConfig
         bounces: REFERENCE_BOUNCES,
         daylight: Some(Daylight::at(DEFAULT_HOURS, true)),
         lattice: (config.lattice > 1).then_some(config.lattice),
+        indirect: false,
     };
     let references = ReferenceCache::new(config.width, config.height, config.reference_spp);
     let (truth, noise) = references.two_seeds(&world, &view, &what)?;

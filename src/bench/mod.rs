@@ -20,6 +20,7 @@ pub mod denoise;
 pub mod equal_time;
 pub mod frame;
 pub mod gi;
+pub mod gi_indirect;
 pub mod gi_scale;
 pub mod motion;
 pub mod net;

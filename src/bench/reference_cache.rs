@@ -18,6 +18,8 @@ pub struct Reference {
     pub daylight: Option<Daylight>,
     /// Only every n-th pixel of the bench's image in each direction (`ReferenceOptions::lattice`), or all.
     pub lattice: Option<u32>,
+    /// Only the light that reaches the camera's hits by bouncing (`ReferenceOptions::indirect_only`).
+    pub indirect: bool,
 }
 
 impl Reference {
@@ -124,6 +126,7 @@ impl ReferenceCache {
             seed,
             daylight: what.daylight,
             lattice: step,
+            indirect_only: what.indirect,
             ..ReferenceOptions::default()
         };
         let reference = render_reference(world, view, &options)?;
@@ -149,6 +152,9 @@ impl ReferenceCache {
         }
         if let Some(step) = what.lattice {
             light += &format!("|lattice{step}");
+        }
+        if what.indirect {
+            light += "|indirect";
         }
         format!(
             "{}|{:?}|{}x{}|{}spp|{light}|seed{seed}|ris{}|v{}",

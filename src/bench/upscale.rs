@@ -142,6 +142,7 @@ fn measure_scene(case: &FrameCase, config: &DenoiseConfig) -> Result<UpscaleScen
         bounces: REFERENCE_BOUNCES,
         daylight: settings.daylight(),
         lattice: (config.lattice > 1).then_some(config.lattice),
+        indirect: false,
     };
     let references = ReferenceCache::new(config.width, config.height, config.reference_spp);
     let (truth, noise) = references.two_seeds(&world, &view, &what)?;

@@ -8,6 +8,7 @@ use crate::bench::daylight::{DaylightConfig, run_daylight_bench};
 use crate::bench::denoise::{DenoiseConfig, DenoiseSection, check_scenes, run_denoise_bench};
 use crate::bench::frame::{CASES, FrameCase, FrameConfig, run_frame_bench};
 use crate::bench::gi::{GiConfig, run_gi_bench};
+use crate::bench::gi_indirect::{IndirectConfig, run_indirect_bench};
 use crate::bench::net::{NetBenchConfig, run_net_bench};
 use crate::bench::rays::{CASES as RAYS_CASES, RaysCase, RaysConfig, run_rays_bench};
 use crate::bench::reference_cache::check_lattice;
@@ -29,7 +30,7 @@ pub struct BenchArgs {
     /// Comma-separated scene names (default: all thesis-like scenes, or a small set with --quick). With
     /// --denoise: only these of its one-frame scenes (window-room, cornell, letters, apartments); with --upscale,
     /// of the frame profile's labels.
-    #[arg(long, value_delimiter = ',', conflicts_with_all = ["thesis", "gi", "daylight", "motion", "reaction", "cost", "net"])]
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["thesis", "daylight", "motion", "reaction", "cost", "net"])]
     scenes: Vec<String>,
     /// A small, fast run (96x64, few frames, 256-spp references) for CI. With --frame: the test suite's run
     /// (48x32, four scenes, counters held to the frame's ray budget; fails over it).
@@ -105,6 +106,11 @@ pub struct BenchArgs {
     /// ms per pass, the table's load); writes gi-scale.md.
     #[arg(long, requires = "gi")]
     game_sizes: bool,
+    /// With --gi: only the cache's light alone (`debug=indirect` against the path tracer's indirect light) with
+    /// the entries' light reservoirs on and off, on scenes of many small lights; writes gi-indirect.md. With
+    /// --scenes, only the scenes whose label holds one of them (e.g. village,cornell).
+    #[arg(long, requires = "gi", conflicts_with = "game_sizes")]
+    indirect: bool,
     /// With --game-sizes, --denoise --cost or --frame: only these sizes (WxH, comma-separated; default
     /// 320x180,1280x720), e.g. a GPU's 1920x1080.
     #[arg(long, value_delimiter = ',', value_parser = parse_size)]
@@ -146,6 +152,8 @@ enum BenchMode {
     Thesis(ThesisOptions),
     /// The GI cache bench: gi.md.
     Gi { spp: u32, game_sizes: bool, sizes: Vec<(u32, u32)> },
+    /// The GI cache's light alone: gi-indirect.md.
+    GiIndirect { spp: u32, scenes: Vec<String> },
     /// The game's lighting at three times of day: daylight.md.
     Daylight { spp: u32 },
     /// The denoiser: denoise.md (or one section alone).
@@ -179,6 +187,9 @@ impl BenchArgs {
         if !(self.set.is_empty() || self.thesis || self.denoise || self.frame) {
             return Err("--set needs --thesis, --denoise or --frame".into());
         }
+        if self.gi && !self.indirect && !self.scenes.is_empty() {
+            return Err("--scenes with --gi needs --indirect".into());
+        }
         // clap's `requires` names one flag; --sizes has three homes.
         if !(self.sizes.is_empty() || self.game_sizes || self.frame || (self.denoise && self.cost)) {
             return Err("--sizes needs --gi --game-sizes, --denoise --cost or --frame".into());
@@ -189,6 +200,10 @@ impl BenchArgs {
             BenchMode::Gi { spp, game_sizes, sizes } => {
                 let config = GiConfig { game_sizes_only: game_sizes, sizes, ..GiConfig::new(spp) };
                 on_gpu(|| run_gi_bench(&config, &out)).map(|text| println!("{text}"))
+            }
+            BenchMode::GiIndirect { spp, scenes } => {
+                let config = IndirectConfig { width: 160, height: 90, reference_spp: spp, only: scenes };
+                on_gpu(|| run_indirect_bench(&config, &out)).map(|text| println!("{text}"))
             }
             BenchMode::Daylight { spp } => {
                 let config = DaylightConfig::new(spp);
@@ -243,6 +258,8 @@ impl BenchArgs {
                 area_only: self.area_only,
                 settings: self.set,
             })
+        } else if self.gi && self.indirect {
+            BenchMode::GiIndirect { spp: self.spp, scenes: self.scenes.clone() }
         } else if self.gi {
             BenchMode::Gi { spp: self.spp, game_sizes: self.game_sizes, sizes: self.sizes.clone() }
         } else if self.daylight {

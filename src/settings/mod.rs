@@ -337,7 +337,7 @@ impl Default for GiSettings {
             bounces: true,
             cache: false,
             qmc: true,
-            reservoirs: false,
+            reservoirs: true,
             warm_up: true,
             table: GI_TABLE_DEFAULT,
             cell_pixels: 4,
