@@ -360,7 +360,7 @@ pub fn with_gi_off_no_gi_pass_runs() {
     }
     assert_eq!(
         glowbrick::render::gi::cache_bytes(&common::settings(&["gi=off"]).gi),
-        188,
+        220,
         "GI off holds a placeholder only"
     );
 }
