@@ -7,7 +7,8 @@
 // in the house's entries. Without it (gi_reservoirs=off) an entry draws one light by power a sample (direct.wgsl).
 //
 // Candidates and targets are those of the cell's centre, the same every frame, so merging frames is resampling
-// one target; the sample is shaded and its shadow ray traced at this frame's point of the cell. A blocked sample
+// one target; the sample is shaded and its shadow ray traced at this frame's point of the cell, and what that
+// point sees of lights the centre cannot (outside_support_sample) is added by one plain sample. A blocked sample
 // keeps its weight: zeroing it (ReSTIR's visibility reuse) darkened a house at night by 5% more than the cache
 // without reservoirs, and dropping its history instead brightened it threefold (docs/bench/gi.md).
 #define_import_path glowbrick::gi::reservoir
@@ -96,36 +97,91 @@ fn stream_gi(r: ptr<function, GiReservoir>, input: GiReservoir, weight: f32, m: 
     }
 }
 
-// One candidate into r: a light by power (or uniformly), one of its exposed faces that look at p uniformly, a
-// point on it uniform in area; resampling weight target / pdf.
-fn stream_candidate(r: ptr<function, GiReservoir>, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) {
+// The exposed faces of a light's cube whose front sides see p, in axis order.
+struct FacesSeen {
+    faces: array<u32, 3>,
+    count: u32,
+}
+
+fn faces_seen(light: Light, p: vec3<f32>) -> FacesSeen {
+    let size = f32(light_size(light));
+    let lo = vec3<f32>(light.min);
+    var seen = FacesSeen(array<u32, 3>(0u, 0u, 0u), 0u);
+    for (var a = 0u; a < 3u; a++) {
+        if p[a] > lo[a] + size && face_exposed(light, a * 2u) {
+            seen.faces[seen.count] = a * 2u;
+            seen.count++;
+        } else if p[a] < lo[a] && face_exposed(light, a * 2u + 1u) {
+            seen.faces[seen.count] = a * 2u + 1u;
+            seen.count++;
+        }
+    }
+    return seen;
+}
+
+// A light by power (or uniformly), one of its exposed faces that look at p uniformly, a point on it uniform in
+// area, and the pdf of that point (per unit area); pdf 0 where the light shows p no face.
+struct LightPoint {
+    slot: u32,
+    face: u32,
+    uv: vec2<f32>,
+    pdf: f32,
+}
+
+fn draw_light_point(p: vec3<f32>, rng: ptr<function, Rng>) -> LightPoint {
     let picked = pick_light(scene.light_count, power_pick_on(), rng_next_u32(rng), rng_next(rng));
     let u_face = rng_next(rng);
     let uv = vec2(rng_next(rng), rng_next(rng));
-    let u_keep = rng_next(rng);
     let light = lights[picked.slot];
     let size = f32(light_size(light));
-    let lo = vec3<f32>(light.min);
-    var faces: array<u32, 3>;
-    var count = 0u;
-    for (var a = 0u; a < 3u; a++) {
-        if p[a] > lo[a] + size && face_exposed(light, a * 2u) {
-            faces[count] = a * 2u;
-            count++;
-        } else if p[a] < lo[a] && face_exposed(light, a * 2u + 1u) {
-            faces[count] = a * 2u + 1u;
-            count++;
-        }
+    let seen = faces_seen(light, p);
+    if light_size(light) == 0 || seen.count == 0u {
+        return LightPoint(picked.slot, 0u, uv, 0.0);
     }
-    if light_size(light) == 0 || count == 0u {
+    let face = seen.faces[min(u32(u_face * f32(seen.count)), seen.count - 1u)];
+    return LightPoint(picked.slot, face, uv, picked.pdf / (f32(seen.count) * size * size));
+}
+
+// One candidate into r, drawn for the cell's centre c; resampling weight target / pdf.
+fn stream_candidate(r: ptr<function, GiReservoir>, c: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) {
+    let drawn = draw_light_point(c, rng);
+    let u_keep = rng_next(rng);
+    if drawn.pdf <= 0.0 {
         (*r).m += 1.0;
         return;
     }
-    let face = faces[min(u32(u_face * f32(count)), count - 1u)];
-    let pdf = picked.pdf / (f32(count) * size * size);
-    let target_value = luminance_of(reflected(p, n, albedo, light, face, uv));
-    let candidate = GiReservoir(picked.slot, light.generation, face, pack2x16unorm(uv), 0.0, 0.0, 0.0, 0.0);
-    stream_gi(r, candidate, target_value / pdf, 1.0, u_keep);
+    let light = lights[drawn.slot];
+    let target_value = luminance_of(reflected(c, n, albedo, light, drawn.face, drawn.uv));
+    let candidate = GiReservoir(drawn.slot, light.generation, drawn.face, pack2x16unorm(drawn.uv), 0.0, 0.0, 0.0, 0.0);
+    stream_gi(r, candidate, target_value / drawn.pdf, 1.0, u_keep);
+}
+
+// Light that p sees and the reservoir can never hold: points of a light whose target at the cell's centre c is
+// zero. A coarse cell's faces lie in several planes (a ceiling and the underside of a lamp hanging from it), so
+// its centre can miss a lamp that its other faces see; the reservoir alone then loses that light for good. One
+// power-drawn point seen from p, counted only outside the reservoir's support: with the reservoir's estimate of
+// the rest, the sum is unbiased. Its shadow ray is traced only when the point counts, which at level 0 is rare.
+fn outside_support_sample(c: vec3<f32>, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+    let drawn = draw_light_point(p, rng);
+    if drawn.pdf <= 0.0 {
+        return vec3(0.0);
+    }
+    let light = lights[drawn.slot];
+    if luminance_of(reflected(c, n, albedo, light, drawn.face, drawn.uv)) > 0.0 {
+        return vec3(0.0);
+    }
+    let unshadowed = reflected(p, n, albedo, light, drawn.face, drawn.uv);
+    if luminance_of(unshadowed) <= 0.0 {
+        return vec3(0.0);
+    }
+    let origin = p + n * RAY_OFFSET;
+    let to_light = point_on_face(light, drawn.face, drawn.uv) - origin;
+    let d = length(to_light);
+    let hit = trace_scene(origin, to_light / max(d, 1e-6), d + 1.0);
+    if hit.found && hit.object == 0u && light_contains(light, hit.voxel) {
+        return unshadowed / drawn.pdf;
+    }
+    return vec3(0.0);
 }
 
 // One estimate of the light-pool light a diffuse surface at p (normal n) reflects, for the entry in `slot` whose
@@ -165,5 +221,5 @@ fn reservoir_sample(slot: u32, c: vec3<f32>, p: vec3<f32>, n: vec3<f32>, albedo:
         }
     }
     gi_direct[slot].reservoir = r;
-    return estimate;
+    return estimate + outside_support_sample(c, p, n, albedo, rng);
 }

@@ -113,8 +113,11 @@ impl Plugin for NetClientPlugin {
                 Update,
                 (
                     say_hello.run_if(in_state(ClientState::Connected)),
+                    // Before the server's edits: materials the game added for its requests (since the last frame's
+                    // forwarding) leave the palette first, so the server's materials land at the server's ids.
+                    forward_requests,
                     take_world_and_edits.in_set(ApplyEdits),
-                    (forward_requests, take_clock, take_players, take_refusals, take_notices, take_welcome_back),
+                    (take_clock, take_players, take_refusals, take_notices, take_welcome_back),
                     (take_server_time, follow_server_clock),
                     rejoin_when_lost.run_if(resource_exists::<Join>),
                 )

@@ -303,9 +303,9 @@ pub struct GiSettings {
     pub qmc: bool,
     /// Draw an entry's light-pool light through a reservoir it keeps from frame to frame (seed 002): 8 lights by
     /// power a sample, resampled by their unshadowed light, merged with the entry's reservoir of the frames
-    /// before, one shadow ray; off (the default), one light by power a sample (docs/bench/gi.md, "Reservoirs per
-    /// entry": 6-38x less noise in the cache's light among thousands of lamps, but a closed white box lit by one
-    /// lamp, nine tenths bounces, comes out 19% dark where it was 9%).
+    /// before, one shadow ray, plus one plain sample of the lights the cell's centre cannot see; off, one light by
+    /// power a sample (docs/bench/gi.md, "Reservoirs per entry": 6-38x less noise in the cache's light among
+    /// thousands of lamps).
     pub reservoirs: bool,
     /// Run four update iterations a frame in a fresh cache's first 64 frames (and after a reset): a room lit
     /// over many bounces is then bright within a second instead of brightening for hundreds of frames
@@ -339,7 +339,7 @@ impl Default for GiSettings {
             bounces: true,
             cache: false,
             qmc: true,
-            reservoirs: false,
+            reservoirs: true,
             warm_up: true,
             table: GI_TABLE_DEFAULT,
             cell_pixels: 4,
