@@ -8,7 +8,7 @@
 //
 // Candidates and targets are those of the cell's centre, the same every frame, so merging frames is resampling
 // one target; the sample is shaded and its shadow ray traced at this frame's point of the cell, and what that
-// point sees of lights the centre cannot (outside_support_sample) is added by one plain sample. A blocked sample
+// point sees of lights the centre cannot (outside_support_sample) is added by a small RIS of its own. A blocked sample
 // keeps its weight: zeroing it (ReSTIR's visibility reuse) darkened a house at night by 5% more than the cache
 // without reservoirs, and dropping its history instead brightened it threefold (docs/bench/gi.md).
 #define_import_path glowbrick::gi::reservoir
@@ -158,28 +158,48 @@ fn stream_candidate(r: ptr<function, GiReservoir>, c: vec3<f32>, n: vec3<f32>, a
 
 // Light that p sees and the reservoir can never hold: points of a light whose target at the cell's centre c is
 // zero. A coarse cell's faces lie in several planes (a ceiling and the underside of a lamp hanging from it), so
-// its centre can miss a lamp that its other faces see; the reservoir alone then loses that light for good. One
-// power-drawn point seen from p, counted only outside the reservoir's support: with the reservoir's estimate of
-// the rest, the sum is unbiased. Its shadow ray is traced only when the point counts, which at level 0 is rare.
+// its centre can miss a lamp that its other faces see; the reservoir alone then loses that light for good. Its
+// own small RIS: OUTSIDE_CANDIDATES power-drawn points seen from p, each counted only outside the reservoir's
+// support, resampled by their unshadowed light at p, one shadow ray for the one kept (traced only when one
+// counts, which at level 0 is rare). With the reservoir's estimate of the rest, the sum is unbiased.
+const OUTSIDE_CANDIDATES: u32 = 4u;
+
 fn outside_support_sample(c: vec3<f32>, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
-    let drawn = draw_light_point(p, rng);
-    if drawn.pdf <= 0.0 {
+    var w_sum = 0.0;
+    var kept = LightPoint(0u, 0u, vec2(0.0), 0.0);
+    var kept_target = 0.0;
+    for (var i = 0u; i < OUTSIDE_CANDIDATES; i++) {
+        let drawn = draw_light_point(p, rng);
+        let u_keep = rng_next(rng);
+        if drawn.pdf <= 0.0 {
+            continue;
+        }
+        let light = lights[drawn.slot];
+        if luminance_of(reflected(c, n, albedo, light, drawn.face, drawn.uv)) > 0.0 {
+            continue;
+        }
+        let target_value = luminance_of(reflected(p, n, albedo, light, drawn.face, drawn.uv));
+        let w = target_value / drawn.pdf;
+        if !(finite(w) && w > 0.0) {
+            continue;
+        }
+        w_sum += w;
+        if u_keep * w_sum < w {
+            kept = drawn;
+            kept_target = target_value;
+        }
+    }
+    if w_sum <= 0.0 {
         return vec3(0.0);
     }
-    let light = lights[drawn.slot];
-    if luminance_of(reflected(c, n, albedo, light, drawn.face, drawn.uv)) > 0.0 {
-        return vec3(0.0);
-    }
-    let unshadowed = reflected(p, n, albedo, light, drawn.face, drawn.uv);
-    if luminance_of(unshadowed) <= 0.0 {
-        return vec3(0.0);
-    }
+    let light = lights[kept.slot];
+    let big_w = w_sum / (f32(OUTSIDE_CANDIDATES) * kept_target);
     let origin = p + n * RAY_OFFSET;
-    let to_light = point_on_face(light, drawn.face, drawn.uv) - origin;
+    let to_light = point_on_face(light, kept.face, kept.uv) - origin;
     let d = length(to_light);
     let hit = trace_scene(origin, to_light / max(d, 1e-6), d + 1.0);
-    if hit.found && hit.object == 0u && light_contains(light, hit.voxel) {
-        return unshadowed / drawn.pdf;
+    if hit.found && hit.object == 0u && light_contains(light, hit.voxel) && finite(big_w) {
+        return reflected(p, n, albedo, light, kept.face, kept.uv) * big_w;
     }
     return vec3(0.0);
 }

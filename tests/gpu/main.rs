@@ -112,6 +112,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             with_gi_off_no_gi_pass_runs,
             with_the_warm_up_off_a_fresh_cache_brings_in_its_bounces_slower,
             a_settled_entry_whose_light_still_rises_catches_up_at_the_fast_weight,
+            a_lamp_placed_in_a_dark_room_lights_its_bounce_within_eight_frames,
         ],
         detail: [every_voxel_has_the_cpus_albedo_and_the_lit_frame_converges],
         headless: [a_broken_shader_fails_every_wait_at_once_with_its_pass_name],
