@@ -715,7 +715,7 @@ fn white_box() -> (VoxelWorld, CameraView) {
 /// (256 spp; its mean's own noise is under 0.5%). Measured since coarse entries stand for their whole cell
 /// (2026-11-30, direct.wgsl `cell_point`): -8.6% with the fast weight on one lavapipe thread, -8.7% to -9.5% on
 /// two (eight runs); -13.4% / -13.7% at alpha alone (the blend's weight set to alpha by hand through
-/// `GLOWBRICK_SHADERS`). With the entries' reservoirs (the default since 2026-12-03): -7.3%; without their
+/// `GLOWBRICK_SHADERS`). With the entries' reservoirs (the default since 2026-12-03): -6.2%; without their
 /// estimate of the light outside the cell centre's target, -18.9% (docs/bench/gi.md).
 /// (Before, the lamp's and the ceiling's faces raced for a coarse cell: -6.2% or -16%, docs/bench/gi.md.)
 pub fn a_settled_entry_whose_light_still_rises_catches_up_at_the_fast_weight() {
