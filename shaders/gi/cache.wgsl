@@ -103,11 +103,14 @@ struct GiReservoir {
 
 // Per entry: the direct light its face reflects, averaged over the face and over frames (rgb), and the samples
 // blended so far (w; 0 = no value yet), written by refresh.wgsl, read by update.wgsl at ray hits (direct.wgsl);
-// and the reservoir it draws the light pool's light from. One binding: a compute stage binds at most 32 storage
-// buffers on lavapipe, and the groups hold 32. GiDirect in src/render/gpu_types.rs.
+// the reservoir it draws the light pool's light from; and the histogram of where its bounce light comes from,
+// that its rays are guided by (gi_guiding=on, guide.wgsl: 16 bins, two 16-bit floats a word). One binding: a
+// compute stage binds at most 32 storage buffers on lavapipe, and the groups hold 32. GiDirect in
+// src/render/gpu_types.rs.
 struct GiDirect {
     light: vec4<f32>,
     reservoir: GiReservoir,
+    guide: array<vec4<u32>, 2>,
 }
 
 @group(3) @binding(7) var<storage, read_write> gi_direct: array<GiDirect>;
@@ -238,6 +241,8 @@ fn claim(slot: u32, expected: u32, checksum: u32, voxel: vec3<i32>, face: u32, o
             gi_direct[slot].light = vec4(0.0);
             // No light samples of the slot's last occupant.
             gi_direct[slot].reservoir = GiReservoir(0xffffffffu, 0u, 0u, 0u, 0.0, 0.0, 0.0, 0.0);
+            // Nor the directions its light came from.
+            gi_direct[slot].guide = array(vec4(0u), vec4(0u));
             atomicStore(&gi_keys[slot], checksum);
             atomicAdd(&counters[COUNT_GI_INSERTED], 1u);
             return checksum;
@@ -473,10 +478,15 @@ fn gi_incoming(point: vec3<f32>, face: u32, object: u32, level: u32) -> vec3<f32
 // Direction i of K for an entry: a Hammersley point, Cranley-Patterson rotated per entry so neighbours do not
 // share directions, mapped to the cosine-weighted hemisphere around the face normal.
 fn ray_direction(face: u32, i: u32, k: u32, seed: u32) -> vec3<f32> {
+    return cosine_direction(face, ray_square_point(i, k, seed));
+}
+
+// Direction i of k's point of the unit square (cosine_direction's): a Hammersley set shifted by the seed.
+fn ray_square_point(i: u32, k: u32, seed: u32) -> vec2<f32> {
     let rotation = vec2(f32(pcg(seed) >> 8u), f32(pcg(seed ^ 0x68E31DA4u) >> 8u)) * (1.0 / 16777216.0);
     let u = fract((f32(i) + 0.5) / f32(k) + rotation.x);
     let v = fract(f32(reverseBits(i)) * 2.3283064e-10 + rotation.y);
-    return cosine_direction(face, vec2(u, v));
+    return vec2(u, v);
 }
 
 // The cosine-weighted direction around the face normal at `u` of the unit square.

@@ -87,7 +87,7 @@ fn face_sample(slot: u32, e: GiEntry, u: vec2<f32>, rng: ptr<function, Rng>) -> 
     let n = face_normal(e.face);
     var estimate = vec3(0.0);
     if gi_setting(GI_RESERVOIRS) && lighting_mode() != LIGHTING_SUN {
-        estimate = reservoir_sample(slot, cell_point(e, vec2(0.5)).point, at.point, n, albedo, rng);
+        estimate = reservoir_sample(slot, cell_point(e, vec2(0.5)).point, at.point, n, albedo, e.level > 0u, rng);
         if lighting_mode() == LIGHTING_FULL {
             estimate += disk_sample(at.point, n, albedo, rng);
         }

@@ -13,11 +13,11 @@
 // without reservoirs, and dropping its history instead brightened it threefold (docs/bench/gi.md).
 #define_import_path glowbrick::gi::reservoir
 
-#import glowbrick::lights::{Light, lights, scene, pick_light, power_pick_on, light_size, face_exposed, light_contains}
-#import glowbrick::traversal::{trace_scene, face_normal}
+#import glowbrick::lights::{Light, lights, scene, pick_light, power_pick_on, light_size, face_exposed, sees_light_point}
+#import glowbrick::traversal::face_normal
 #import glowbrick::random::{Rng, rng_next, rng_next_u32}
 #import glowbrick::guards::finite
-#import glowbrick::constants::{RAY_OFFSET, PI}
+#import glowbrick::constants::PI
 #import glowbrick::gi::cache::{gi_direct, GiReservoir}
 
 // Candidates per sample, and the frames' worth of candidates a reservoir may carry (its M at most
@@ -161,7 +161,7 @@ fn stream_candidate(r: ptr<function, GiReservoir>, c: vec3<f32>, n: vec3<f32>, a
 // its centre can miss a lamp that its other faces see; the reservoir alone then loses that light for good. Its
 // own small RIS: OUTSIDE_CANDIDATES power-drawn points seen from p, each counted only outside the reservoir's
 // support, resampled by their unshadowed light at p, one shadow ray for the one kept (traced only when one
-// counts, which at level 0 is rare). With the reservoir's estimate of the rest, the sum is unbiased.
+// counts). With the reservoir's estimate of the rest, the sum is unbiased. Only coarse cells need it.
 const OUTSIDE_CANDIDATES: u32 = 4u;
 
 fn outside_support_sample(c: vec3<f32>, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
@@ -194,11 +194,7 @@ fn outside_support_sample(c: vec3<f32>, p: vec3<f32>, n: vec3<f32>, albedo: vec3
     }
     let light = lights[kept.slot];
     let big_w = w_sum / (f32(OUTSIDE_CANDIDATES) * kept_target);
-    let origin = p + n * RAY_OFFSET;
-    let to_light = point_on_face(light, kept.face, kept.uv) - origin;
-    let d = length(to_light);
-    let hit = trace_scene(origin, to_light / max(d, 1e-6), d + 1.0);
-    if hit.found && hit.object == 0u && light_contains(light, hit.voxel) && finite(big_w) {
+    if finite(big_w) && sees_light_point(p, n, light, point_on_face(light, kept.face, kept.uv)) {
         return reflected(p, n, albedo, light, kept.face, kept.uv) * big_w;
     }
     return vec3(0.0);
@@ -206,7 +202,9 @@ fn outside_support_sample(c: vec3<f32>, p: vec3<f32>, n: vec3<f32>, albedo: vec3
 
 // One estimate of the light-pool light a diffuse surface at p (normal n) reflects, for the entry in `slot` whose
 // cell's centre is c: new candidates, the entry's reservoir so far, one shadow ray. Writes the reservoir back.
-fn reservoir_sample(slot: u32, c: vec3<f32>, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, Rng>) -> vec3<f32> {
+// `coarse`: the cell spans more than one voxel face, so p may see lights its centre cannot (one face's centre
+// and its points see the same lights: the planes of a light's faces lie on whole voxels).
+fn reservoir_sample(slot: u32, c: vec3<f32>, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, coarse: bool, rng: ptr<function, Rng>) -> vec3<f32> {
     if scene.light_count == 0u {
         return vec3(0.0);
     }
@@ -231,15 +229,14 @@ fn reservoir_sample(slot: u32, c: vec3<f32>, p: vec3<f32>, n: vec3<f32>, albedo:
         let target_value = luminance_of(reflected(c, n, albedo, light, r.face, uv));
         if target_value > 0.0 {
             r.big_w = r.w_sum / (r.m * target_value);
-            let origin = p + n * RAY_OFFSET;
-            let to_light = point_on_face(light, r.face, uv) - origin;
-            let d = length(to_light);
-            let hit = trace_scene(origin, to_light / max(d, 1e-6), d + 1.0);
-            if hit.found && hit.object == 0u && light_contains(light, hit.voxel) && finite(r.big_w) {
+            if finite(r.big_w) && sees_light_point(p, n, light, point_on_face(light, r.face, uv)) {
                 estimate = unshadowed * r.big_w;
             }
         }
     }
     gi_direct[slot].reservoir = r;
-    return estimate + outside_support_sample(c, p, n, albedo, rng);
+    if coarse {
+        estimate += outside_support_sample(c, p, n, albedo, rng);
+    }
+    return estimate;
 }

@@ -8,15 +8,16 @@
 #import glowbrick::world::{materials, voxel_at, objects, object_index, object_count, albedo_at}
 #import glowbrick::traversal::{Hit, trace, trace_objects, trace_scene, face_normal, INF, count_rays_only}
 #import glowbrick::lights::{lighting_mode, scene, sky}
-#import glowbrick::random::{Rng, pcg, rng_next, r4_point, rotation4}
+#import glowbrick::random::{Rng, pcg, rng_next, r4_point, rotation2, rotation4}
 #import glowbrick::guards::finite3
 #import glowbrick::counters::counters
-#import glowbrick::constants::{RAY_OFFSET, LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, GI_QMC, COUNT_GI_BORROWED, COUNT_RAYS_GI,
+#import glowbrick::constants::{RAY_OFFSET, LIGHTING_SUN, LIGHTING_FULL, GI_BOUNCES, GI_CACHE, GI_RESTART, GI_EDIT_RESTART, GI_QMC, GI_GUIDING, COUNT_GI_BORROWED, COUNT_RAYS_GI,
     COUNT_GI_RESETS, COUNT_GI_DIRECT_TRACED}
 #import glowbrick::gi::cache::{gi_setting, gi, gi_entries, gi_irradiance, gi_filtered, gi_rays, gi_direct, gi_probe,
-    GiEntry, has_filtered_value, listed_slot, hit_level, used_within, settled_samples, sequence_step, slot_seed, world_exit, ray_direction, cosine_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
+    GiEntry, has_filtered_value, listed_slot, hit_level, used_within, settled_samples, sequence_step, slot_seed, world_exit, ray_direction, ray_square_point, cosine_direction, hit_face, hit_distance, ray_origin, NOT_FOUND, MISS_FACE,
     WORK_STATIC, WORK_DYNAMIC}
 #import glowbrick::gi::direct::{direct_at, cell_point}
+#import glowbrick::gi::guide::{load_guide, guided_point, guide_bin, guide_record, store_guide}
 
 // The indirect light a hit face's entry holds (its last filtered value), or `fallback` (the shooting entry's
 // own) where it has none yet or no room in a full table: counted as borrowed. (Told by its colour, which this pass
@@ -106,13 +107,17 @@ fn miss_radiance(dir: vec3<f32>) -> vec3<f32> {
     return select(vec3(0.0), sky(dir), lighting_mode() == LIGHTING_SUN || lighting_mode() == LIGHTING_FULL);
 }
 
-// One of an entry's rays this frame: where it starts, where it goes, and the static world's hit (if any).
+// One of an entry's rays this frame: where it starts, where it goes, and the static world's hit (if any); with
+// guided rays, the guide's bin it was drawn in and its weight (the cosine lobe's density over the mixture's; 1
+// for unguided rays).
 struct EntryRay {
     start: vec3<f32>,
     dir: vec3<f32>,
     found: bool,
     face: u32,
     distance: f32,
+    bin: u32,
+    weight: f32,
 }
 
 // The ray generators' inputs for one entry this frame.
@@ -128,6 +133,10 @@ struct RayPlan {
     rotation: vec4<u32>,
     // Fresh rays of a static entry start from a point of its cell.
     spread: bool,
+    // Fresh rays drawn from the entry's guide (gi_guiding; guide.wgsl), loaded for this thread, and this
+    // frame's shift of their points of the square.
+    guided: bool,
+    shift: vec2<f32>,
 }
 
 // With cached hits, each frame re-shades the next `update_rays` of the entry's K fixed directions; a frame's
@@ -137,7 +146,7 @@ fn cached_ray(e: GiEntry, slot: u32, plan: RayPlan, j: u32) -> EntryRay {
     let i = (plan.first + j) % gi.rays;
     let code = gi_rays[slot * gi.rays + i];
     let face = hit_face(code);
-    return EntryRay(plan.origin, ray_direction(e.face, i, gi.rays, plan.seed), face != MISS_FACE, face, hit_distance(code));
+    return EntryRay(plan.origin, ray_direction(e.face, i, gi.rays, plan.seed), face != MISS_FACE, face, hit_distance(code), 0u, 1.0);
 }
 
 // Without cached hits each frame draws `update_rays` fresh directions (a fixed set leaves each entry a quadrature
@@ -146,19 +155,32 @@ fn cached_ray(e: GiEntry, slot: u32, plan: RayPlan, j: u32) -> EntryRay {
 // after frame and iteration after iteration, so the blend of the last frames' rays covers the hemisphere and the
 // cell evenly (docs/bench/gi.md, "Low-discrepancy rays"). Without, this frame's directions are stratified (a
 // Hammersley set turned by a seed of the frame's, not the rng's stream, which the hits' direct light draws from)
-// and the start points random.
+// and the start points random. Guided, the direction's point of the square is warped to the entry's guide.
 fn fresh_ray(e: GiEntry, plan: RayPlan, j: u32, rng: ptr<function, Rng>) -> EntryRay {
-    var dir: vec3<f32>;
-    // The start point's place on the cell.
+    // The direction's point of the unit square (cosine_direction's), and the start point's place on the cell.
+    var square: vec2<f32>;
     var across: vec2<f32>;
     if gi_setting(GI_QMC) {
         let u = r4_point(plan.run + j, plan.rotation);
-        dir = cosine_direction(e.face, u.xy);
+        square = u.xy;
         across = u.zw;
     } else {
-        dir = ray_direction(e.face, j, gi.update_rays, pcg(plan.seed ^ plan.frame_seed ^ 0x68BC21EBu));
+        square = ray_square_point(j, gi.update_rays, pcg(plan.seed ^ plan.frame_seed ^ 0x68BC21EBu));
         across = vec2(rng_next(rng), rng_next(rng));
     }
+    var bin = 0u;
+    var weight = 1.0;
+    if plan.guided {
+        // The guide is learnt from the entry's earlier rays, and a sequence continued across frames is a
+        // function of those same rays: warped by the guide it is no longer spread evenly (the window room's
+        // bounce light came out 17% bright). A random shift of this frame's own keeps its rays stratified
+        // among themselves and independent of the guide.
+        let guided = guided_point(fract(square + plan.shift));
+        square = guided.u;
+        bin = guided.bin;
+        weight = 1.0 / guided.density;
+    }
+    let dir = cosine_direction(e.face, square);
     // A static entry's value is then its cell's average, as its direct light is, whichever face inserted it (a
     // cache that lived through an edit settles where a fresh one does).
     var start = plan.origin;
@@ -166,7 +188,7 @@ fn fresh_ray(e: GiEntry, plan: RayPlan, j: u32, rng: ptr<function, Rng>) -> Entr
         start = cell_point(e, across).point + face_normal(e.face) * RAY_OFFSET;
     }
     let hit = trace(start, dir, INF);
-    return EntryRay(start, dir, hit.found, hit.face, hit.distance);
+    return EntryRay(start, dir, hit.found, hit.face, hit.distance, bin, weight);
 }
 
 // The light a ray brings: a moving object in front of the static hit replaces it for this frame.
@@ -235,6 +257,7 @@ fn ray_plan(e: GiEntry, slot: u32, cached: bool, dynamic: bool) -> RayPlan {
         base = objects[object_index(e.object)].min;
     }
     let seed = slot_seed(slot);
+    let frame_seed = pcg(gi.frame ^ (gi.iteration << 28u));
     var first = 0u;
     if cached {
         first = pcg(seed ^ 0x5bd1e995u) + (sequence_step(gi.frame, e) + gi.iteration * 3u) * gi.update_rays;
@@ -242,11 +265,13 @@ fn ray_plan(e: GiEntry, slot: u32, cached: bool, dynamic: bool) -> RayPlan {
     return RayPlan(
         ray_origin(e.voxel, e.face, base),
         seed,
-        pcg(gi.frame ^ (gi.iteration << 28u)),
+        frame_seed,
         first,
         sequence_step(gi.update_run + gi.iteration, e) * gi.update_rays,
         rotation4(seed ^ 0x68BC21EBu),
         !cached && !dynamic,
+        !cached && gi_setting(GI_GUIDING),
+        vec2<f32>(rotation2(seed ^ frame_seed) >> vec2(8u)) * (1.0 / 16777216.0),
     );
 }
 
@@ -272,6 +297,9 @@ fn update_entry(slot: u32, dynamic: bool) {
     var rng = Rng(pcg(plan.seed ^ plan.frame_seed));
     var lo = select(plan.origin, e.lo, samples > 0u);
     var hi = select(plan.origin, e.hi, samples > 0u);
+    if plan.guided {
+        load_guide(slot);
+    }
     var sum = vec3(0.0);
     for (var j = 0u; j < gi.update_rays; j++) {
         var ray: EntryRay;
@@ -287,7 +315,11 @@ fn update_entry(slot: u32, dynamic: bool) {
             lo = min(lo, min(ray.start, end));
             hi = max(hi, max(ray.start, end));
         }
-        sum += ray_radiance(ray, e.level, seen, own, &rng);
+        let radiance = ray_radiance(ray, e.level, seen, own, &rng) * ray.weight;
+        if plan.guided {
+            guide_record(ray.bin, dot(radiance, LUMINANCE));
+        }
+        sum += radiance;
     }
     var estimate = sum / f32(gi.update_rays);
     if !finite3(estimate) {
@@ -295,6 +327,9 @@ fn update_entry(slot: u32, dynamic: bool) {
         estimate = vec3(0.0);
     }
     let drifting = blend_estimate(slot, age, estimate);
+    if plan.guided {
+        store_guide(slot, age);
+    }
     if plan.spread {
         gi_entries[slot].lo = lo;
         gi_entries[slot].hi = hi;

@@ -84,6 +84,7 @@ const GI_RESTART: u32 = #{GI_RESTART}u;
 const GI_EDIT_RESTART: u32 = #{GI_EDIT_RESTART}u;
 const GI_QMC: u32 = #{GI_QMC}u;
 const GI_RESERVOIRS: u32 = #{GI_RESERVOIRS}u;
+const GI_GUIDING: u32 = #{GI_GUIDING}u;
 // The filtered colour of a GI entry with no value yet (shaders/gi/cache.wgsl's forget_value).
 const GI_NO_VALUE: i32 = #{GI_NO_VALUE};
 // Direct-light samples an entry starts over with after a change of light (gi/direct.wgsl).

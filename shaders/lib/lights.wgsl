@@ -273,6 +273,16 @@ fn light_contains(light: Light, voxel: vec3<i32>) -> bool {
     return all(voxel >= light.min) && all(voxel < light.min + vec3(light_size(light)));
 }
 
+// Whether a surface at p (normal n) sees the point q of a light: the first thing a shadow ray from just off the
+// surface meets toward q is the light's own cube (a moving object or another voxel in between blocks it).
+fn sees_light_point(p: vec3<f32>, n: vec3<f32>, light: Light, q: vec3<f32>) -> bool {
+    let origin = p + n * RAY_OFFSET;
+    let to_light = q - origin;
+    let d = length(to_light);
+    let hit = trace_scene(origin, to_light / max(d, 1e-6), d + 1.0);
+    return hit.found && hit.object == 0u && light_contains(light, hit.voxel);
+}
+
 // One next-event-estimation sample of the radiance reflected by a diffuse surface at p (normal n).
 fn direct_sample(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, count: u32, power: bool, rng: ptr<function, Rng>) -> vec3<f32> {
     if count == 0u {
@@ -330,9 +340,7 @@ fn direct_sample(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, count: u32, powe
     if cos_surface <= 0.0 || cos_light <= 0.0 {
         return vec3(0.0);
     }
-    let origin = p + n * RAY_OFFSET;
-    let hit = trace_scene(origin, normalize(q - origin), d + 1.0);
-    if !hit.found || hit.object != 0u || !light_contains(light, hit.voxel) {
+    if !sees_light_point(p, n, light, q) {
         return vec3(0.0);
     }
     let pdf = max(picked.pdf * pdf_area, 1e-30);

@@ -1,10 +1,11 @@
 //! The GI cache's light alone (`bench --gi --indirect`): `debug=indirect` (the cache's share of the image, the
 //! denoiser off) against the path tracer's indirect light (`reference --indirect`, 32 bounces, the mean of two
-//! seeds, its own noise stated), with each entry's light-pool reservoirs (`gi_reservoirs`, seed 002) on and off,
-//! on scenes of many small lights: the generated world at night (the village, inside a house, a crystal cave),
-//! the thesis' apartments and letters, the cornell box and the window room. One frame's error at frames 16, 64 and
-//! 256 of a cold cache, the GI passes' GPU ms, and the error at equal GPU time (the reservoirs' error at the frame
-//! their time reaches the frame-64 time of the cache without them, log-log between the frames measured).
+//! seeds, its own noise stated), with each entry's light-pool reservoirs (`gi_reservoirs`, seed 002) off and on,
+//! and on with guided rays (`gi_guiding`, seed 004), on scenes of many small lights: the generated world at night
+//! (the village, inside a house, a crystal cave), the thesis' apartments and letters, the cornell box and the
+//! window room. One frame's error at frames 16, 64 and 256 of a cold cache, the GI passes' GPU ms, and the error
+//! at equal GPU time (a mode's error at the frame its time reaches the frame-64 time of the first mode, log-log
+//! between the frames measured).
 
 use super::frame::{FrameCase, case_world};
 use super::reference_cache::{Reference, ReferenceCache};
@@ -27,8 +28,13 @@ pub const CASES: [FrameCase; 7] = [
     FrameCase { label: "window-room", scene: "window-room", view: "inside", settings: &["lighting=emitters"] },
 ];
 
-/// The modes compared: today's one light a sample, and the reservoirs.
-const MODES: [(&str, &str); 2] = [("one light a sample", "gi_reservoirs=off"), ("reservoirs", "gi_reservoirs=on")];
+/// The modes compared (settings separated by spaces): one light a sample, the reservoirs, and the reservoirs with
+/// guided rays.
+const MODES: [(&str, &str); 3] = [
+    ("one light a sample", "gi_reservoirs=off gi_guiding=off"),
+    ("reservoirs", "gi_reservoirs=on gi_guiding=off"),
+    ("reservoirs, guided rays", "gi_reservoirs=on gi_guiding=on"),
+];
 
 /// Frames after which one frame is measured (cumulative).
 const FRAMES: [u32; 3] = [16, 64, 256];
@@ -57,7 +63,8 @@ fn settings_for(case: &FrameCase, mode: &str) -> Result<RenderSettings, String> 
         .settings
         .iter()
         .copied()
-        .chain(["gi=on", "denoise=off", "debug=indirect", mode])
+        .chain(["gi=on", "denoise=off", "debug=indirect"])
+        .chain(mode.split_whitespace())
         .map(str::to_string)
         .collect();
     RenderSettings::default().with_pairs(&pairs)
@@ -108,7 +115,7 @@ pub fn run_indirect_bench(config: &IndirectConfig, out: &Path) -> Result<String,
         CASES.iter().filter(|c| config.only.is_empty() || config.only.iter().any(|o| c.label.contains(o.as_str())));
     for case in cases {
         let (world, view) = case_world(case)?;
-        let settings = settings_for(case, "gi_reservoirs=off")?;
+        let settings = settings_for(case, MODES[0].1)?;
         let what = Reference { indirect: true, daylight: settings.daylight(), ..Reference::bounces(REFERENCE_BOUNCES) };
         let (truth, noise) = references.two_seeds(&world, &view, &what)?;
         noises.push((case.label, noise, truth.mean_luminance()));
@@ -125,10 +132,10 @@ pub fn run_indirect_bench(config: &IndirectConfig, out: &Path) -> Result<String,
 
 fn markdown(rows: &[Row], noises: &[(&str, Metrics, f64)], config: &IndirectConfig) -> String {
     let mut text = format!(
-        "# The GI cache's light alone: reservoirs per entry\n\n`debug=indirect` at {}x{}, denoiser off, one frame \
+        "# The GI cache's light alone: reservoirs per entry, guided rays\n\n`debug=indirect` at {}x{}, denoiser off, one frame \
          of a cold cache at frames {FRAMES:?}, against `reference --indirect` ({REFERENCE_BOUNCES} bounces, the \
          mean of two seeds of {} spp; its own relMSE beside each scene). GPU ms: the GI passes, and the whole frame, \
-         mean of frames 64-256. Equal time: the reservoirs' error at the frame their GPU time reaches the frame-64 \
+         mean of frames 64-256. Equal time: a mode's error at the frame its GPU time reaches the frame-64 \
          time of one light a sample.\n\n\
          | scene | mode | relMSE f16 | f64 | f256 | bias f64 (% of mean) | GI ms | frame ms | relMSE at equal time | reference's relMSE |\n\
          |---|---|---|---|---|---|---|---|---|---|\n",

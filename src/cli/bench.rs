@@ -107,7 +107,8 @@ pub struct BenchArgs {
     #[arg(long, requires = "gi")]
     game_sizes: bool,
     /// With --gi: only the cache's light alone (`debug=indirect` against the path tracer's indirect light) with
-    /// the entries' light reservoirs on and off, on scenes of many small lights; writes gi-indirect.md. With
+    /// the entries' light reservoirs off and on, and on with guided rays, on scenes of many small lights; writes
+    /// gi-indirect.md. With
     /// --scenes, only the scenes whose label holds one of them (e.g. village,cornell).
     #[arg(long, requires = "gi", conflicts_with = "game_sizes")]
     indirect: bool,

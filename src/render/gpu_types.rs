@@ -213,16 +213,19 @@ pub struct GiReservoir {
 
 const _: () = assert!(size_of::<GiReservoir>() == 32);
 
-/// One GI entry's direct light and its reservoir (`GiDirect` in `shaders/gi/cache.wgsl`, the `gi_direct`
-/// buffer).
+/// One GI entry's direct light, its reservoir and its rays' guide (`GiDirect` in `shaders/gi/cache.wgsl`, the
+/// `gi_direct` buffer).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct GiDirect {
     pub light: [f32; 4],
     pub reservoir: GiReservoir,
+    /// Where the entry's bounce light came from: 16 bins of the cosine lobe, two 16-bit floats a word
+    /// (`shaders/gi/guide.wgsl`, `gi_guiding`).
+    pub guide: [u32; 8],
 }
 
-const _: () = assert!(size_of::<GiDirect>() == 48);
+const _: () = assert!(size_of::<GiDirect>() == 80);
 
 /// One edit-log record (two `vec4<i32>` in `gi_edits`): an edited brick's box and the epoch of the edit.
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -431,6 +434,9 @@ pub const GI_QMC: u32 = 32;
 /// `GiParams::flags`: entries draw their light-pool light through reservoirs kept from frame to frame
 /// (`gi_reservoirs`, `shaders/gi/reservoir.wgsl`).
 pub const GI_RESERVOIRS: u32 = 64;
+/// `GiParams::flags`: fresh rays drawn from a mixture of the cosine lobe and each entry's learnt histogram of
+/// incoming light (`gi_guiding`, `shaders/gi/guide.wgsl`).
+pub const GI_GUIDING: u32 = 128;
 /// The filtered colour of a GI entry that holds no value yet (radiance is never negative): the tables start with
 /// it and `forget_value` (`shaders/gi/cache.wgsl`) writes it back. An integer, as the shared table holds them.
 pub const GI_NO_VALUE: i32 = -1;
@@ -537,6 +543,7 @@ pub fn shared_constants() -> Vec<(&'static str, Shared)> {
         ("GI_EDIT_RESTART", U32(GI_EDIT_RESTART)),
         ("GI_QMC", U32(GI_QMC)),
         ("GI_RESERVOIRS", U32(GI_RESERVOIRS)),
+        ("GI_GUIDING", U32(GI_GUIDING)),
         ("GI_NO_VALUE", I32(GI_NO_VALUE)),
         ("GI_RESTART_SAMPLES", U32(GI_RESTART_DIRECT_SAMPLES)),
         // The GI work buffer's words.

@@ -9,7 +9,7 @@ use bevy::prelude::*;
 use bevy::shader::Shader;
 
 /// Every shader file: its path under `shaders/` and its source. Libraries first (they only define imports).
-pub const SOURCES: [(&str, &str); 26] = [
+pub const SOURCES: [(&str, &str); 27] = [
     ("lib/constants.wgsl", include_str!("../../shaders/lib/constants.wgsl")),
     ("lib/random.wgsl", include_str!("../../shaders/lib/random.wgsl")),
     ("lib/guards.wgsl", include_str!("../../shaders/lib/guards.wgsl")),
@@ -20,6 +20,7 @@ pub const SOURCES: [(&str, &str); 26] = [
     ("lib/frame.wgsl", include_str!("../../shaders/lib/frame.wgsl")),
     ("gi/cache.wgsl", include_str!("../../shaders/gi/cache.wgsl")),
     ("gi/reservoir.wgsl", include_str!("../../shaders/gi/reservoir.wgsl")),
+    ("gi/guide.wgsl", include_str!("../../shaders/gi/guide.wgsl")),
     ("gi/direct.wgsl", include_str!("../../shaders/gi/direct.wgsl")),
     ("restir/common.wgsl", include_str!("../../shaders/restir/common.wgsl")),
     ("denoise/common.wgsl", include_str!("../../shaders/denoise/common.wgsl")),

@@ -307,6 +307,11 @@ pub struct GiSettings {
     /// power a sample (docs/bench/gi.md, "Reservoirs per entry": 6-38x less noise in the cache's light among
     /// thousands of lamps).
     pub reservoirs: bool,
+    /// Draw an entry's fresh rays from a mixture of the cosine lobe and a histogram of where its light came
+    /// from, learnt from its own rays (seed 004's guiding toward the voxels that carry light), each weighted by
+    /// the cosine lobe's density over the mixture's; off, the cosine lobe alone (docs/bench/gi.md, "Guided
+    /// rays"). Unused with `cache` (cached hits keep fixed directions).
+    pub guiding: bool,
     /// Run four update iterations a frame in a fresh cache's first 64 frames (and after a reset): a room lit
     /// over many bounces is then bright within a second instead of brightening for hundreds of frames
     /// (docs/bench/gi.md, "A fresh cache warms up"); off, one a frame from the start.
@@ -340,6 +345,7 @@ impl Default for GiSettings {
             cache: false,
             qmc: true,
             reservoirs: true,
+            guiding: false,
             warm_up: true,
             table: GI_TABLE_DEFAULT,
             cell_pixels: 4,

@@ -429,7 +429,7 @@ pub static SETTINGS: &[Setting] = &[
     Setting {
         key: "gi_table",
         section: Section::Gi,
-        about: "Slots in the GI cache's table (rounded up to a power of two; 124 bytes each, 376 with gi_cached_hits=on at gi_cached_rays=64). A full \
+        about: "Slots in the GI cache's table (rounded up to a power of two; 156 bytes each, 408 with gi_cached_hits=on at gi_cached_rays=64). A full \
                 table leaves new faces without indirect light, counted as gi_full.",
         field: &Range {
             range: GI_TABLE_RANGE,
@@ -485,6 +485,14 @@ pub static SETTINGS: &[Setting] = &[
         about: "Each entry draws its light-pool light through a reservoir kept from frame to frame (8 lights by \
                 power a sample, resampled, merged with its past ones; seed 002); off, one light by power a sample.",
         field: &Choice { get: |s| s.gi.reservoirs, set: |s, v| s.gi.reservoirs = v },
+    },
+    Setting {
+        key: "gi_guiding",
+        section: Section::Gi,
+        about: "Each entry's fresh rays lean toward where its light came from (a 16-bin histogram of its own rays, \
+                mixed half and half with the cosine lobe, weighted so the estimate stays unbiased; seed 004); off, \
+                the cosine lobe alone. No effect with gi_cached_hits=on.",
+        field: &Choice { get: |s| s.gi.guiding, set: |s, v| s.gi.guiding = v },
     },
     Setting {
         key: "gi_warm_up",

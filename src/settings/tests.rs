@@ -25,7 +25,7 @@ fn the_messages_list_the_keys_and_values_as_before_the_table() {
          render_scale=auto|<0.25..1>, frame_target=<1..10000>, \
          candidates=<1..64>, taps=<0..16>, radius=<0..100>, temporal=on|off, spatial=on|off, \
          sample=area|point, reuse=biased|one-ray|unbiased, local_lights=on|off, initial_visibility=on|off, light_tiles=on|off, gi=on|off, gi_cached_rays=<4..128>, gi_update=<1..64>, \
-         gi_period=<1..8>, gi_alpha=<0.001..1>, gi_table=<4096..4194304>, gi_cell=<1..16>, gi_filter=on|off, gi_bounces=on|off, gi_cached_hits=on|off, gi_qmc=on|off, gi_reservoirs=on|off, gi_warm_up=on|off"
+         gi_period=<1..8>, gi_alpha=<0.001..1>, gi_table=<4096..4194304>, gi_cell=<1..16>, gi_filter=on|off, gi_bounces=on|off, gi_cached_hits=on|off, gi_qmc=on|off, gi_reservoirs=on|off, gi_guiding=on|off, gi_warm_up=on|off"
     );
 }
 

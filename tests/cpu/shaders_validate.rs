@@ -246,7 +246,7 @@ fn twins() -> Vec<Twin> {
         sized("gi_filtered", None, GI_RADIANCE_BYTES, 1),
         sized("gi_rays", None, GI_RAY_BYTES, 1),
         sized("gi_edits", None, size_of::<GiEdit>() as u64, 2),
-        twin!("gi_direct", "GiDirect", GiDirect { light, reservoir }),
+        twin!("gi_direct", "GiDirect", GiDirect { light, reservoir, guide }),
         sized("gi_work", None, word, 1),
         sized("gi_list", None, word, 1),
     ]

@@ -108,6 +108,7 @@ fn tests() -> Vec<(&'static str, fn())> {
             a_coarse_entry_whose_face_an_edit_covers_is_freed_and_inserted_again,
             a_sky_seen_through_a_small_hole_is_averaged_over_fresh_directions,
             low_discrepancy_rays_hold_each_entrys_light_steadier,
+            guided_rays_find_the_light_of_a_small_hole,
             wider_camera_cells_keep_fewer_entries,
             with_gi_off_no_gi_pass_runs,
             with_the_warm_up_off_a_fresh_cache_brings_in_its_bounces_slower,

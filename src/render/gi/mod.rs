@@ -22,7 +22,7 @@ pub use schedule::{RESTART_ITERATIONS, WARM_UP_FRAMES};
 pub use tables::{DYNAMIC_CAPACITY, ENTRY_BYTES, RAY_BYTES, cache_bytes, static_capacity};
 
 use super::gpu_types::{
-    GI_BOUNCES, GI_CACHE, GI_EDIT_RESTART, GI_FILTER, GI_QMC, GI_RESERVOIRS, GI_RESTART, GiEdit, GiParams,
+    GI_BOUNCES, GI_CACHE, GI_EDIT_RESTART, GI_FILTER, GI_GUIDING, GI_QMC, GI_RESERVOIRS, GI_RESTART, GiEdit, GiParams,
 };
 use super::interface::{GpuBinding, GroupInterface};
 use super::pass::{Dispatch, VoxelPass};
@@ -276,6 +276,7 @@ pub fn setting_flags(gi: &GiSettings) -> u32 {
         | flag(gi.cache, GI_CACHE)
         | flag(gi.qmc, GI_QMC)
         | flag(gi.reservoirs, GI_RESERVOIRS)
+        | flag(gi.guiding, GI_GUIDING)
 }
 
 /// Sizes the tables for the settings, logs this frame's edits, plans the frame and writes the parameters (Render

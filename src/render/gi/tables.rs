@@ -45,7 +45,7 @@ impl Shape {
             }
             Shape { static_entries, dynamic_entries: DYNAMIC_CAPACITY, rays }
         } else {
-            // Bindings need a non-empty buffer: one entry, one ray and the work buffers cost 220 bytes.
+            // Bindings need a non-empty buffer: one entry, one ray and the work buffers cost 252 bytes.
             Shape { static_entries: 1, dynamic_entries: 0, rays: 1 }
         }
     }
@@ -67,7 +67,7 @@ pub fn static_capacity(settings: &GiSettings) -> u32 {
     settings.table.clamp(64, 1 << 30).next_power_of_two()
 }
 
-/// GPU bytes the cache holds for `settings` (with GI off a 220-byte placeholder), on a device that binds
+/// GPU bytes the cache holds for `settings` (with GI off a 252-byte placeholder), on a device that binds
 /// buffers of any size (a smaller limit halves the table: `Shape::of`).
 pub fn cache_bytes(settings: &GiSettings) -> u64 {
     let shape = Shape::of(settings, u64::MAX);
