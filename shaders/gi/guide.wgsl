@@ -15,6 +15,7 @@
 
 #import glowbrick::gi::cache::gi_direct
 
+// Four rings by four sectors: guided_point picks among four of each (pick_of_four).
 const GUIDE_ROWS: u32 = 4u;
 const GUIDE_COLUMNS: u32 = 4u;
 const GUIDE_BINS: u32 = 16u;
@@ -59,41 +60,38 @@ fn load_guide(slot: u32) {
     }
 }
 
-// The mixture's point for the uniform point `u`: the ring by u.x through the rings' CDF, then the sector by u.y
-// through that ring's.
-fn guided_point(u: vec2<f32>) -> GuidedPoint {
-    let cell = 1.0 / f32(GUIDE_BINS);
-    var row = 0u;
+// Where `u` falls among four masses that sum to 1: which one, and its place within that one (0..1).
+struct Pick {
+    index: u32,
+    within: f32,
+}
+
+fn pick_of_four(masses: vec4<f32>, u: f32) -> Pick {
     var below = 0.0;
-    var row_mass = 0.0;
-    for (var r = 0u; r < GUIDE_ROWS; r++) {
-        var mass = 0.0;
-        for (var c = 0u; c < GUIDE_COLUMNS; c++) {
-            mass += guide_density[r * GUIDE_COLUMNS + c] * cell;
-        }
-        row = r;
-        row_mass = mass;
-        if u.x < below + mass || r == GUIDE_ROWS - 1u {
+    var i = 0u;
+    for (; i < 3u; i++) {
+        if u < below + masses[i] {
             break;
         }
-        below += mass;
+        below += masses[i];
     }
-    let x = (f32(row) + clamp((u.x - below) / row_mass, 0.0, 0.99999)) / f32(GUIDE_ROWS);
-    var column = 0u;
-    var left = 0.0;
-    var share = 0.0;
-    for (var c = 0u; c < GUIDE_COLUMNS; c++) {
-        let mass = guide_density[row * GUIDE_COLUMNS + c] * cell / row_mass;
-        column = c;
-        share = mass;
-        if u.y < left + mass || c == GUIDE_COLUMNS - 1u {
-            break;
-        }
-        left += mass;
+    return Pick(i, clamp((u - below) / masses[i], 0.0, 0.99999));
+}
+
+// The mixture's point for the uniform point `u`: the ring by u.x through the rings' masses, then the sector by
+// u.y through that ring's (four of each: pick_of_four).
+fn guided_point(u: vec2<f32>) -> GuidedPoint {
+    var rings = vec4(0.0);
+    for (var b = 0u; b < GUIDE_BINS; b++) {
+        rings[b / GUIDE_COLUMNS] += guide_density[b];
     }
-    let y = (f32(column) + clamp((u.y - left) / share, 0.0, 0.99999)) / f32(GUIDE_COLUMNS);
-    let bin = row * GUIDE_COLUMNS + column;
-    return GuidedPoint(vec2(x, y), bin, guide_density[bin]);
+    let ring = pick_of_four(rings / f32(GUIDE_BINS), u.x);
+    let first = ring.index * GUIDE_COLUMNS;
+    let sectors = vec4(guide_density[first], guide_density[first + 1u], guide_density[first + 2u], guide_density[first + 3u]);
+    let sector = pick_of_four(sectors / rings[ring.index], u.y);
+    let point = (vec2(f32(ring.index), f32(sector.index)) + vec2(ring.within, sector.within)) / f32(GUIDE_ROWS);
+    let bin = first + sector.index;
+    return GuidedPoint(point, bin, guide_density[bin]);
 }
 
 // A ray of this frame brought `luminance` (already over its density) through `bin`.
