@@ -22,7 +22,9 @@
 
 // Candidates per sample, and the frames' worth of candidates a reservoir may carry (its M at most
 // GI_HISTORY x GI_CANDIDATES): enough to keep a rare light, few enough to let a new one in within a few frames.
-const GI_CANDIDATES: u32 = 8u;
+// The blend of an entry's direct light averages about ten frames' samples, so its noise follows the candidates
+// drawn a frame, not the history: 8, 32 and 64 are measured against their cost in docs/bench/gi.md.
+const GI_CANDIDATES: u32 = 32u;
 const GI_HISTORY: f32 = 20.0;
 const NO_LIGHT: u32 = 0xffffffffu;
 

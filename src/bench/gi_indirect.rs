@@ -3,13 +3,15 @@
 //! seeds, its own noise stated), with each entry's light-pool reservoirs (`gi_reservoirs`, seed 002) off and on,
 //! and on with guided rays (`gi_guiding`, seed 004), on scenes of many small lights: the generated world at night
 //! (the village, inside a house, a crystal cave), the thesis' apartments and letters, the cornell box and the
-//! window room. One frame's error at frames 16, 64 and 256 of a cold cache, the GI passes' GPU ms, and the error
+//! window room. One frame's error at frames 16, 64 and 256 of a cold cache, the bias of frames 65-256's mean (the
+//! cache's own, as a share of the indirect light and of the lit frame), the GI passes' GPU ms, and the error
 //! at equal GPU time (a mode's error at the frame its time reaches the frame-64 time of the first mode, log-log
 //! between the frames measured).
 
 use super::frame::{FrameCase, case_world};
 use super::reference_cache::{Reference, ReferenceCache};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
+use crate::image_io::LinearImage;
 use crate::reference::REFERENCE_BOUNCES;
 use crate::reference::metrics::{Metrics, compare};
 use crate::render::gi::GI_PASS_NAMES;
@@ -54,6 +56,8 @@ struct Row {
     mode: &'static str,
     /// One frame's error at each of FRAMES.
     errors: Vec<Metrics>,
+    /// The bias of the mean of frames 65-256 (luminance): the cache's own, its frame-to-frame noise averaged out.
+    steady_bias: f64,
     gi_ms: f64,
     frame_ms: f64,
 }
@@ -74,7 +78,7 @@ fn measure(
     case: &FrameCase,
     mode: (&'static str, &str),
     config: &IndirectConfig,
-    truth: &crate::image_io::LinearImage,
+    truth: &LinearImage,
 ) -> Result<Row, String> {
     let (world, view) = case_world(case)?;
     let settings = settings_for(case, mode.1)?;
@@ -82,18 +86,48 @@ fn measure(
     let mut r = HeadlessRenderer::new(world, &view, &options)?;
     let mut errors = Vec::new();
     let mut done = 0;
+    let mut steady_bias = f64::NAN;
     for &frames in &FRAMES {
         if frames == 64 {
             r.clear_gpu_pass_times();
         }
-        let image = r.render(frames - done)?;
+        let image = if frames == FRAMES[2] {
+            // Every frame after frame 64: their mean's bias is the cache's own.
+            let sequence = r.render_sequence(frames - done, |_, _| {})?;
+            steady_bias = compare(&mean_image(&sequence), truth)?.bias;
+            sequence.into_iter().next_back().ok_or("no frames rendered")?
+        } else {
+            r.render(frames - done)?
+        };
         done = frames;
         errors.push(compare(&image, truth)?);
         eprintln!("gi indirect: {} {} frame {frames}: {}", case.label, mode.0, errors.last().unwrap());
     }
     let gi_ms = GI_PASS_NAMES.iter().filter_map(|n| r.gpu_pass_ms(n)).sum();
     let frame_ms = crate::render::frame::all_passes().iter().filter_map(|p| r.gpu_pass_ms(p.name)).sum();
-    Ok(Row { case: case.label, mode: mode.0, errors, gi_ms, frame_ms })
+    Ok(Row { case: case.label, mode: mode.0, errors, steady_bias, gi_ms, frame_ms })
+}
+
+/// The pixel-by-pixel mean of images of one size.
+fn mean_image(images: &[LinearImage]) -> LinearImage {
+    let mut mean = images[0].clone();
+    for (k, pixel) in mean.pixels.iter_mut().enumerate() {
+        for c in 0..4 {
+            pixel[c] = (images.iter().map(|i| i.pixels[k][c] as f64).sum::<f64>() / images.len() as f64) as f32;
+        }
+    }
+    mean
+}
+
+/// The mean luminance of the lit image (the cache's light with the direct light, the default settings, frame
+/// 16): what the indirect light's bias is a share of in the whole frame.
+fn lit_mean(case: &FrameCase, config: &IndirectConfig) -> Result<f64, String> {
+    let (world, view) = case_world(case)?;
+    let pairs: Vec<String> =
+        case.settings.iter().copied().chain(["gi=on", "denoise=off"]).map(str::to_string).collect();
+    let settings = RenderSettings::default().with_pairs(&pairs)?;
+    let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
+    Ok(HeadlessRenderer::new(world, &view, &options)?.render(16)?.mean_luminance())
 }
 
 /// The error `row` reaches after `frames` frames, log-log between the frames measured (clamped to their range).
@@ -118,7 +152,7 @@ pub fn run_indirect_bench(config: &IndirectConfig, out: &Path) -> Result<String,
         let settings = settings_for(case, MODES[0].1)?;
         let what = Reference { indirect: true, daylight: settings.daylight(), ..Reference::bounces(REFERENCE_BOUNCES) };
         let (truth, noise) = references.two_seeds(&world, &view, &what)?;
-        noises.push((case.label, noise, truth.mean_luminance()));
+        noises.push((case.label, noise, truth.mean_luminance(), lit_mean(case, config)?));
         for mode in MODES {
             rows.push(measure(case, mode, config, &truth)?);
         }
@@ -130,19 +164,22 @@ pub fn run_indirect_bench(config: &IndirectConfig, out: &Path) -> Result<String,
     Ok(text)
 }
 
-fn markdown(rows: &[Row], noises: &[(&str, Metrics, f64)], config: &IndirectConfig) -> String {
+fn markdown(rows: &[Row], noises: &[(&str, Metrics, f64, f64)], config: &IndirectConfig) -> String {
     let mut text = format!(
         "# The GI cache's light alone: reservoirs per entry, guided rays\n\n`debug=indirect` at {}x{}, denoiser off, one frame \
          of a cold cache at frames {FRAMES:?}, against `reference --indirect` ({REFERENCE_BOUNCES} bounces, the \
          mean of two seeds of {} spp; its own relMSE beside each scene). GPU ms: the GI passes, and the whole frame, \
          mean of frames 64-256. Equal time: a mode's error at the frame its GPU time reaches the frame-64 \
-         time of one light a sample.\n\n\
-         | scene | mode | relMSE f16 | f64 | f256 | bias f64 (% of mean) | GI ms | frame ms | relMSE at equal time | reference's relMSE |\n\
-         |---|---|---|---|---|---|---|---|---|---|\n",
+         time of one light a sample. Steady bias: the bias of the mean of frames 65-256 (the cache's own, its \
+         noise averaged out), as a share of the reference's indirect light and of the lit frame's mean (the \
+         default settings' image with its direct light, frame 16).\n\n\
+         | scene | mode | relMSE f16 | f64 | f256 | bias f64 (% of mean) | steady bias (% of indirect) | (% of lit frame) | GI ms | frame ms | relMSE at equal time | reference's relMSE |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
         config.width, config.height, config.reference_spp
     );
     for row in rows {
-        let (noise, mean) = noises.iter().find(|n| n.0 == row.case).map_or((f64::NAN, f64::NAN), |n| (n.1.relmse, n.2));
+        let (noise, mean, lit) =
+            noises.iter().find(|n| n.0 == row.case).map_or((f64::NAN, f64::NAN, f64::NAN), |n| (n.1.relmse, n.2, n.3));
         let baseline = rows.iter().find(|r| r.case == row.case && r.mode == MODES[0].0);
         let equal = match baseline {
             Some(b) if row.mode != MODES[0].0 && row.frame_ms > 0.0 => {
@@ -151,13 +188,15 @@ fn markdown(rows: &[Row], noises: &[(&str, Metrics, f64)], config: &IndirectConf
             _ => format!("{:.5}", row.errors[1].relmse),
         };
         text += &format!(
-            "| {} | {} | {:.5} | {:.5} | {:.5} | {:+.1} | {:.2} | {:.2} | {equal} | {noise:.5} |\n",
+            "| {} | {} | {:.5} | {:.5} | {:.5} | {:+.1} | {:+.1} | {:+.1} | {:.2} | {:.2} | {equal} | {noise:.5} |\n",
             row.case,
             row.mode,
             row.errors[0].relmse,
             row.errors[1].relmse,
             row.errors[2].relmse,
             100.0 * row.errors[1].bias / mean,
+            100.0 * row.steady_bias / mean,
+            100.0 * row.steady_bias / lit,
             row.gi_ms,
             row.frame_ms,
         );
