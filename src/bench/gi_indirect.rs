@@ -123,9 +123,8 @@ fn mean_image(images: &[LinearImage]) -> LinearImage {
 /// 16): what the indirect light's bias is a share of in the whole frame.
 fn lit_mean(case: &FrameCase, config: &IndirectConfig) -> Result<f64, String> {
     let (world, view) = case_world(case)?;
-    let pairs: Vec<String> =
-        case.settings.iter().copied().chain(["gi=on", "denoise=off"]).map(str::to_string).collect();
-    let settings = RenderSettings::default().with_pairs(&pairs)?;
+    // The default mode's settings with the lit image in place of the indirect view.
+    let settings = settings_for(case, "debug=none")?;
     let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
     Ok(HeadlessRenderer::new(world, &view, &options)?.render(16)?.mean_luminance())
 }
