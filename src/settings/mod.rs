@@ -301,7 +301,7 @@ pub struct GiSettings {
     /// frames then covers the hemisphere and the cell evenly: the slow swing a few half-lit cells gave a whole
     /// room's bounce light falls (docs/bench/gi.md, "Low-discrepancy rays").
     pub qmc: bool,
-    /// Draw an entry's light-pool light through a reservoir it keeps from frame to frame (seed 002): 8 lights by
+    /// Draw an entry's light-pool light through a reservoir it keeps from frame to frame (seed 002): 32 lights by
     /// power a sample, resampled by their unshadowed light, merged with the entry's reservoir of the frames
     /// before, one shadow ray, plus a resampled sample of the lights the cell's centre cannot see; off, one light by
     /// power a sample (docs/bench/gi.md, "Reservoirs per entry": 6-38x less noise in the cache's light among

@@ -482,7 +482,7 @@ pub static SETTINGS: &[Setting] = &[
     Setting {
         key: "gi_reservoirs",
         section: Section::Gi,
-        about: "Each entry draws its light-pool light through a reservoir kept from frame to frame (8 lights by \
+        about: "Each entry draws its light-pool light through a reservoir kept from frame to frame (32 lights by \
                 power a sample, resampled, merged with its past ones; seed 002); off, one light by power a sample.",
         field: &Choice { get: |s| s.gi.reservoirs, set: |s, v| s.gi.reservoirs = v },
     },
