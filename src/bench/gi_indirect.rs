@@ -170,8 +170,8 @@ fn markdown(rows: &[Row], noises: &[(&str, Metrics, f64, f64)], config: &Indirec
          mean of two seeds of {} spp; its own relMSE beside each scene). GPU ms: the GI passes, and the whole frame, \
          mean of frames 64-256. Equal time: a mode's error at the frame its GPU time reaches the frame-64 \
          time of one light a sample. Steady bias: the bias of the mean of frames 65-256 (the cache's own, its \
-         noise averaged out, and in a scene whose bounces are still arriving its lag: the letters' is lag, -0.3% \
-         at frame 1024, docs/bench/gi.md), as a share of the reference's indirect light and of the lit frame's mean (the \
+         noise averaged out, and in a scene whose bounces are still arriving its lag: docs/bench/gi.md, \
+         \"The letters' slow light\"), as a share of the reference's indirect light and of the lit frame's mean (the \
          default settings' image with its direct light, frame 16).\n\n\
          | scene | mode | relMSE f16 | f64 | f256 | bias f64 (% of mean) | steady bias (% of indirect) | (% of lit frame) | GI ms | frame ms | relMSE at equal time | reference's relMSE |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|\n",
