@@ -6,9 +6,11 @@
 //! window room. One frame's error at frames 16, 64 and 256 of a cold cache, the bias of frames 65-256's mean (the
 //! cache's own, as a share of the indirect light and of the lit frame), the GI passes' GPU ms, and the error
 //! at equal GPU time (a mode's error at the frame its time reaches the frame-64 time of the first mode, log-log
-//! between the frames measured).
+//! between the frames measured). With `seeds` above one, every figure is the mean over that many independent
+//! realisations (the `seed` setting 0, 1, ..): one run's apartments move by 10-40% between runs.
 
 use super::frame::{FrameCase, case_world};
+use super::mean_metrics;
 use super::reference_cache::{Reference, ReferenceCache};
 use crate::headless::{HeadlessOptions, HeadlessRenderer};
 use crate::image_io::LinearImage;
@@ -49,6 +51,8 @@ pub struct IndirectConfig {
     pub reference_spp: u32,
     /// Only the cases whose label contains one of these (all when empty).
     pub only: Vec<String>,
+    /// Independent realisations averaged per row (the `seed` setting 0..seeds).
+    pub seeds: u32,
 }
 
 struct Row {
@@ -62,26 +66,53 @@ struct Row {
     frame_ms: f64,
 }
 
-fn settings_for(case: &FrameCase, mode: &str) -> Result<RenderSettings, String> {
+fn settings_for(case: &FrameCase, mode: &str, seed: u32) -> Result<RenderSettings, String> {
+    let seed = format!("seed={seed}");
     let pairs: Vec<String> = case
         .settings
         .iter()
         .copied()
         .chain(["gi=on", "denoise=off", "debug=indirect"])
         .chain(mode.split_whitespace())
+        .chain([seed.as_str()])
         .map(str::to_string)
         .collect();
     RenderSettings::default().with_pairs(&pairs)
 }
 
+/// One mode on one case, averaged over the config's seeds.
 fn measure(
     case: &FrameCase,
     mode: (&'static str, &str),
     config: &IndirectConfig,
     truth: &LinearImage,
 ) -> Result<Row, String> {
+    let runs = (0..config.seeds.max(1))
+        .map(|seed| measure_seed(case, mode, config, truth, seed))
+        .collect::<Result<Vec<_>, _>>()?;
+    let n = runs.len() as f64;
+    let mean = |f: fn(&Row) -> f64| runs.iter().map(f).sum::<f64>() / n;
+    let errors =
+        (0..FRAMES.len()).map(|i| mean_metrics(&runs.iter().map(|r| r.errors[i]).collect::<Vec<_>>())).collect();
+    Ok(Row {
+        case: case.label,
+        mode: mode.0,
+        errors,
+        steady_bias: mean(|r| r.steady_bias),
+        gi_ms: mean(|r| r.gi_ms),
+        frame_ms: mean(|r| r.frame_ms),
+    })
+}
+
+fn measure_seed(
+    case: &FrameCase,
+    mode: (&'static str, &str),
+    config: &IndirectConfig,
+    truth: &LinearImage,
+    seed: u32,
+) -> Result<Row, String> {
     let (world, view) = case_world(case)?;
-    let settings = settings_for(case, mode.1)?;
+    let settings = settings_for(case, mode.1, seed)?;
     let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
     let mut r = HeadlessRenderer::new(world, &view, &options)?;
     let mut errors = Vec::new();
@@ -101,7 +132,7 @@ fn measure(
         };
         done = frames;
         errors.push(compare(&image, truth)?);
-        eprintln!("gi indirect: {} {} frame {frames}: {}", case.label, mode.0, errors.last().unwrap());
+        eprintln!("gi indirect: {} {} seed {seed} frame {frames}: {}", case.label, mode.0, errors.last().unwrap());
     }
     let gi_ms = GI_PASS_NAMES.iter().filter_map(|n| r.gpu_pass_ms(n)).sum();
     let frame_ms = crate::render::frame::all_passes().iter().filter_map(|p| r.gpu_pass_ms(p.name)).sum();
@@ -124,7 +155,7 @@ fn mean_image(images: &[LinearImage]) -> LinearImage {
 fn lit_mean(case: &FrameCase, config: &IndirectConfig) -> Result<f64, String> {
     let (world, view) = case_world(case)?;
     // The default mode's settings with the lit image in place of the indirect view.
-    let settings = settings_for(case, "debug=none")?;
+    let settings = settings_for(case, "debug=none", 0)?;
     let options = HeadlessOptions { width: config.width, height: config.height, settings, ..Default::default() };
     Ok(HeadlessRenderer::new(world, &view, &options)?.render(16)?.mean_luminance())
 }
@@ -148,7 +179,7 @@ pub fn run_indirect_bench(config: &IndirectConfig, out: &Path) -> Result<String,
         CASES.iter().filter(|c| config.only.is_empty() || config.only.iter().any(|o| c.label.contains(o.as_str())));
     for case in cases {
         let (world, view) = case_world(case)?;
-        let settings = settings_for(case, MODES[0].1)?;
+        let settings = settings_for(case, MODES[0].1, 0)?;
         let what = Reference { indirect: true, daylight: settings.daylight(), ..Reference::bounces(REFERENCE_BOUNCES) };
         let (truth, noise) = references.two_seeds(&world, &view, &what)?;
         noises.push((case.label, noise, truth.mean_luminance(), lit_mean(case, config)?));
@@ -167,7 +198,8 @@ fn markdown(rows: &[Row], noises: &[(&str, Metrics, f64, f64)], config: &Indirec
     let mut text = format!(
         "# The GI cache's light alone: reservoirs per entry, guided rays\n\n`debug=indirect` at {}x{}, denoiser off, one frame \
          of a cold cache at frames {FRAMES:?}, against `reference --indirect` ({REFERENCE_BOUNCES} bounces, the \
-         mean of two seeds of {} spp; its own relMSE beside each scene). GPU ms: the GI passes, and the whole frame, \
+         mean of two seeds of {} spp; its own relMSE beside each scene). Each figure is the mean of {} \
+         realisation(s) (the `seed` setting). GPU ms: the GI passes, and the whole frame, \
          mean of frames 64-256. Equal time: a mode's error at the frame its GPU time reaches the frame-64 \
          time of one light a sample. Steady bias: the bias of the mean of frames 65-256 (the cache's own, its \
          noise averaged out, and in a scene whose bounces are still arriving its lag: docs/bench/gi.md, \
@@ -175,7 +207,10 @@ fn markdown(rows: &[Row], noises: &[(&str, Metrics, f64, f64)], config: &Indirec
          default settings' image with its direct light, frame 16).\n\n\
          | scene | mode | relMSE f16 | f64 | f256 | bias f64 (% of mean) | steady bias (% of indirect) | (% of lit frame) | GI ms | frame ms | relMSE at equal time | reference's relMSE |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|\n",
-        config.width, config.height, config.reference_spp
+        config.width,
+        config.height,
+        config.reference_spp,
+        config.seeds.max(1)
     );
     for row in rows {
         let (noise, mean, lit) =

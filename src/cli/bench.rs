@@ -91,8 +91,9 @@ pub struct BenchArgs {
     upscale: bool,
     /// With --denoise: average its one-frame and reaction measures over this many independent realisations
     /// (the `seed` setting 0, 1, ..): one realisation's GI cache carries a slow noise of its own (a room's mean
-    /// moves by a percent or two between seeds, more at night), which this averages.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16), requires = "denoise", conflicts_with = "motion")]
+    /// moves by a percent or two between seeds, more at night), which this averages. With --gi --indirect:
+    /// average every figure of each row over them.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16), conflicts_with = "motion")]
     seeds: u32,
     /// With --denoise or --frame: a setting on top of the game's frame for every measure (repeatable), e.g.
     /// `gi_qmc=off`; with --thesis, on top of the protocol's, e.g. `denoise=on`.
@@ -154,7 +155,7 @@ enum BenchMode {
     /// The GI cache bench: gi.md.
     Gi { spp: u32, game_sizes: bool, sizes: Vec<(u32, u32)> },
     /// The GI cache's light alone: gi-indirect.md.
-    GiIndirect { spp: u32, scenes: Vec<String> },
+    GiIndirect { spp: u32, scenes: Vec<String>, seeds: u32 },
     /// The game's lighting at three times of day: daylight.md.
     Daylight { spp: u32 },
     /// The denoiser: denoise.md (or one section alone).
@@ -192,6 +193,9 @@ impl BenchArgs {
             return Err("--scenes with --gi needs --indirect".into());
         }
         // clap's `requires` names one flag; --sizes has three homes.
+        if self.seeds > 1 && !(self.denoise || (self.gi && self.indirect)) {
+            return Err("--seeds needs --denoise or --gi --indirect".into());
+        }
         if !(self.sizes.is_empty() || self.game_sizes || self.frame || (self.denoise && self.cost)) {
             return Err("--sizes needs --gi --game-sizes, --denoise --cost or --frame".into());
         }
@@ -202,8 +206,8 @@ impl BenchArgs {
                 let config = GiConfig { game_sizes_only: game_sizes, sizes, ..GiConfig::new(spp) };
                 on_gpu(|| run_gi_bench(&config, &out)).map(|text| println!("{text}"))
             }
-            BenchMode::GiIndirect { spp, scenes } => {
-                let config = IndirectConfig { width: 160, height: 90, reference_spp: spp, only: scenes };
+            BenchMode::GiIndirect { spp, scenes, seeds } => {
+                let config = IndirectConfig { width: 160, height: 90, reference_spp: spp, only: scenes, seeds };
                 on_gpu(|| run_indirect_bench(&config, &out)).map(|text| println!("{text}"))
             }
             BenchMode::Daylight { spp } => {
@@ -260,7 +264,7 @@ impl BenchArgs {
                 settings: self.set,
             })
         } else if self.gi && self.indirect {
-            BenchMode::GiIndirect { spp: self.spp, scenes: self.scenes.clone() }
+            BenchMode::GiIndirect { spp: self.spp, scenes: self.scenes.clone(), seeds: self.seeds }
         } else if self.gi {
             BenchMode::Gi { spp: self.spp, game_sizes: self.game_sizes, sizes: self.sizes.clone() }
         } else if self.daylight {

@@ -257,6 +257,10 @@ fn each_bench_mode_takes_its_own_flags() {
     let out = glowbrick(&["bench", "--gi", "--set", "denoise=on", "--out", NOWHERE]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("--set needs --thesis, --denoise or --frame"), "{}", text(&out.stderr));
+    // Realisations to average belong to the denoiser's bench and the cache's light alone.
+    let out = glowbrick(&["bench", "--gi", "--seeds", "4", "--out", NOWHERE]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("--seeds needs --denoise or --gi --indirect"), "{}", text(&out.stderr));
     let out = glowbrick(&["bench", "--lattice", "4", "--out", NOWHERE]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("--lattice needs --thesis or --denoise"), "{}", text(&out.stderr));
