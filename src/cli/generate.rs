@@ -3,8 +3,9 @@
 
 use super::args::parse_size;
 use crate::world::format::save_world;
+use crate::world::generate::endless::{EndlessGenerator, REGION_EDGE};
 use crate::world::generate::generate_world;
-use bevy::math::UVec3;
+use bevy::math::{IVec2, UVec3};
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -20,10 +21,22 @@ pub struct GenerateArgs {
     /// Save the world here (RON, as F5 does) and report the file's size and the time taken.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Instead of a bounded world, make R x R regions of the endless world around its first village (each
+    /// REGION_EDGE voxels across and --size's Y high) in parallel, and report how fast regions are made.
+    #[arg(long, value_name = "R", value_parser = clap::value_parser!(u32).range(1..=64), conflicts_with = "out")]
+    endless: Option<u32>,
 }
+
+/// The game's top flying speed in voxels a second (`game::player`: 12 with Ctrl's x4).
+const TOP_FLYING_SPEED: f64 = 48.0;
+/// The resident window's edge the endless world will keep filled (today's bounded world's).
+const WINDOW_EDGE: i32 = 1024;
 
 impl GenerateArgs {
     pub fn run(self) -> Result<(), String> {
+        if let Some(regions) = self.endless {
+            return run_endless(self.seed, self.size.y, regions as i32);
+        }
         let start = Instant::now();
         let (world, report) = generate_world(self.seed, self.size).map_err(|e| e.to_string())?;
         let seconds = start.elapsed().as_secs_f64();
@@ -58,4 +71,40 @@ impl GenerateArgs {
         }
         Ok(())
     }
+}
+
+/// Makes `count` x `count` regions around the endless world's first village and says how fast: regions a
+/// second, and the straight-line speed at which a WINDOW_EDGE-wide window's next row of regions is made in the
+/// time the player takes to cross one (the row is WINDOW_EDGE / REGION_EDGE regions).
+fn run_endless(seed: u32, height: u32, count: i32) -> Result<(), String> {
+    let generator = EndlessGenerator::new(seed, height)?;
+    let start = Instant::now();
+    let first = generator.village_site(IVec2::ZERO);
+    let village_seconds = start.elapsed().as_secs_f64();
+    let centre = first.map_or(IVec2::ZERO, |site| EndlessGenerator::region_of(site.centre.0, site.centre.1));
+    let keys: Vec<IVec2> =
+        (0..count).flat_map(|z| (0..count).map(move |x| centre - count / 2 + IVec2::new(x, z))).collect();
+    let start = Instant::now();
+    let regions = generator.regions(&keys);
+    let seconds = start.elapsed().as_secs_f64();
+    let rate = keys.len() as f64 / seconds;
+    let bricks: u64 = regions.iter().map(|r| r.grid.pooled_bricks() as u64).sum();
+    let row = (WINDOW_EDGE / REGION_EDGE) as f64;
+    let speed = rate / row * REGION_EDGE as f64;
+    println!(
+        "made {} regions of {REGION_EDGE}x{height}x{REGION_EDGE} (seed {seed}, the first village's at {:?}, found in \
+         {village_seconds:.2} s) in {seconds:.2} s on {} threads: {rate:.1} regions/s, {:.1} ms a region, {:.0} \
+         stored bricks a region",
+        keys.len(),
+        first.map(|site| site.centre),
+        rayon::current_num_threads(),
+        1000.0 / rate,
+        bricks as f64 / keys.len() as f64,
+    );
+    println!(
+        "a {WINDOW_EDGE}-wide window's next row ({row} regions) in the time a player crosses a region at {speed:.0} \
+         voxels/s of straight flight along an axis (top flying speed {TOP_FLYING_SPEED}: {:.1}x)",
+        speed / TOP_FLYING_SPEED
+    );
+    Ok(())
 }

@@ -414,3 +414,18 @@ fn play_at_a_missing_view_lists_the_views_and_generate_reports_its_world() {
     assert!(stdout.contains("generated 128x48x128 (seed 3)") && stdout.contains("houses"), "{stdout}");
     assert!(stdout.contains("views: village, house, lantern, overview"), "{stdout}");
 }
+
+/// `generate --endless R` makes R x R regions of the endless world and says how fast; a height too low for a
+/// village is one clear error.
+#[test]
+fn generate_endless_makes_regions_and_refuses_a_world_too_low() {
+    let out = glowbrick(&["generate", "--size", "64,64,64", "--seed", "2", "--endless", "2"]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(stdout.contains("made 4 regions of 64x64x64 (seed 2") && stdout.contains("regions/s"), "{stdout}");
+    let out = glowbrick(&["generate", "--size", "64,30,64", "--endless", "1"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("height must be 40..=2048, not 30"), "{}", text(&out.stderr));
+    let out = glowbrick(&["generate", "--endless", "2", "--out", "/nowhere.ron"]);
+    assert_eq!(out.status.code(), Some(2), "saving an endless world is not there yet: a usage error");
+}

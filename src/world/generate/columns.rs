@@ -8,10 +8,10 @@
 //! per voxel for walls just as smooth at this scale.
 
 use super::Blocks;
-use super::land::{Land, Surface, VillageSite, surface_of};
+use super::land::{Footprint, Land, Surface, VillageSite, surface_of};
 use crate::world::grid::{AIR, BRICK_SIZE, BRICK_VOXELS, Voxel, local_index};
 use crate::world::terrain::hash_u32;
-use bevy::math::IVec3;
+use bevy::math::{IVec2, IVec3};
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 
 /// One generated brick: all one voxel, or 512 voxels.
@@ -37,8 +37,9 @@ const CRYSTAL_PER_MILLE: u32 = 7;
 pub struct Ground<'a> {
     pub land: &'a Land,
     pub heights: &'a [i32],
+    /// The columns `heights` holds and the world's height.
+    pub footprint: Footprint,
     pub site: Option<&'a VillageSite>,
-    pub size: IVec3,
     pub seed: u32,
     pub blocks: &'a Blocks,
     tunnel_a: Fbm<Perlin>,
@@ -50,8 +51,8 @@ impl<'a> Ground<'a> {
     pub fn new(
         land: &'a Land,
         heights: &'a [i32],
+        footprint: Footprint,
         site: Option<&'a VillageSite>,
-        size: IVec3,
         seed: u32,
         blocks: &'a Blocks,
     ) -> Self {
@@ -61,8 +62,8 @@ impl<'a> Ground<'a> {
         Ground {
             land,
             heights,
+            footprint,
             site,
-            size,
             seed,
             blocks,
             tunnel_a: fbm(21, 0.011),
@@ -71,8 +72,20 @@ impl<'a> Ground<'a> {
         }
     }
 
-    fn height(&self, x: i32, z: i32) -> i32 {
-        self.heights[(z * self.size.x + x) as usize]
+    pub fn height(&self, x: i32, z: i32) -> i32 {
+        self.heights[self.footprint.index(x, z)]
+    }
+
+    /// What the surface voxel of column (x, z) is made of, before caves.
+    pub fn surface(&self, x: i32, z: i32) -> Surface {
+        surface_of(self.land, self.heights, self.footprint, x, z)
+    }
+
+    /// Whether a cave takes voxel (x, y, z) of a column whose ground is at `h`: the same answer `brick_column`
+    /// gives there (the cave lattice lies on whole multiples of its spacing), for one voxel.
+    pub fn carved(&self, x: i32, y: i32, z: i32, h: i32) -> bool {
+        let (x0, z0) = (x.div_euclid(BRICK_SIZE) * BRICK_SIZE, z.div_euclid(BRICK_SIZE) * BRICK_SIZE);
+        self.may_carve(x, y, z) && CaveLattice::sample(self, x0, z0, y + 1).is_cave(x - x0, y, z - z0, h - y)
     }
 
     /// Whether caves may open at (x, y, z): not under the village's plaza and houses, never in the bottom layers.
@@ -93,9 +106,11 @@ impl<'a> Ground<'a> {
     /// The voxels of brick column (bx, bz), bottom brick first.
     pub fn brick_column(&self, bx: i32, bz: i32) -> Vec<GeneratedBrick> {
         let (x0, z0) = (bx * BRICK_SIZE, bz * BRICK_SIZE);
-        let bricks_high = (self.size.y + BRICK_SIZE - 1) / BRICK_SIZE;
+        let size = self.footprint.size;
+        let end = self.footprint.min + IVec2::new(size.x, size.z);
+        let bricks_high = (size.y + BRICK_SIZE - 1) / BRICK_SIZE;
         let column_height = bricks_high * BRICK_SIZE;
-        let (w, d) = ((self.size.x - x0).min(BRICK_SIZE), (self.size.z - z0).min(BRICK_SIZE));
+        let (w, d) = ((end.x - x0).min(BRICK_SIZE), (end.y - z0).min(BRICK_SIZE));
         // Columns indexed [y][z][x] over the brick column's full 8 x 8 footprint.
         let mut voxels = vec![AIR; (column_height * BRICK_SIZE * BRICK_SIZE) as usize];
         let at = |x: i32, y: i32, z: i32| ((y * BRICK_SIZE + z) * BRICK_SIZE + x) as usize;
@@ -105,7 +120,7 @@ impl<'a> Ground<'a> {
             for lx in 0..w {
                 let (x, z) = (x0 + lx, z0 + lz);
                 let h = self.height(x, z);
-                let surface = match surface_of(self.land, self.heights, self.size.x, self.size.z, x, z) {
+                let surface = match self.surface(x, z) {
                     Surface::Grass => self.blocks.grass,
                     Surface::Sand => self.blocks.sand,
                     Surface::Stone => self.blocks.stone,

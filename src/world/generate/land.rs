@@ -2,6 +2,7 @@
 //! where the village stands, and the surface material each column gets (grass, sand in hollows, bare stone on
 //! steep slopes, snow on peaks).
 
+use bevy::math::{IVec2, IVec3};
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin, RidgedMulti};
 use rayon::prelude::*;
 
@@ -108,13 +109,19 @@ impl Land {
     /// A plaza for the village: the flattest of a grid of candidate spots in the middle half of the world, away from
     /// mountains. `None` for worlds too small to hold one.
     pub fn village_site(&self, size: (i32, i32, i32)) -> Option<VillageSite> {
+        self.village_site_in((0, 0), size)
+    }
+
+    /// The same for the columns from `min` (x, z) on, `size` (x, height, z): one village cell of the endless world.
+    pub fn village_site_in(&self, min: (i32, i32), size: (i32, i32, i32)) -> Option<VillageSite> {
         let (sx, sy, sz) = size;
+        let (mx, mz) = min;
         let radius = (sx.min(sz) as f32 / 6.0).min(34.0);
         if radius < 16.0 || sy < 40 {
             return None;
         }
         let candidates: Vec<(i32, i32)> =
-            (0..7).flat_map(|i| (0..7).map(move |j| (sx / 4 + i * sx / 12, sz / 4 + j * sz / 12))).collect();
+            (0..7).flat_map(|i| (0..7).map(move |j| (mx + sx / 4 + i * sx / 12, mz + sz / 4 + j * sz / 12))).collect();
         let score = |&(cx, cz): &(i32, i32)| {
             let r = radius as i32;
             let samples: Vec<f32> = (-r..=r)
@@ -125,7 +132,7 @@ impl Land {
             let mean = samples.iter().sum::<f32>() / samples.len() as f32;
             let variance = samples.iter().map(|h| (h - mean) * (h - mean)).sum::<f32>() / samples.len() as f32;
             // Prefer flat ground near the middle (the start view) and close to the mean height.
-            let off_centre = ((cx - sx / 2).pow(2) + (cz - sz / 2).pow(2)) as f32 / (sx * sz) as f32;
+            let off_centre = ((cx - mx - sx / 2).pow(2) + (cz - mz - sz / 2).pow(2)) as f32 / (sx * sz) as f32;
             (variance + 40.0 * off_centre + (mean - self.base()).abs(), mean)
         };
         let scored: Vec<((f32, f32), (i32, i32))> = candidates.par_iter().map(|c| (score(c), *c)).collect();
@@ -159,10 +166,27 @@ pub fn height_field(land: &Land, site: Option<&VillageSite>, sx: i32, sy: i32, s
     heights
 }
 
+/// The columns a height field holds: x and z from `min`, `size.x` by `size.z` of them (`heights[z * size.x + x]`,
+/// relative to `min`), under a world `size.y` high. A bounded world's starts at 0 and covers it; an endless world's
+/// region's reaches a few columns past the region, for its slopes and the trees that lean in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Footprint {
+    pub min: IVec2,
+    pub size: IVec3,
+}
+
+impl Footprint {
+    /// The index of column (x, z) in the height field, clamped to the footprint's edge.
+    pub fn index(&self, x: i32, z: i32) -> usize {
+        let (lx, lz) = ((x - self.min.x).clamp(0, self.size.x - 1), (z - self.min.y).clamp(0, self.size.z - 1));
+        (lz * self.size.x + lx) as usize
+    }
+}
+
 /// The surface material of column (x, z): bare stone where the ground is steep, snow above the snow line, sand in
 /// hollows, grass elsewhere.
-pub fn surface_of(land: &Land, heights: &[i32], sx: i32, sz: i32, x: i32, z: i32) -> Surface {
-    let at = |x: i32, z: i32| heights[(z.clamp(0, sz - 1) * sx + x.clamp(0, sx - 1)) as usize];
+pub fn surface_of(land: &Land, heights: &[i32], footprint: Footprint, x: i32, z: i32) -> Surface {
+    let at = |x: i32, z: i32| heights[footprint.index(x, z)];
     let h = at(x, z);
     let slope = (at(x + 1, z) - at(x - 1, z)).abs() + (at(x, z + 1) - at(x, z - 1)).abs();
     if h > land.snow_line() {

@@ -7,6 +7,7 @@
 //! default moving objects hang.
 
 mod columns;
+pub mod endless;
 mod land;
 mod trees;
 mod village;
@@ -16,9 +17,9 @@ use super::grid::{BRICK_SIZE, MAX_WORLD_EDGE, Voxel};
 use super::palette::Palette;
 use super::{CameraView, VoxelWorld};
 use crate::progress::Progress;
-use bevy::math::{IVec3, UVec3, Vec3};
+use bevy::math::{IVec2, IVec3, UVec3, Vec3};
 use columns::{GeneratedBrick, Ground};
-use land::Land;
+use land::{Footprint, Land};
 use rayon::prelude::*;
 
 pub use land::VillageSite;
@@ -89,7 +90,8 @@ pub fn generate_world(seed: u32, size: UVec3) -> Result<(VoxelWorld, GenerationR
     let site = land.village_site((s.x, s.y, s.z));
     let heights = land::height_field(&land, site.as_ref(), s.x, s.y, s.z);
 
-    let ground = Ground::new(&land, &heights, site.as_ref(), s, seed, &blocks);
+    let footprint = Footprint { min: IVec2::ZERO, size: s };
+    let ground = Ground::new(&land, &heights, footprint, site.as_ref(), seed, &blocks);
     let dims = world.grid.brick_dims().as_ivec3();
     let progress = Progress::new("generating world", dims.z as u64);
     let mut report = GenerationReport::default();
@@ -101,22 +103,7 @@ pub fn generate_world(seed: u32, size: UVec3) -> Result<(VoxelWorld, GenerationR
             .map(|(bx, bz)| (bx, bz, ground.brick_column(bx, bz)))
             .collect();
         for (bx, bz, column) in rows {
-            for (by, brick) in column.into_iter().enumerate() {
-                let b = IVec3::new(bx, by as i32, bz);
-                match brick {
-                    GeneratedBrick::Uniform(0) => {}
-                    GeneratedBrick::Uniform(v) => {
-                        let lo = b * BRICK_SIZE;
-                        let _ = world.grid.fill_box(lo, (lo + BRICK_SIZE).min(s), v);
-                    }
-                    GeneratedBrick::Mixed(voxels) => {
-                        report.crystals +=
-                            voxels.iter().filter(|&&v| v == blocks.crystal_cyan || v == blocks.crystal_violet).count()
-                                as u32;
-                        world.grid.set_brick(b, &voxels);
-                    }
-                }
-            }
+            report.crystals += place_column(&mut world, bx, bz, column, &blocks);
         }
         progress.advance((batch + ROWS_PER_BATCH).min(dims.z) as u64 - batch as u64);
     }
@@ -132,6 +119,28 @@ pub fn generate_world(seed: u32, size: UVec3) -> Result<(VoxelWorld, GenerationR
     // Generating is not an edit: nothing is dirty until the world is uploaded as a whole.
     world.grid.take_dirty();
     Ok((world, report))
+}
+
+/// Puts a generated brick column into the world at its brick column (bx, bz); returns the crystals it holds.
+fn place_column(world: &mut VoxelWorld, bx: i32, bz: i32, column: Vec<GeneratedBrick>, blocks: &Blocks) -> u32 {
+    let size = world.grid.size().as_ivec3();
+    let mut crystals = 0;
+    for (by, brick) in column.into_iter().enumerate() {
+        let b = IVec3::new(bx, by as i32, bz);
+        match brick {
+            GeneratedBrick::Uniform(0) => {}
+            GeneratedBrick::Uniform(v) => {
+                let lo = b * BRICK_SIZE;
+                let _ = world.grid.fill_box(lo, (lo + BRICK_SIZE).min(size), v);
+            }
+            GeneratedBrick::Mixed(voxels) => {
+                crystals +=
+                    voxels.iter().filter(|&&v| v == blocks.crystal_cyan || v == blocks.crystal_violet).count() as u32;
+                world.grid.set_brick(b, &voxels);
+            }
+        }
+    }
+    crystals
 }
 
 fn view(name: &str, origin: Vec3, target: Vec3) -> CameraView {

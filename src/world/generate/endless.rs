@@ -1,0 +1,303 @@
+//! The endless world's generator: the same land, caves, crystals and trees as the bounded world, made one region
+//! (REGION_EDGE x height x REGION_EDGE voxels) at a time, on demand, for any region of an unbounded grid. A
+//! region is a function of the seed and its key alone: made in any order, on any thread, it comes out the same,
+//! and regions side by side fit voxel for voxel (a tree on a border grows whole on both sides).
+//!
+//! Villages recur: the world is cut into village cells VILLAGE_CELL voxels wide, cell (0, 0) centred on the
+//! origin (the start), and each cell has its village on the flattest spot of its middle half, found as the
+//! bounded world finds its one. A village is built once per cell into the ground it stands on and kept as the
+//! voxels it changed (its stamp); each region the stamp reaches takes its part.
+//!
+//! Not here yet (issue 69): streaming regions into a resident window, region saves, the GPU side.
+
+use super::columns::Ground;
+use super::land::{self, BLEND, Footprint, Land, VillageSite};
+use super::trees::{MAX_CROWN, plant_trees_in};
+use super::{Blocks, place_column, village};
+use crate::world::VoxelWorld;
+use crate::world::grid::{BRICK_SIZE, Voxel};
+use crate::world::palette::Palette;
+use crate::world::terrain::hash_u32;
+use bevy::math::{IVec2, IVec3, UVec3};
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+/// A region's edge in voxels (x and z; a region is the world's whole height).
+pub const REGION_EDGE: i32 = 64;
+/// A village cell's edge in voxels: one village in each, 0.8-2.4 km apart.
+pub const VILLAGE_CELL: i32 = 1536;
+/// Columns of height field kept past an area's edge: a tree's crown leans in from MAX_CROWN away, and a slope
+/// reads one column further.
+const MARGIN: i32 = MAX_CROWN + 1;
+/// Columns around a plaza's centre that its village can change (houses, paths, lamp posts, the swing's frame lie
+/// within the plaza and its blend), rounded to whole bricks.
+const VILLAGE_REACH: i32 = 34 + BLEND as i32 + 14;
+
+/// One cell's village: its plaza and the voxels building it changed, in world coordinates.
+pub struct Village {
+    pub site: VillageSite,
+    pub stamp: Vec<(IVec3, Voxel)>,
+}
+
+/// Makes the endless world of one seed, a region at a time.
+pub struct EndlessGenerator {
+    seed: u32,
+    height: i32,
+    land: Land,
+    blocks: Blocks,
+    palette: Palette,
+    /// Each village cell's village (None where the cell holds none), built the first time a region asks.
+    villages: Mutex<HashMap<IVec2, Arc<Option<Village>>>>,
+}
+
+impl EndlessGenerator {
+    /// The generator of `seed`'s world, `height` voxels high (at least 40, so villages fit; at most the bounded
+    /// world's limit).
+    pub fn new(seed: u32, height: u32) -> Result<Self, String> {
+        if !(40..=crate::world::grid::MAX_WORLD_EDGE).contains(&height) {
+            return Err(format!(
+                "an endless world's height must be 40..={}, not {height}",
+                crate::world::grid::MAX_WORLD_EDGE
+            ));
+        }
+        let palette = Palette::default_blocks();
+        let blocks = Blocks::of(&palette)?;
+        Ok(EndlessGenerator {
+            seed,
+            height: height as i32,
+            land: Land::new(seed, height),
+            blocks,
+            palette,
+            villages: Mutex::new(HashMap::new()),
+        })
+    }
+
+    /// The region holding column (x, z).
+    pub fn region_of(x: i32, z: i32) -> IVec2 {
+        IVec2::new(x.div_euclid(REGION_EDGE), z.div_euclid(REGION_EDGE))
+    }
+
+    /// The village cell holding column (x, z).
+    pub fn village_cell_of(x: i32, z: i32) -> IVec2 {
+        let half = VILLAGE_CELL / 2;
+        IVec2::new((x + half).div_euclid(VILLAGE_CELL), (z + half).div_euclid(VILLAGE_CELL))
+    }
+
+    /// The plaza of a village cell's village: the flattest spot of the cell's middle half.
+    pub fn village_site(&self, cell: IVec2) -> Option<VillageSite> {
+        let min = cell * VILLAGE_CELL - VILLAGE_CELL / 2;
+        self.land.village_site_in((min.x, min.y), (VILLAGE_CELL, self.height, VILLAGE_CELL))
+    }
+
+    /// The village of a cell, built on first use.
+    pub fn village(&self, cell: IVec2) -> Arc<Option<Village>> {
+        if let Some(village) = self.villages.lock().unwrap_or_else(|e| e.into_inner()).get(&cell) {
+            return village.clone();
+        }
+        // Built outside the lock: two threads may both build it, and get the same.
+        let village = Arc::new(self.build_village(cell));
+        self.villages.lock().unwrap_or_else(|e| e.into_inner()).entry(cell).or_insert(village).clone()
+    }
+
+    /// Region `key`: its voxels, column (0, 0) at world column key x REGION_EDGE.
+    pub fn region(&self, key: IVec2) -> VoxelWorld {
+        self.area(key * REGION_EDGE, IVec2::splat(REGION_EDGE))
+    }
+
+    /// Several regions at once, in parallel (rayon), in the order asked.
+    pub fn regions(&self, keys: &[IVec2]) -> Vec<VoxelWorld> {
+        keys.par_iter().map(|&key| self.region(key)).collect()
+    }
+
+    /// The columns from `min` (whole bricks) `size` across: ground, caves, crystals, trees, and the part of a
+    /// village that falls there. An area lies inside one village cell (a region always does).
+    pub(crate) fn area(&self, min: IVec2, size: IVec2) -> VoxelWorld {
+        let cell = Self::village_cell_of(min.x, min.y);
+        debug_assert_eq!(
+            cell,
+            Self::village_cell_of(min.x + size.x - 1, min.y + size.y - 1),
+            "an area in one village cell"
+        );
+        let village = self.village(cell);
+        let site = village.as_ref().as_ref().map(|v| v.site);
+        let mut world = self.ground(min, size, site.as_ref());
+        if let Some(village) = village.as_ref() {
+            let local = IVec3::new(min.x, 0, min.y);
+            for &(p, voxel) in &village.stamp {
+                if world.grid.contains(p - local) {
+                    let _ = world.grid.set(p - local, voxel);
+                }
+            }
+        }
+        world.grid.take_dirty();
+        world
+    }
+
+    /// The area's ground and trees, under the plaza of `site` (the cell's village, which flattens the land and
+    /// keeps caves out from under it).
+    fn ground(&self, min: IVec2, size: IVec2, site: Option<&VillageSite>) -> VoxelWorld {
+        debug_assert!(
+            min.x % BRICK_SIZE == 0 && min.y % BRICK_SIZE == 0 && size.x % BRICK_SIZE == 0 && size.y % BRICK_SIZE == 0
+        );
+        let footprint =
+            Footprint { min: min - MARGIN, size: IVec3::new(size.x + 2 * MARGIN, self.height, size.y + 2 * MARGIN) };
+        let heights: Vec<i32> = (0..footprint.size.z)
+            .flat_map(|z| (0..footprint.size.x).map(move |x| (x, z)))
+            .map(|(x, z)| land::column_height(&self.land, site, footprint.min.x + x, footprint.min.y + z, self.height))
+            .collect();
+        let ground = Ground::new(&self.land, &heights, footprint, site, self.seed, &self.blocks);
+        let mut world =
+            VoxelWorld::new(UVec3::new(size.x as u32, self.height as u32, size.y as u32), self.palette.clone());
+        let bricks = min / BRICK_SIZE;
+        for bz in 0..size.y / BRICK_SIZE {
+            for bx in 0..size.x / BRICK_SIZE {
+                let column = ground.brick_column(bricks.x + bx, bricks.y + bz);
+                place_column(&mut world, bx, bz, column, &self.blocks);
+            }
+        }
+        plant_trees_in(&mut world, min, &ground, self.seed, &self.blocks);
+        world
+    }
+
+    /// Builds a cell's village into the ground around its plaza and keeps what it changed.
+    fn build_village(&self, cell: IVec2) -> Option<Village> {
+        let site = self.village_site(cell)?;
+        let centre = IVec2::new(site.centre.0, site.centre.1);
+        let min = (centre - VILLAGE_REACH).div_euclid(IVec2::splat(BRICK_SIZE)) * BRICK_SIZE;
+        let max = (centre + VILLAGE_REACH + BRICK_SIZE).div_euclid(IVec2::splat(BRICK_SIZE)) * BRICK_SIZE;
+        let mut world = self.ground(min, max - min, Some(&site));
+        let size = world.grid.size().as_ivec3();
+        let all = |world: &VoxelWorld| -> Vec<Voxel> {
+            (0..size.y)
+                .flat_map(|y| (0..size.z).flat_map(move |z| (0..size.x).map(move |x| IVec3::new(x, y, z))))
+                .map(|p| world.grid.get(p))
+                .collect()
+        };
+        let before = all(&world);
+        let local = VillageSite { centre: (site.centre.0 - min.x, site.centre.1 - min.y), ..site };
+        // Each cell's village is laid out by a seed of its own, so villages differ from one another.
+        let seed = hash_u32(self.seed ^ hash_u32(cell.x as u32 ^ hash_u32(cell.y as u32).rotate_left(16)));
+        village::build_village(&mut world, &local, seed, &self.blocks);
+        let after = all(&world);
+        let offset = IVec3::new(min.x, 0, min.y);
+        let stamp = (0..size.y)
+            .flat_map(|y| (0..size.z).flat_map(move |z| (0..size.x).map(move |x| IVec3::new(x, y, z))))
+            .zip(before.iter().zip(&after))
+            .filter(|(_, (b, a))| b != a)
+            .map(|(p, (_, &a))| (p + offset, a))
+            .collect();
+        Some(Village { site, stamp })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn voxels(world: &VoxelWorld) -> Vec<Voxel> {
+        let s = world.grid.size().as_ivec3();
+        (0..s.y)
+            .flat_map(|y| (0..s.z).flat_map(move |z| (0..s.x).map(move |x| IVec3::new(x, y, z))))
+            .map(|p| world.grid.get(p))
+            .collect()
+    }
+
+    /// Whether a tree stands within its crown's reach of the line x = `border` (in `world`'s columns) with leaves
+    /// on the far side of it: a tree a region border cuts.
+    fn tree_across(world: &VoxelWorld, border: i32, blocks: &Blocks) -> bool {
+        let s = world.grid.size().as_ivec3();
+        (0..s.z).any(|z| {
+            (0..s.y).any(|y| {
+                (border - MAX_CROWN..border).any(|x| world.grid.get(IVec3::new(x, y, z)) == blocks.wood)
+                    && (border..border + MAX_CROWN)
+                        .any(|x| (y..y + 5).any(|ly| world.grid.get(IVec3::new(x, ly, z)) == blocks.leaves))
+            })
+        })
+    }
+
+    #[test]
+    fn regions_made_in_any_order_fit_the_area_they_tile_voxel_for_voxel() {
+        let generator = EndlessGenerator::new(7, 64).unwrap();
+        let min = IVec2::new(3, 3) * REGION_EDGE;
+        let whole = generator.area(min, IVec2::splat(2 * REGION_EDGE));
+        // Made in parallel and backwards, by a generator that has made nothing yet, and one by one by another.
+        let keys = [IVec2::new(4, 4), IVec2::new(3, 4), IVec2::new(4, 3), IVec2::new(3, 3)];
+        let parts = EndlessGenerator::new(7, 64).unwrap().regions(&keys);
+        for (key, part) in keys.iter().zip(&parts) {
+            assert_eq!(voxels(part), voxels(&generator.region(*key)), "region {key} made twice");
+            let d = *key * REGION_EDGE - min;
+            let offset = IVec3::new(d.x, 0, d.y);
+            let s = part.grid.size().as_ivec3();
+            for y in 0..s.y {
+                for z in 0..s.z {
+                    for x in 0..s.x {
+                        let p = IVec3::new(x, y, z);
+                        assert_eq!(part.grid.get(p), whole.grid.get(p + offset), "region {key} at {p}");
+                    }
+                }
+            }
+        }
+        // Not vacuous: trees stand on the borders between the four, and caves open somewhere.
+        let blocks = &generator.blocks;
+        let rotated = |world: &VoxelWorld| {
+            let s = world.grid.size();
+            let mut turned = VoxelWorld::new(UVec3::new(s.z, s.y, s.x), world.palette.clone());
+            for p in (0..s.y as i32)
+                .flat_map(|y| (0..s.z as i32).flat_map(move |z| (0..s.x as i32).map(move |x| IVec3::new(x, y, z))))
+            {
+                let _ = turned.grid.set(IVec3::new(p.z, p.y, p.x), world.grid.get(p));
+            }
+            turned
+        };
+        let crossings = [tree_across(&whole, REGION_EDGE, blocks), tree_across(&rotated(&whole), REGION_EDGE, blocks)];
+        assert!(crossings.iter().any(|&c| c), "no tree on a border in this area: pick another");
+        assert!(voxels(&whole).iter().filter(|&&v| v == blocks.wood).count() > 20, "trees grow");
+    }
+
+    #[test]
+    fn villages_recur_one_a_cell_and_the_first_stands_at_the_start() {
+        let generator = EndlessGenerator::new(1, 96).unwrap();
+        let first = generator.village_site(IVec2::ZERO).expect("a village at the start");
+        let at = |site: VillageSite| IVec2::new(site.centre.0, site.centre.1);
+        assert!(
+            at(first).abs().max_element() <= VILLAGE_CELL / 4,
+            "the first village is near the origin: {:?}",
+            first.centre
+        );
+        for cell in [IVec2::X, IVec2::Y, -IVec2::X, -IVec2::Y, IVec2::new(5, -3)] {
+            let site = generator.village_site(cell).unwrap_or_else(|| panic!("no village in cell {cell}"));
+            assert_eq!(EndlessGenerator::village_cell_of(site.centre.0, site.centre.1), cell);
+            if cell.abs().max_element() == 1 {
+                let apart = (at(site) - at(first)).as_vec2().length();
+                assert!((768.0..=2304.0).contains(&apart), "cell {cell}: {apart} voxels from the first");
+            }
+        }
+        // The region under the first plaza holds the village: its lamps and its cobble.
+        let region = generator.region(EndlessGenerator::region_of(first.centre.0, first.centre.1));
+        let all = voxels(&region);
+        let blocks = &generator.blocks;
+        assert!(all.contains(&blocks.lamp_warm) && all.contains(&blocks.cobble), "the village is built");
+        // A region far from any plaza holds none of it.
+        let wild = voxels(&generator.region(EndlessGenerator::region_of(first.centre.0 + 600, first.centre.1 + 600)));
+        assert!(!wild.contains(&blocks.cobble) && !wild.contains(&blocks.plaster));
+    }
+
+    #[test]
+    fn far_from_the_origin_regions_are_made_as_near_it() {
+        let generator = EndlessGenerator::new(3, 64).unwrap();
+        let far = IVec2::new(-15_625, 15_624); // a million voxels out
+        let region = generator.region(far);
+        let all = voxels(&region);
+        let solid = all.iter().filter(|&&v| v != 0).count();
+        // Ground fills about a third of the height; the region is neither empty nor solid.
+        assert!(solid > all.len() / 8 && solid < all.len() * 3 / 4, "{solid} of {}", all.len());
+        assert_eq!(all, voxels(&EndlessGenerator::new(3, 64).unwrap().region(far)));
+    }
+
+    #[test]
+    fn an_endless_world_too_low_for_a_village_is_refused() {
+        assert!(EndlessGenerator::new(1, 39).err().is_some_and(|e| e.contains("40..=2048")));
+        assert!(EndlessGenerator::new(1, 1 << 20).is_err());
+    }
+}
