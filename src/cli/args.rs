@@ -2,6 +2,7 @@
 //! of `--camera` and `--size`.
 
 use crate::settings::{RenderSettings, help_text, valid_pairs};
+use crate::world::generate::endless::{DEFAULT_HEIGHT, EndlessGenerator, SHOT_WINDOW_REGIONS};
 use crate::world::source::WorldSource;
 use crate::world::{CameraView, VoxelWorld};
 use bevy::math::UVec3;
@@ -76,12 +77,19 @@ pub struct ShotArgs {
     pub width: u32,
     #[arg(long, default_value_t = 180)]
     pub height: u32,
+    /// The endless world of this seed instead of a file: a window of it 512 voxels across (192 high) made around
+    /// the camera, which is given in world coordinates (default: above the first village).
+    #[arg(long, value_name = "SEED", conflicts_with_all = ["world", "scene", "view"])]
+    pub endless: Option<u32>,
 }
 
 impl ShotArgs {
     /// Loads the world of `--world`/`--scene` and its camera: `--camera`, the view named `--view`, or the
     /// world's first view, or an overview.
     pub fn world_and_view(&self, command: &str) -> Result<(VoxelWorld, CameraView), String> {
+        if let Some(seed) = self.endless {
+            return endless_window(seed, self.camera.as_ref());
+        }
         let source = self.world.source().ok_or_else(|| format!("{command} needs --world PATH or --scene NAME"))?;
         let world = source.load().map_err(|e| e.to_string())?;
         if let Some(camera) = &self.camera {
@@ -89,6 +97,25 @@ impl ShotArgs {
         }
         pick_view(world, self.view.as_deref())
     }
+}
+
+/// How far from the origin (x and z) `--endless` takes a camera: 2^24 voxels.
+const ENDLESS_CAMERA_REACH: f32 = 16_777_216.0;
+
+/// The endless world's window around `camera` (world coordinates), and the camera in the window's.
+fn endless_window(seed: u32, camera: Option<&CameraView>) -> Result<(VoxelWorld, CameraView), String> {
+    let generator = EndlessGenerator::new(seed, DEFAULT_HEIGHT)?;
+    let camera = camera.cloned().unwrap_or_else(|| generator.start_view());
+    let [x, _, z] = camera.origin;
+    // Past 2^24 an f32 no longer holds every whole voxel, and region keys would near i32's end.
+    if x.abs().max(z.abs()) > ENDLESS_CAMERA_REACH {
+        return Err(format!(
+            "the endless world's camera must stand within {ENDLESS_CAMERA_REACH} voxels of the origin on x and z, not at ({x}, {z})"
+        ));
+    }
+    let window = generator.window(EndlessGenerator::region_of(x.floor() as i32, z.floor() as i32), SHOT_WINDOW_REGIONS);
+    let view = window.local_view(&camera);
+    Ok((window.world, view))
 }
 
 /// The view named `view`, or the world's first, or an overview.

@@ -415,6 +415,27 @@ fn play_at_a_missing_view_lists_the_views_and_generate_reports_its_world() {
     assert!(stdout.contains("views: village, house, lantern, overview"), "{stdout}");
 }
 
+/// `reference --endless SEED` traces a window of the endless world around a camera given in world coordinates,
+/// a million voxels out as at the start; a camera past f32's whole voxels is one clear error.
+#[test]
+fn reference_of_the_endless_world_stands_anywhere() {
+    let dir = std::env::temp_dir().join(format!("glowbrick-endless-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("far.exr");
+    let camera = "1000000.5,110,1000000.5,0.7,-0.35,0.6";
+    let args = ["reference", "--endless", "1", "--camera", camera, "--width", "24", "--height", "16", "--spp", "1"];
+    let run = glowbrick(&[&args[..], &["--out", out.to_str().unwrap()]].concat());
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    let image = glowbrick::image_io::read_image(&out).unwrap();
+    assert!(image.mean_luminance() > 0.01, "the far land is lit: {}", image.mean_luminance());
+    let run =
+        glowbrick(&["reference", "--endless", "1", "--camera", "3e7,100,0,1,0,0", "--out", out.to_str().unwrap()]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(text(&run.stderr).contains("within 16777216 voxels"), "{}", text(&run.stderr));
+    let run = glowbrick(&["reference", "--endless", "1", "--view", "village", "--out", out.to_str().unwrap()]);
+    assert_eq!(run.status.code(), Some(2), "a named view belongs to a world file");
+}
+
 /// `generate --endless R` makes R x R regions of the endless world and says how fast; a height too low for a
 /// village is one clear error.
 #[test]

@@ -15,6 +15,7 @@ use glowbrick::image_io::LinearImage;
 use glowbrick::reference::metrics::compare;
 use glowbrick::render::gpu_types::GpuCounter;
 use glowbrick::settings::RenderSettings;
+use glowbrick::world::generate::endless::EndlessGenerator;
 use glowbrick::world::recipe::{generated_world, load_scene};
 use glowbrick::world::traversal::{Counts, trace_counted, trace_occupancy_counted};
 use glowbrick::world::{CameraView, VoxelWorld, trace};
@@ -65,7 +66,18 @@ pub fn gpu_primary_rays_match_cpu_traversal() {
     let room = load_scene("test-room").unwrap();
     let terrain = generated_world(9, UVec3::new(64, 40, 64)).unwrap();
     let wide = generated_world(3, UVec3::new(300, 72, 260)).unwrap();
+    // The endless world a million voxels out, in its window's own coordinates (as `render --endless` has it).
+    let endless = EndlessGenerator::new(1, 96).unwrap();
+    let window = endless.window(EndlessGenerator::region_of(1_000_000, 1_000_000), 3);
+    let far = CameraView {
+        name: "far".into(),
+        origin: [1_000_000.5, 90.0, 1_000_000.5],
+        direction: [0.7, -0.5, 0.6],
+        fov_deg: 60.0,
+    };
+    let far = window.local_view(&far);
     let cases = [
+        ("endless world a million voxels out", window.world, far),
         ("test-room inside", room.clone(), room.view(Some("inside")).unwrap().clone()),
         ("test-room top", room.clone(), room.view(Some("top")).unwrap().clone()),
         ("terrain overview", terrain.clone(), terrain.overview()),

@@ -8,17 +8,19 @@
 //! bounded world finds its one. A village is built once per cell into the ground it stands on and kept as the
 //! voxels it changed (its stamp); each region the stamp reaches takes its part.
 //!
-//! Not here yet (issue 69): streaming regions into a resident window, region saves, the GPU side.
+//! `window` puts regions around a point into one bounded world in the window's own coordinates, for `render
+//! --endless` and `reference --endless`. Not here yet (issue 69): a resident window that scrolls as the player
+//! moves, streaming, region saves.
 
 use super::columns::Ground;
 use super::land::{self, BLEND, Footprint, Land, VillageSite};
 use super::trees::{MAX_CROWN, plant_trees_in};
 use super::{Blocks, place_column, village};
-use crate::world::VoxelWorld;
-use crate::world::grid::{BRICK_SIZE, Voxel};
+use crate::world::grid::{BRICK_SIZE, BrickCell, Voxel};
 use crate::world::palette::Palette;
 use crate::world::terrain::hash_u32;
-use bevy::math::{IVec2, IVec3, UVec3};
+use crate::world::{CameraView, VoxelWorld};
+use bevy::math::{IVec2, IVec3, UVec3, Vec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -27,6 +29,10 @@ use std::sync::{Arc, Mutex};
 pub const REGION_EDGE: i32 = 64;
 /// A village cell's edge in voxels: one village in each, 0.8-2.4 km apart.
 pub const VILLAGE_CELL: i32 = 1536;
+/// The endless world's height when none is given: the bounded default world's.
+pub const DEFAULT_HEIGHT: u32 = 192;
+/// Regions across the window `render --endless` and `reference --endless` make around the camera (512 voxels).
+pub const SHOT_WINDOW_REGIONS: i32 = 8;
 /// Columns of height field kept past an area's edge: a tree's crown leans in from MAX_CROWN away, and a slope
 /// reads one column further.
 const MARGIN: i32 = MAX_CROWN + 1;
@@ -110,6 +116,36 @@ impl EndlessGenerator {
         keys.par_iter().map(|&key| self.region(key)).collect()
     }
 
+    /// A window of the world: `regions` x `regions` regions around region `centre` in one bounded world, its
+    /// column (0, 0) at world column `min`. Whatever reads it (the renderer, the reference, picking) works in the
+    /// window's own coordinates, so a window a million voxels out is drawn as exactly as one at the origin.
+    pub fn window(&self, centre: IVec2, regions: i32) -> Window {
+        let first = centre - regions / 2;
+        let keys: Vec<IVec2> = (0..regions).flat_map(|z| (0..regions).map(move |x| first + IVec2::new(x, z))).collect();
+        let edge = (regions * REGION_EDGE) as u32;
+        let mut world = VoxelWorld::new(UVec3::new(edge, self.height as u32, edge), self.palette.clone());
+        for (key, region) in keys.iter().zip(self.regions(&keys)) {
+            let at = (*key - first) * (REGION_EDGE / BRICK_SIZE);
+            paste(&mut world, &region, IVec3::new(at.x, 0, at.y));
+        }
+        world.grid.take_dirty();
+        Window { world, min: first * REGION_EDGE }
+    }
+
+    /// A view from above the first village's plaza, in world coordinates.
+    pub fn start_view(&self) -> CameraView {
+        let plaza = self
+            .village_site(IVec2::ZERO)
+            .map_or(Vec3::ZERO, |site| Vec3::new(site.centre.0 as f32, site.ground as f32, site.centre.1 as f32) + 0.5);
+        let origin = plaza + Vec3::new(-48.0, 28.0, -40.0);
+        CameraView {
+            name: "village".into(),
+            origin: origin.into(),
+            direction: (plaza - origin).normalize().into(),
+            fov_deg: 60.0,
+        }
+    }
+
     /// The columns from `min` (whole bricks) `size` across: ground, caves, crystals, trees, and the part of a
     /// village that falls there. An area lies inside one village cell (a region always does).
     pub(crate) fn area(&self, min: IVec2, size: IVec2) -> VoxelWorld {
@@ -188,6 +224,37 @@ impl EndlessGenerator {
             .map(|(p, (_, &a))| (p + offset, a))
             .collect();
         Some(Village { site, stamp })
+    }
+}
+
+/// A window of the endless world and where it lies.
+pub struct Window {
+    pub world: VoxelWorld,
+    /// The world column of the window's column (0, 0).
+    pub min: IVec2,
+}
+
+impl Window {
+    /// A view given in world coordinates, in the window's.
+    pub fn local_view(&self, view: &CameraView) -> CameraView {
+        let offset = Vec3::new(self.min.x as f32, 0.0, self.min.y as f32);
+        CameraView { origin: (Vec3::from(view.origin) - offset).into(), ..view.clone() }
+    }
+}
+
+/// Copies `region` into `world` with its brick (0, 0, 0) at brick `at`, brick by brick.
+fn paste(world: &mut VoxelWorld, region: &VoxelWorld, at: IVec3) {
+    let dims = region.grid.brick_dims().as_ivec3();
+    let size = world.grid.size().as_ivec3();
+    for b in (0..dims.y).flat_map(|y| (0..dims.z).flat_map(move |z| (0..dims.x).map(move |x| IVec3::new(x, y, z)))) {
+        match region.grid.cell(b) {
+            BrickCell::Empty => {}
+            BrickCell::Homogeneous(voxel) => {
+                let lo = (at + b) * BRICK_SIZE;
+                let _ = world.grid.fill_box(lo, (lo + BRICK_SIZE).min(size), voxel);
+            }
+            BrickCell::Pooled(_) => world.grid.set_brick(at + b, &region.grid.brick_voxels(b)),
+        }
     }
 }
 
@@ -293,6 +360,33 @@ mod tests {
         // Ground fills about a third of the height; the region is neither empty nor solid.
         assert!(solid > all.len() / 8 && solid < all.len() * 3 / 4, "{solid} of {}", all.len());
         assert_eq!(all, voxels(&EndlessGenerator::new(3, 64).unwrap().region(far)));
+    }
+
+    #[test]
+    fn a_window_holds_its_regions_where_they_lie() {
+        let generator = EndlessGenerator::new(4, 48).unwrap();
+        let window = generator.window(IVec2::new(-1, 2), 3);
+        assert_eq!(window.min, IVec2::new(-2, 1) * REGION_EDGE);
+        assert_eq!(window.world.grid.size(), UVec3::new(192, 48, 192));
+        for key in [IVec2::new(-2, 1), IVec2::new(0, 3), IVec2::new(-1, 2)] {
+            let region = generator.region(key);
+            let d = key * REGION_EDGE - window.min;
+            let s = region.grid.size().as_ivec3();
+            for p in (0..s.y).flat_map(|y| (0..s.z).flat_map(move |z| (0..s.x).map(move |x| IVec3::new(x, y, z)))) {
+                assert_eq!(
+                    window.world.grid.get(p + IVec3::new(d.x, 0, d.y)),
+                    region.grid.get(p),
+                    "region {key} at {p}"
+                );
+            }
+        }
+        let view = CameraView {
+            name: "far".into(),
+            origin: [-100.5, 40.0, 100.25],
+            direction: [1.0, 0.0, 0.0],
+            fov_deg: 60.0,
+        };
+        assert_eq!(window.local_view(&view).origin, [27.5, 40.0, 36.25]);
     }
 
     #[test]
