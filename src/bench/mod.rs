@@ -31,6 +31,7 @@ pub mod reference_cache;
 pub mod same_hit;
 pub mod sweep;
 pub mod thesis;
+pub mod travel;
 pub mod upscale;
 
 use crate::headless::HeadlessRenderer;

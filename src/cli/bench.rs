@@ -14,6 +14,7 @@ use crate::bench::rays::{CASES as RAYS_CASES, RaysCase, RaysConfig, run_rays_ben
 use crate::bench::reference_cache::check_lattice;
 use crate::bench::sweep::{ALL_SCENES, QUICK_SCENES, SweepConfig, run_bench};
 use crate::bench::thesis::{ThesisOptions, run_thesis_bench};
+use crate::bench::travel::{TravelConfig, run_travel_bench};
 use crate::settings::RenderSettings;
 use crate::world::CameraView;
 use clap::{ArgGroup, Args};
@@ -21,8 +22,8 @@ use std::path::{Path, PathBuf};
 
 /// The flags `--spp` is refused with: the sweep's own
 /// (its reference's samples are fixed) and the frame profile (no reference).
-const SPP_REFUSED: [&str; 6] = ["quick", "settings", "camera", "frame", "rays", "net"];
-const MODES: [&str; 7] = ["thesis", "gi", "daylight", "denoise", "frame", "rays", "net"];
+const SPP_REFUSED: [&str; 7] = ["quick", "settings", "camera", "frame", "rays", "net", "travel"];
+const MODES: [&str; 8] = ["thesis", "gi", "daylight", "denoise", "frame", "rays", "net", "travel"];
 
 #[derive(Args)]
 #[command(group(ArgGroup::new("mode").args(MODES)))]
@@ -68,6 +69,12 @@ pub struct BenchArgs {
     /// from an edit to another client; writes net.md and net.csv. No GPU.
     #[arg(long)]
     net: bool,
+    /// The endless world's streaming bench instead: a 10 km straight flight at the game's top flying speed in
+    /// real time (--quick: 320 voxels), the regions around the player made on worker threads; regions a second,
+    /// the main thread's longest wait, ticks where the view was not yet made, resident memory; writes travel.md.
+    /// No GPU.
+    #[arg(long)]
+    travel: bool,
     /// With --denoise: only its section on ghosting under motion (a camera path and a sliding block, every
     /// frame against its own reference); writes denoise-motion.md.
     #[arg(long, requires = "denoise")]
@@ -175,6 +182,8 @@ enum BenchMode {
     Rays { quick: bool, scenes: Vec<String> },
     /// The server: net.md, net.csv.
     Net { quick: bool },
+    /// The endless world streamed around a flight: travel.md.
+    Travel { quick: bool },
 }
 
 impl BenchArgs {
@@ -238,6 +247,10 @@ impl BenchArgs {
                 config.extra = set;
                 on_gpu(|| run_frame_bench(&config, quick, &out))
             }
+            BenchMode::Travel { quick } => {
+                let config = if quick { TravelConfig::quick() } else { TravelConfig::full() };
+                run_travel_bench(&config, &out).map(|text| println!("{text}"))
+            }
             BenchMode::Net { quick } => {
                 let config = if quick { NetBenchConfig::quick() } else { NetBenchConfig::full() };
                 run_net_bench(&config, &out).map(|text| println!("{text}"))
@@ -297,6 +310,8 @@ impl BenchArgs {
             BenchMode::Frame { quick: self.quick, sizes: self.sizes, scenes: self.scenes, set: self.set }
         } else if self.rays {
             BenchMode::Rays { quick: self.quick, scenes: self.scenes }
+        } else if self.travel {
+            BenchMode::Travel { quick: self.quick }
         } else if self.net {
             BenchMode::Net { quick: self.quick }
         } else {

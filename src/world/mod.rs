@@ -15,6 +15,7 @@ pub mod occupancy;
 pub mod palette;
 pub mod recipe;
 pub mod source;
+pub mod stream;
 pub mod terrain;
 pub mod traversal;
 

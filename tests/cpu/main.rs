@@ -20,6 +20,7 @@ mod server_ops;
 mod shaders_validate;
 mod shared_objects;
 mod smoke;
+mod travel;
 mod traversal_matches_brute_force;
 #[path = "../shared/vox_scene.rs"]
 mod vox_scene;
