@@ -25,6 +25,9 @@ struct WorldInfo {
     pool_part_shift: u32,
     occupied_hi: vec3<i32>,
     _pad_hi: u32,
+    // The world coordinates of voxel (0, 0, 0): per-voxel detail hashes world coordinates.
+    detail_origin: vec3<i32>,
+    _pad_detail: u32,
 }
 
 struct Material {
@@ -174,12 +177,13 @@ fn voxel_hash(voxel: vec3<i32>) -> u32 {
 }
 
 // The albedo of a voxel of `material` (Material::albedo_at): scaled by 1 + variation * (2u - 1), u a hash of the
-// world voxel in [0, 1). Moving objects' voxels (object != 0) keep the flat colour.
+// world voxel in [0, 1), at world coordinates (an endless world's window starts at detail_origin). Moving
+// objects' voxels (object != 0) keep the flat colour.
 fn albedo_at(material: u32, voxel: vec3<i32>, object: u32) -> vec3<f32> {
     let m = materials[material];
     if m.albedo.w == 0.0 || object != 0u {
         return m.albedo.rgb;
     }
-    let u = f32(voxel_hash(voxel) >> 8u) / 16777216.0;
+    let u = f32(voxel_hash(voxel + world_info.detail_origin) >> 8u) / 16777216.0;
     return min(m.albedo.rgb * (1.0 + m.albedo.w * (2.0 * u - 1.0)), vec3(1.0));
 }

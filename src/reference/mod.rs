@@ -295,7 +295,7 @@ impl Scene<'_> {
             position: ray.at(hit.distance),
             normal: hit.face.normal().as_vec3(),
             // Moving objects' voxels are in their own coordinates: flat colours, as on the GPU.
-            albedo: if on_object { material.albedo } else { material.albedo_at(hit.voxel) },
+            albedo: if on_object { material.albedo } else { self.world.voxel_albedo(material, hit.voxel) },
             emission: Vec3::from(material.radiance()),
             on_object,
         })

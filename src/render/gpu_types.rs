@@ -38,6 +38,10 @@ pub struct WorldInfo {
     pub pool_part_shift: u32,
     pub occupied_hi: [i32; 3],
     pub _pad_hi: u32,
+    /// The world coordinates of voxel (0, 0, 0) (`VoxelWorld::detail_origin`): per-voxel detail hashes world
+    /// coordinates, so a window of the endless world shades each voxel as it would anywhere else.
+    pub detail_origin: [i32; 3],
+    pub _pad_detail: u32,
 }
 
 /// All zero but the pool's part shift: a pool in one buffer (a shift of 0 would put every slot in a part of its own).
@@ -282,7 +286,7 @@ pub const GI_EMPTY_WORK: [u32; GI_WORK_WORDS as usize] = {
 };
 
 // The shaders read these structs at exactly these sizes (WGSL alignment rules included).
-const _: () = assert!(size_of::<WorldInfo>() == 96);
+const _: () = assert!(size_of::<WorldInfo>() == 112);
 const _: () = assert!(size_of::<GpuMaterial>() == 32);
 const _: () = assert!(size_of::<GpuObject>() == 48);
 const _: () = assert!(size_of::<GpuLight>() == 32);

@@ -25,7 +25,7 @@ pub use grid::{AIR, BRICK_SIZE, BrickCell, BrickGrid, Voxel};
 pub use palette::{Material, Palette};
 pub use traversal::{Face, Hit, Ray, trace};
 
-use bevy::math::{UVec3, Vec3};
+use bevy::math::{IVec3, UVec3, Vec3};
 use bevy::prelude::Resource;
 use serde::{Deserialize, Serialize};
 
@@ -84,6 +84,10 @@ pub struct VoxelWorld {
     /// Whether homogeneous emissive bricks become one brick light (the default) or 512 voxel lights; the thesis
     /// measures its cornell box both ways. Not saved: a rule of the light pool, set by the bench.
     pub brick_lights: bool,
+    /// The world coordinates of this grid's voxel (0, 0, 0): zero but in a window of the endless world
+    /// (`generate::endless`). Per-voxel detail hashes world coordinates (`voxel_albedo`), so a voxel keeps its
+    /// shade wherever the window lies. Not saved.
+    pub detail_origin: IVec3,
     /// Identifies this world among those created in this process, so the renderer knows when the world was
     /// replaced (loaded or generated) rather than edited.
     pub instance: u64,
@@ -101,8 +105,15 @@ impl VoxelWorld {
             time_of_day: None,
             objects: None,
             brick_lights: true,
+            detail_origin: IVec3::ZERO,
             instance,
         }
+    }
+
+    /// The albedo of the world voxel at `voxel` (grid coordinates) made of `material`, its per-voxel detail
+    /// hashed at world coordinates.
+    pub fn voxel_albedo(&self, material: &Material, voxel: IVec3) -> [f32; 3] {
+        material.albedo_at(voxel + self.detail_origin)
     }
 
     /// The view called `name`, or the first view when `name` is `None`.

@@ -157,7 +157,8 @@ fn twins() -> Vec<Twin> {
                 region_base,
                 occupied_lo,
                 pool_part_shift,
-                occupied_hi
+                occupied_hi,
+                detail_origin
             }
         ),
         sized("top_cells", None, word, 1),

@@ -71,6 +71,8 @@ pub struct FullWorld {
     /// Pool voxels of all slots, padded with air to `pool_slots` slots.
     pub pool: Arc<Vec<Voxel>>,
     pub pool_slots: u32,
+    /// `VoxelWorld::detail_origin`.
+    pub detail_origin: IVec3,
 }
 
 /// This frame's changes for the GPU copy of the world.
@@ -211,6 +213,7 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
             occupied: grid.occupied_box(),
             pool: Arc::new(pool),
             pool_slots,
+            detail_origin: world.detail_origin,
         }));
         state.world_instance = Some(world.instance);
         state.gpu_pool_slots = pool_slots;
@@ -434,6 +437,7 @@ pub fn world_info(full: &FullWorld, object_count: u32) -> WorldInfo {
         sector_base: full.occupancy_bases.0 as u32,
         regions: full.region_dims.as_ivec3().to_array(),
         region_base: full.occupancy_bases.1 as u32,
+        detail_origin: full.detail_origin.to_array(),
         ..WorldInfo::default()
     }
     .with_occupied(full.occupied)

@@ -9,8 +9,8 @@
 //! voxels it changed (its stamp); each region the stamp reaches takes its part.
 //!
 //! `window` puts regions around a point into one bounded world in the window's own coordinates, for `render
-//! --endless` and `reference --endless`. Not here yet (issue 69): a resident window that scrolls as the player
-//! moves, streaming, region saves.
+//! --endless` and `reference --endless`; `world::stream` keeps regions resident around a moving point. Not here
+//! yet (issue 69): a GPU window that scrolls as the player moves, region saves.
 
 use super::columns::Ground;
 use super::land::{self, BLEND, Footprint, Land, VillageSite};
@@ -36,8 +36,8 @@ pub const SHOT_WINDOW_REGIONS: i32 = 8;
 /// Columns of height field kept past an area's edge: a tree's crown leans in from MAX_CROWN away, and a slope
 /// reads one column further.
 const MARGIN: i32 = MAX_CROWN + 1;
-/// Columns around a plaza's centre that its village can change (houses, paths, lamp posts, the swing's frame lie
-/// within the plaza and its blend), rounded to whole bricks.
+/// Columns around a plaza's centre that its village can change: the largest plaza's radius (34), its blend, and
+/// room for the houses, paths, lamp posts and the swing's frame (the build rounds the area out to whole bricks).
 const VILLAGE_REACH: i32 = 34 + BLEND as i32 + 14;
 
 /// One cell's village: its plaza and the voxels building it changed, in world coordinates.
@@ -129,7 +129,9 @@ impl EndlessGenerator {
             paste(&mut world, &region, IVec3::new(at.x, 0, at.y));
         }
         world.grid.take_dirty();
-        Window { world, min: first * REGION_EDGE }
+        let min = first * REGION_EDGE;
+        world.detail_origin = IVec3::new(min.x, 0, min.y);
+        Window { world, min }
     }
 
     /// A view from above the first village's plaza, in world coordinates.
@@ -367,6 +369,7 @@ mod tests {
         let generator = EndlessGenerator::new(4, 48).unwrap();
         let window = generator.window(IVec2::new(-1, 2), 3);
         assert_eq!(window.min, IVec2::new(-2, 1) * REGION_EDGE);
+        assert_eq!(window.world.detail_origin, IVec3::new(-128, 0, 64), "detail hashed at world coordinates");
         assert_eq!(window.world.grid.size(), UVec3::new(192, 48, 192));
         for key in [IVec2::new(-2, 1), IVec2::new(0, 3), IVec2::new(-1, 2)] {
             let region = generator.region(key);
