@@ -3,6 +3,7 @@
 
 use crate::settings::{RenderSettings, help_text, valid_pairs};
 use crate::world::generate::endless::{DEFAULT_HEIGHT, EndlessGenerator, SHOT_WINDOW_REGIONS};
+use crate::world::region_save::EndlessSave;
 use crate::world::source::WorldSource;
 use crate::world::{CameraView, VoxelWorld};
 use bevy::math::UVec3;
@@ -81,6 +82,10 @@ pub struct ShotArgs {
     /// the camera, which is given in world coordinates (default: above the first village).
     #[arg(long, value_name = "SEED", conflicts_with_all = ["world", "scene", "view"])]
     pub endless: Option<u32>,
+    /// With --endless: an endless world's save folder (`world.ron`, `regions/r.X.Z.ron`) whose regions replace
+    /// the generator's where it holds them.
+    #[arg(long, value_name = "DIR", requires = "endless")]
+    pub saves: Option<PathBuf>,
 }
 
 impl ShotArgs {
@@ -88,7 +93,7 @@ impl ShotArgs {
     /// world's first view, or an overview.
     pub fn world_and_view(&self, command: &str) -> Result<(VoxelWorld, CameraView), String> {
         if let Some(seed) = self.endless {
-            return endless_window(seed, self.camera.as_ref());
+            return endless_window(seed, self.camera.as_ref(), self.saves.as_deref());
         }
         let source = self.world.source().ok_or_else(|| format!("{command} needs --world PATH or --scene NAME"))?;
         let world = source.load().map_err(|e| e.to_string())?;
@@ -103,8 +108,17 @@ impl ShotArgs {
 const ENDLESS_CAMERA_REACH: f32 = 16_777_216.0;
 
 /// The endless world's window around `camera` (world coordinates), and the camera in the window's.
-fn endless_window(seed: u32, camera: Option<&CameraView>) -> Result<(VoxelWorld, CameraView), String> {
-    let generator = EndlessGenerator::new(seed, DEFAULT_HEIGHT)?;
+fn endless_window(
+    seed: u32,
+    camera: Option<&CameraView>,
+    saves: Option<&std::path::Path>,
+) -> Result<(VoxelWorld, CameraView), String> {
+    let save = saves.map(|folder| EndlessSave::open(folder).map_err(|e| e.to_string())).transpose()?;
+    let height = save.as_ref().map_or(DEFAULT_HEIGHT, |s| s.height);
+    if let Some(save) = save.as_ref().filter(|s| s.seed != seed) {
+        return Err(format!("{} holds the endless world of seed {}, not {seed}", save.folder.display(), save.seed));
+    }
+    let generator = EndlessGenerator::new(seed, height)?;
     let camera = camera.cloned().unwrap_or_else(|| generator.start_view());
     let [x, _, z] = camera.origin;
     // Past 2^24 an f32 no longer holds every whole voxel, and region keys would near i32's end.
@@ -113,7 +127,8 @@ fn endless_window(seed: u32, camera: Option<&CameraView>) -> Result<(VoxelWorld,
             "the endless world's camera must stand within {ENDLESS_CAMERA_REACH} voxels of the origin on x and z, not at ({x}, {z})"
         ));
     }
-    let window = generator.window(EndlessGenerator::region_of(x.floor() as i32, z.floor() as i32), SHOT_WINDOW_REGIONS);
+    let centre = EndlessGenerator::region_of(x.floor() as i32, z.floor() as i32);
+    let window = generator.window(centre, SHOT_WINDOW_REGIONS, save.as_ref()).map_err(|e| e.to_string())?;
     let view = window.local_view(&camera);
     Ok((window.world, view))
 }

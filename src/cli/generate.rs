@@ -5,6 +5,7 @@ use super::args::parse_size;
 use crate::world::format::save_world;
 use crate::world::generate::endless::{EndlessGenerator, REGION_EDGE};
 use crate::world::generate::generate_world;
+use crate::world::region_save::EndlessSave;
 use bevy::math::{IVec2, UVec3};
 use clap::Args;
 use std::path::PathBuf;
@@ -18,12 +19,13 @@ pub struct GenerateArgs {
     /// Size in voxels, X,Y,Z (each edge at most 2048).
     #[arg(long, default_value = super::args::DEFAULT_SIZE, value_parser = parse_size)]
     size: UVec3,
-    /// Save the world here (RON, as F5 does) and report the file's size and the time taken.
+    /// Save the world here (RON, as F5 does) and report the file's size and the time taken. With --endless: an
+    /// endless world's save folder, every region made written into it.
     #[arg(long)]
     out: Option<PathBuf>,
     /// Instead of a bounded world, make R x R regions of the endless world around its first village (each
     /// REGION_EDGE voxels across and --size's Y high) in parallel, and report how fast regions are made.
-    #[arg(long, value_name = "R", value_parser = clap::value_parser!(u32).range(1..=64), conflicts_with = "out")]
+    #[arg(long, value_name = "R", value_parser = clap::value_parser!(u32).range(1..=64))]
     endless: Option<u32>,
 }
 
@@ -35,7 +37,7 @@ const WINDOW_EDGE: i32 = 1024;
 impl GenerateArgs {
     pub fn run(self) -> Result<(), String> {
         if let Some(regions) = self.endless {
-            return run_endless(self.seed, self.size.y, regions as i32);
+            return run_endless(self.seed, self.size.y, regions as i32, self.out.as_deref());
         }
         let start = Instant::now();
         let (world, report) = generate_world(self.seed, self.size).map_err(|e| e.to_string())?;
@@ -76,7 +78,7 @@ impl GenerateArgs {
 /// Makes `count` x `count` regions around the endless world's first village and says how fast: regions a
 /// second, and the straight-line speed at which a WINDOW_EDGE-wide window's next row of regions is made in the
 /// time the player takes to cross one (the row is WINDOW_EDGE / REGION_EDGE regions).
-fn run_endless(seed: u32, height: u32, count: i32) -> Result<(), String> {
+fn run_endless(seed: u32, height: u32, count: i32, out: Option<&std::path::Path>) -> Result<(), String> {
     let generator = EndlessGenerator::new(seed, height)?;
     let start = Instant::now();
     let first = generator.village_site(IVec2::ZERO);
@@ -106,5 +108,13 @@ fn run_endless(seed: u32, height: u32, count: i32) -> Result<(), String> {
          voxels/s of straight flight along an axis (top flying speed {TOP_FLYING_SPEED}: {:.1}x)",
         speed / TOP_FLYING_SPEED
     );
+    if let Some(folder) = out {
+        let start = Instant::now();
+        let save = EndlessSave::open_or_create(folder, seed, height)?;
+        for (key, region) in keys.iter().zip(&regions) {
+            save.save_region(*key, region)?;
+        }
+        println!("saved {} regions into {} in {:.2} s", keys.len(), folder.display(), start.elapsed().as_secs_f64());
+    }
     Ok(())
 }

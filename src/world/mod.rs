@@ -14,6 +14,7 @@ pub mod objects;
 pub mod occupancy;
 pub mod palette;
 pub mod recipe;
+pub mod region_save;
 pub mod source;
 pub mod stream;
 pub mod terrain;

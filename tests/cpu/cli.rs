@@ -447,6 +447,19 @@ fn generate_endless_makes_regions_and_refuses_a_world_too_low() {
     let out = glowbrick(&["generate", "--size", "64,30,64", "--endless", "1"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("height must be 40..=2048, not 30"), "{}", text(&out.stderr));
-    let out = glowbrick(&["generate", "--endless", "2", "--out", "/nowhere.ron"]);
-    assert_eq!(out.status.code(), Some(2), "saving an endless world is not there yet: a usage error");
+    // --out writes an endless world's save folder; `reference --saves` reads it, refusing another seed's.
+    let dir = std::env::temp_dir().join(format!("glowbrick-endless-save-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out =
+        glowbrick(&["generate", "--size", "64,48,64", "--seed", "2", "--endless", "1", "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("saved 1 regions"), "{}", text(&out.stdout));
+    assert!(dir.join("world.ron").is_file());
+    assert_eq!(std::fs::read_dir(dir.join("regions")).unwrap().count(), 1, "one region file");
+    let exr = dir.join("shot.exr");
+    let args = ["reference", "--endless", "3", "--saves", dir.to_str().unwrap(), "--out", exr.to_str().unwrap()];
+    let out = glowbrick(&args);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("holds the endless world of seed 2, not 3"), "{}", text(&out.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -68,7 +68,7 @@ pub fn gpu_primary_rays_match_cpu_traversal() {
     let wide = generated_world(3, UVec3::new(300, 72, 260)).unwrap();
     // The endless world a million voxels out, in its window's own coordinates (as `render --endless` has it).
     let endless = EndlessGenerator::new(1, 96).unwrap();
-    let window = endless.window(EndlessGenerator::region_of(1_000_000, 1_000_000), 3);
+    let window = endless.window(EndlessGenerator::region_of(1_000_000, 1_000_000), 3, None).unwrap();
     let far = CameraView {
         name: "far".into(),
         origin: [1_000_000.5, 90.0, 1_000_000.5],

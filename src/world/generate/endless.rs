@@ -16,8 +16,10 @@ use super::columns::Ground;
 use super::land::{self, BLEND, Footprint, Land, VillageSite};
 use super::trees::{MAX_CROWN, plant_trees_in};
 use super::{Blocks, place_column, village};
+use crate::world::format::LoadError;
 use crate::world::grid::{BRICK_SIZE, BrickCell, Voxel};
 use crate::world::palette::Palette;
+use crate::world::region_save::EndlessSave;
 use crate::world::terrain::hash_u32;
 use crate::world::{CameraView, VoxelWorld};
 use bevy::math::{IVec2, IVec3, UVec3, Vec3};
@@ -79,6 +81,19 @@ impl EndlessGenerator {
         })
     }
 
+    pub fn seed(&self) -> u32 {
+        self.seed
+    }
+
+    pub fn height(&self) -> u32 {
+        self.height as u32
+    }
+
+    /// The palette every region is made with.
+    pub fn palette(&self) -> &Palette {
+        &self.palette
+    }
+
     /// The region holding column (x, z).
     pub fn region_of(x: i32, z: i32) -> IVec2 {
         IVec2::new(x.div_euclid(REGION_EDGE), z.div_euclid(REGION_EDGE))
@@ -119,19 +134,28 @@ impl EndlessGenerator {
     /// A window of the world: `regions` x `regions` regions around region `centre` in one bounded world, its
     /// column (0, 0) at world column `min`. Whatever reads it (the renderer, the reference, picking) works in the
     /// window's own coordinates, so a window a million voxels out is drawn as exactly as one at the origin.
-    pub fn window(&self, centre: IVec2, regions: i32) -> Window {
+    /// Regions with a file in `save` are read from it instead of made (one clear error for a file that is not
+    /// one of this world's regions).
+    pub fn window(&self, centre: IVec2, regions: i32, save: Option<&EndlessSave>) -> Result<Window, LoadError> {
         let first = centre - regions / 2;
         let keys: Vec<IVec2> = (0..regions).flat_map(|z| (0..regions).map(move |x| first + IVec2::new(x, z))).collect();
         let edge = (regions * REGION_EDGE) as u32;
         let mut world = VoxelWorld::new(UVec3::new(edge, self.height as u32, edge), self.palette.clone());
-        for (key, region) in keys.iter().zip(self.regions(&keys)) {
+        let made: Vec<VoxelWorld> = keys
+            .par_iter()
+            .map(|&key| match save.map(|s| s.load_region(key, &self.palette)).transpose()?.flatten() {
+                Some(saved) => Ok(saved),
+                None => Ok(self.region(key)),
+            })
+            .collect::<Result<_, LoadError>>()?;
+        for (key, region) in keys.iter().zip(made) {
             let at = (*key - first) * (REGION_EDGE / BRICK_SIZE);
             paste(&mut world, &region, IVec3::new(at.x, 0, at.y));
         }
         world.grid.take_dirty();
         let min = first * REGION_EDGE;
         world.detail_origin = IVec3::new(min.x, 0, min.y);
-        Window { world, min }
+        Ok(Window { world, min })
     }
 
     /// A view from above the first village's plaza, in world coordinates.
@@ -367,7 +391,7 @@ mod tests {
     #[test]
     fn a_window_holds_its_regions_where_they_lie() {
         let generator = EndlessGenerator::new(4, 48).unwrap();
-        let window = generator.window(IVec2::new(-1, 2), 3);
+        let window = generator.window(IVec2::new(-1, 2), 3, None).unwrap();
         assert_eq!(window.min, IVec2::new(-2, 1) * REGION_EDGE);
         assert_eq!(window.world.detail_origin, IVec3::new(-128, 0, 64), "detail hashed at world coordinates");
         assert_eq!(window.world.grid.size(), UVec3::new(192, 48, 192));
