@@ -5,6 +5,7 @@
 //! 256 voxels) was not yet made, the resident regions and the process's resident memory over the trip. The CPU
 //! side only: the GPU upload of the regions that arrive is the scrolling window's, still to come (issue 69).
 
+use crate::game::player::TOP_FLYING_SPEED;
 use crate::stress::memory::resident_bytes;
 use crate::world::generate::endless::{DEFAULT_HEIGHT, EndlessGenerator, REGION_EDGE};
 use crate::world::stream::RegionStreamer;
@@ -13,8 +14,6 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// The game's top flying speed in voxels a second (`game::player`: 12, x4 with Ctrl).
-pub const TOP_FLYING_SPEED: f64 = 48.0;
 /// Regions each side of the player's that stay resident.
 const RADIUS: i32 = 8;
 /// Regions each side of the player's that must be there: the view the player sees.
@@ -36,7 +35,13 @@ pub struct TravelConfig {
 impl TravelConfig {
     /// 10 km along x at top speed (208 s).
     pub fn full() -> Self {
-        TravelConfig { seed: 1, distance: 10_000.0, speed: TOP_FLYING_SPEED, direction: DVec2::X, workers: workers() }
+        TravelConfig {
+            seed: 1,
+            distance: 10_000.0,
+            speed: TOP_FLYING_SPEED as f64,
+            direction: DVec2::X,
+            workers: workers(),
+        }
     }
 
     /// 320 voxels diagonally at top speed (7 s): the test suite's.

@@ -2,6 +2,7 @@
 //! took and what it holds, and optionally save it (how large and how slow a save of that world is).
 
 use super::args::parse_size;
+use crate::game::player::TOP_FLYING_SPEED;
 use crate::world::format::save_world;
 use crate::world::generate::endless::{EndlessGenerator, REGION_EDGE};
 use crate::world::generate::generate_world;
@@ -29,8 +30,6 @@ pub struct GenerateArgs {
     endless: Option<u32>,
 }
 
-/// The game's top flying speed in voxels a second (`game::player`: 12 with Ctrl's x4).
-const TOP_FLYING_SPEED: f64 = 48.0;
 /// The resident window's edge the endless world will keep filled (today's bounded world's).
 const WINDOW_EDGE: i32 = 1024;
 
@@ -93,6 +92,7 @@ fn run_endless(seed: u32, height: u32, count: i32, out: Option<&std::path::Path>
     let bricks: u64 = regions.iter().map(|r| r.grid.pooled_bricks() as u64).sum();
     let row = (WINDOW_EDGE / REGION_EDGE) as f64;
     let speed = rate / row * REGION_EDGE as f64;
+    let top = TOP_FLYING_SPEED as f64;
     println!(
         "made {} regions of {REGION_EDGE}x{height}x{REGION_EDGE} (seed {seed}, the first village's at {:?}, found in \
          {village_seconds:.2} s) in {seconds:.2} s on {} threads: {rate:.1} regions/s, {:.1} ms a region, {:.0} \
@@ -105,8 +105,8 @@ fn run_endless(seed: u32, height: u32, count: i32, out: Option<&std::path::Path>
     );
     println!(
         "a {WINDOW_EDGE}-wide window's next row ({row} regions) in the time a player crosses a region at {speed:.0} \
-         voxels/s of straight flight along an axis (top flying speed {TOP_FLYING_SPEED}: {:.1}x)",
-        speed / TOP_FLYING_SPEED
+         voxels/s of straight flight along an axis (top flying speed {top}: {:.1}x)",
+        speed / top
     );
     if let Some(folder) = out {
         let start = Instant::now();

@@ -22,6 +22,10 @@ pub struct Player {
 pub const BODY_HALF: Vec3 = Vec3::new(0.3, 0.9, 0.3);
 pub const EYE_HEIGHT: f32 = 1.6;
 const FLY_SPEED: f32 = 12.0;
+/// Ctrl's speed-up, walking or flying.
+const BOOST: f32 = 4.0;
+/// The fastest the player moves, voxels a second (flying with Ctrl held): what streaming must keep up with.
+pub const TOP_FLYING_SPEED: f32 = FLY_SPEED * BOOST;
 const WALK_SPEED: f32 = 5.0;
 const GRAVITY: f32 = 25.0;
 const JUMP_SPEED: f32 = 8.0;
@@ -162,7 +166,7 @@ fn steer_player(
     transform.rotation = Quat::from_euler(EulerRot::YXZ, player.yaw, player.pitch, 0.0);
     // Long frames (software rendering) must not tunnel through walls or launch the player.
     let dt = time.delta_secs().min(0.1);
-    let boost = if keys.pressed(KeyCode::ControlLeft) { 4.0 } else { 1.0 };
+    let boost = if keys.pressed(KeyCode::ControlLeft) { BOOST } else { 1.0 };
     let pressed = |k: KeyCode| keys.pressed(k) as i32 as f32;
     let forward_axis = pressed(KeyCode::KeyW) - pressed(KeyCode::KeyS);
     let right_axis = pressed(KeyCode::KeyD) - pressed(KeyCode::KeyA);

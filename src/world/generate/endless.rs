@@ -230,12 +230,7 @@ impl EndlessGenerator {
         let max = (centre + VILLAGE_REACH + BRICK_SIZE).div_euclid(IVec2::splat(BRICK_SIZE)) * BRICK_SIZE;
         let mut world = self.ground(min, max - min, Some(&site));
         let size = world.grid.size().as_ivec3();
-        let all = |world: &VoxelWorld| -> Vec<Voxel> {
-            (0..size.y)
-                .flat_map(|y| (0..size.z).flat_map(move |z| (0..size.x).map(move |x| IVec3::new(x, y, z))))
-                .map(|p| world.grid.get(p))
-                .collect()
-        };
+        let all = |world: &VoxelWorld| world.grid.read_box(IVec3::ZERO, size);
         let before = all(&world);
         let local = VillageSite { centre: (site.centre.0 - min.x, site.centre.1 - min.y), ..site };
         // Each cell's village is laid out by a seed of its own, so villages differ from one another.
@@ -243,8 +238,9 @@ impl EndlessGenerator {
         village::build_village(&mut world, &local, seed, &self.blocks);
         let after = all(&world);
         let offset = IVec3::new(min.x, 0, min.y);
-        let stamp = (0..size.y)
-            .flat_map(|y| (0..size.z).flat_map(move |z| (0..size.x).map(move |x| IVec3::new(x, y, z))))
+        // In read_box's order: x fastest, then y, then z.
+        let stamp = (0..size.z)
+            .flat_map(|z| (0..size.y).flat_map(move |y| (0..size.x).map(move |x| IVec3::new(x, y, z))))
             .zip(before.iter().zip(&after))
             .filter(|(_, (b, a))| b != a)
             .map(|(p, (_, &a))| (p + offset, a))
@@ -289,11 +285,7 @@ mod tests {
     use super::*;
 
     fn voxels(world: &VoxelWorld) -> Vec<Voxel> {
-        let s = world.grid.size().as_ivec3();
-        (0..s.y)
-            .flat_map(|y| (0..s.z).flat_map(move |z| (0..s.x).map(move |x| IVec3::new(x, y, z))))
-            .map(|p| world.grid.get(p))
-            .collect()
+        world.grid.read_box(IVec3::ZERO, world.grid.size().as_ivec3())
     }
 
     /// Whether a tree stands within its crown's reach of the line x = `border` (in `world`'s columns) with leaves
