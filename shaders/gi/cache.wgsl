@@ -3,7 +3,7 @@
 // lookups the shading passes use. Kept by refresh.wgsl, update.wgsl and filter.wgsl in this folder.
 #define_import_path glowbrick::gi::cache
 
-#import glowbrick::world::{voxel_at, objects, object_voxel, object_index, object_count, world_info}
+#import glowbrick::world::{voxel_at, objects, object_voxel, object_index, object_count, world_info, window_hi}
 #import glowbrick::traversal::{face_normal, box_entry}
 #import glowbrick::random::pcg
 #import glowbrick::counters::counters
@@ -528,5 +528,5 @@ fn hit_distance(code: u32) -> f32 {
 
 // How far a ray from `origin` inside the world goes before it leaves it.
 fn world_exit(origin: vec3<f32>, dir: vec3<f32>) -> f32 {
-    return max(box_entry(origin, dir, vec3(0.0), vec3<f32>(world_info.size.xyz)).y, 0.0);
+    return max(box_entry(origin, dir, vec3<f32>(world_info.window_lo), vec3<f32>(window_hi())).y, 0.0);
 }

@@ -3,7 +3,7 @@
 // src/world/traversal.rs step for step (same boundary formulas and tie rules) so GPU and CPU agree.
 #define_import_path glowbrick::traversal
 
-#import glowbrick::world::{world_info, top_cells, occupancy, brick_cell, pooled_voxel, objects, object_count, object_voxel, Object}
+#import glowbrick::world::{world_info, top_cells, occupancy, brick_cell, pooled_voxel, stored_index, window_hi, objects, object_count, object_voxel, Object}
 #import glowbrick::constants::{POOLED_FLAG, BRICK_SIZE, BRICK_SHIFT, MAX_WORLD_EDGE, COUNT_TRACE_STEPS, COUNT_TRACE_LOADS,
     CELL_SHIFT, SECTOR_SHIFT, REGION_SHIFT, CELL_BOX_LEVEL, VOXEL_MASK_WORDS, OBJECT_TRACE_STEPS}
 #import glowbrick::counters::counters
@@ -123,7 +123,7 @@ fn trace_in_brick(origin: vec3<f32>, dir: vec3<f32>, inv: vec3<f32>, brick: vec3
     let step = vec3<i32>(sign(dir));
     let positive = dir > vec3(0.0);
     let lo = brick * BRICK_SIZE;
-    let hi = min(lo + vec3(BRICK_SIZE), world_info.size) - vec3(1);
+    let hi = min(lo + vec3(BRICK_SIZE), window_hi()) - vec3(1);
     var t = t_start;
     var axis = entry_axis;
     var voxel = clamp(vec3<i32>(floor(origin + dir * t)), lo, hi);
@@ -157,8 +157,7 @@ fn trace_in_brick(origin: vec3<f32>, dir: vec3<f32>, inv: vec3<f32>, brick: vec3
 // The plain two-level DDA (traversal=dda): bricks, skipping empty ones, then the voxels of pooled bricks; one
 // load per step. Mirrors `trace_counted` in src/world/traversal.rs.
 fn trace_dda(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
-    let size = vec3<f32>(world_info.size);
-    let entry = box_entry(origin, dir, vec3(0.0), size);
+    let entry = box_entry(origin, dir, vec3<f32>(world_info.window_lo), vec3<f32>(window_hi()));
     let t_end = min(entry.y, max_distance);
     var t = max(entry.x, 0.0);
     if !(t <= t_end) || all(dir == vec3(0.0)) {
@@ -168,18 +167,19 @@ fn trace_dda(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
     let step = vec3<i32>(sign(dir));
     let positive = dir > vec3(0.0);
     let edge = f32(BRICK_SIZE);
-    let last_brick = max((world_info.size - vec3(1)) >> vec3(BRICK_SHIFT), vec3(0));
+    let first_brick = world_info.window_lo >> vec3(BRICK_SHIFT);
+    let last_brick = max((window_hi() - vec3(1)) >> vec3(BRICK_SHIFT), first_brick);
     var axis = u32(entry.z);
     if entry.x < 0.0 {
         let v = floor(origin);
         axis = u32(box_entry(origin, dir, v, v + vec3(1.0)).z);
     }
-    var brick = clamp(vec3<i32>(floor((origin + dir * t) / edge)), vec3(0), last_brick);
+    var brick = clamp(vec3<i32>(floor((origin + dir * t) / edge)), first_brick, last_brick);
     var brick_t_max: vec3<f32>;
     for (var a = 0u; a < 3u; a++) {
         brick_t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(brick[a] + select(0, 1, positive[a])) * edge);
     }
-    let max_steps = last_brick.x + last_brick.y + last_brick.z + 3;
+    let max_steps = world_info.bricks.x + world_info.bricks.y + world_info.bricks.z;
     for (var i = 0; i < max_steps; i++) {
         trace_steps += 1u;
         trace_loads += 1u;
@@ -188,7 +188,7 @@ fn trace_dda(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
             if (cell & POOLED_FLAG) == 0u {
                 let lo = brick * BRICK_SIZE;
                 let voxel = min(clamp(vec3<i32>(floor(origin + dir * t)), lo, lo + vec3(BRICK_SIZE - 1)),
-                                world_info.size - vec3(1));
+                                window_hi() - vec3(1));
                 return Hit(voxel, face_entered(axis, positive[axis]), t, cell, true, 0u);
             }
             let hit = trace_in_brick(origin, dir, inv, brick, cell & ~POOLED_FLAG, t, t_end, axis);
@@ -203,7 +203,7 @@ fn trace_dda(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
         }
         axis = a;
         brick[a] += step[a];
-        if brick[a] < 0 || brick[a] > last_brick[a] {
+        if brick[a] < first_brick[a] || brick[a] > last_brick[a] {
             break;
         }
         brick_t_max[a] = cross_t(origin[a], dir[a], inv[a], f32(brick[a] + select(0, 1, positive[a])) * edge);
@@ -265,8 +265,10 @@ fn any_bits(m: vec2<u32>, pattern: vec2<u32>, base: u32) -> bool {
     return ((m.x & low) | (m.y & high)) != 0u;
 }
 
-fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
-    return u32(c.x + dims.x * (c.y + dims.y * c.z));
+// The index of the mask of the level-`shift` cell (bricks, sectors, regions) holding voxel v, in its level's part
+// of `occupancy`.
+fn mask_index(v: vec3<i32>, dims: vec3<i32>, shift: u32) -> u32 {
+    return stored_index(v >> vec3(shift), dims, shift - BRICK_SHIFT);
 }
 
 // traversal=occupancy: one move per step, as `trace_occupancy_counted` in src/world/traversal.rs: the ray is in
@@ -278,7 +280,6 @@ fn mask_index(c: vec3<i32>, dims: vec3<i32>) -> u32 {
 // the first voxel of a quadrant a material is read only at the hit. (The CPU walks the voxels of an occupied 2^3
 // cell in a loop of its own; here they stay steps of the one loop, so lanes keep in step.)
 fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit {
-    let size = world_info.size;
     // Nothing solid lies outside the occupied box: a ray starts where it enters it and misses where it leaves.
     let box_lo = world_info.occupied_lo;
     let box_hi = world_info.occupied_hi;
@@ -298,7 +299,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
         let o = floor(origin);
         axis = u32(box_entry(origin, dir, o, o + vec3(1.0)).z);
     }
-    let last = size - vec3(1);
+    let last = window_hi() - vec3(1);
     var v = clamp(vec3<i32>(floor(origin + dir * t)), box_lo, box_hi - vec3(1));
     // The child masks of the region, sector and brick the ray is in, the brick's index and its pool slot once read
     // (NO_SLOT before); `entered`: the coarsest level whose cell the last move changed (a mask of that level or
@@ -314,7 +315,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
     // A ray that starts in an occupied brick (as one leaving a surface does) reads that brick's mask first: it
     // needs its sector's and region's masks only once it leaves the brick (`*_unread` until then).
     trace_loads += 1u;
-    var brick = mask_index(v >> vec3(BRICK_SHIFT), world_info.bricks);
+    var brick = mask_index(v, world_info.bricks, BRICK_SHIFT);
     var brick_mask = occupancy[brick];
     let starts_in_brick = any(brick_mask != vec2(0u));
     var region_unread = starts_in_brick;
@@ -333,7 +334,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
         if entered >= SECTOR_SHIFT {
             if entered >= REGION_SHIFT || region_unread {
                 trace_loads += 1u;
-                region_mask = occupancy[world_info.region_base + mask_index(v >> vec3(REGION_SHIFT), world_info.regions)];
+                region_mask = occupancy[world_info.region_base + mask_index(v, world_info.regions, REGION_SHIFT)];
                 region_unread = false;
             }
             let region_edge = i32(1) << REGION_SHIFT;
@@ -341,7 +342,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
                           all(region_mask == vec2(0u)));
             if cell.w == 0 {
                 trace_loads += 1u;
-                sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(SECTOR_SHIFT), world_info.sectors)];
+                sector_mask = occupancy[world_info.sector_base + mask_index(v, world_info.sectors, SECTOR_SHIFT)];
                 sector_unread = false;
             }
         }
@@ -349,7 +350,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
             if entered >= BRICK_SHIFT {
                 if sector_unread {
                     trace_loads += 1u;
-                    sector_mask = occupancy[world_info.sector_base + mask_index(v >> vec3(SECTOR_SHIFT), world_info.sectors)];
+                    sector_mask = occupancy[world_info.sector_base + mask_index(v, world_info.sectors, SECTOR_SHIFT)];
                     sector_unread = false;
                 }
                 cell = empty_child_cell(sector_mask, v, BRICK_SHIFT, positive);
@@ -357,7 +358,7 @@ fn trace_occupancy(origin: vec3<f32>, dir: vec3<f32>, max_distance: f32) -> Hit 
                     // The brick's mask first: its top cell (homogeneous, or the pool slot) is read only where a
                     // voxel must be.
                     trace_loads += 1u;
-                    brick = mask_index(v >> vec3(BRICK_SHIFT), world_info.bricks);
+                    brick = mask_index(v, world_info.bricks, BRICK_SHIFT);
                     brick_mask = occupancy[brick];
                     slot = NO_SLOT;
                     quadrant = NO_QUADRANT;

@@ -28,6 +28,13 @@ struct WorldInfo {
     // The world coordinates of voxel (0, 0, 0): per-voxel detail hashes world coordinates.
     detail_origin: vec3<i32>,
     _pad_detail: u32,
+    // The window's lowest voxel (zero in a bounded world) and the voxel stored first before the wrap: a brick (a
+    // sector, a region) is stored at its offset from wrap_base, less the grid where that reaches past it, so an
+    // endless world's scroll rewrites only the bricks that entered (BrickGrid::scroll_window).
+    window_lo: vec3<i32>,
+    _pad_window: u32,
+    wrap_base: vec3<i32>,
+    _pad_wrap: u32,
 }
 
 struct Material {
@@ -109,12 +116,26 @@ fn object_motion(id: u32) -> vec3<f32> {
     return objects[i].min - objects[i].previous_min;
 }
 
+// Where cell `c` of a level of cells 2^shift voxels wide (`dims` of them: bricks, sectors or regions) is stored,
+// for a cell inside the window: BrickGrid::brick_index and Occupancy's `wrapped`.
+fn stored_index(c: vec3<i32>, dims: vec3<i32>, shift: u32) -> u32 {
+    let s = c - (world_info.wrap_base >> vec3(shift));
+    let w = select(s, s - dims, s >= dims);
+    return u32(w.x + dims.x * (w.y + dims.y * w.z));
+}
+
 fn brick_cell(brick: vec3<i32>) -> u32 {
     let b = world_info.bricks;
-    if any(brick < vec3(0)) || any(brick >= b) {
+    let q = brick - (world_info.window_lo >> vec3(BRICK_SHIFT));
+    if any(q < vec3(0)) || any(q >= b) {
         return 0u;
     }
-    return top_cells[u32(brick.x + b.x * (brick.y + b.y * brick.z))];
+    return top_cells[stored_index(brick, b, BRICK_SHIFT)];
+}
+
+// The window's voxels are [window_lo, window_hi()).
+fn window_hi() -> vec3<i32> {
+    return world_info.window_lo + world_info.size;
 }
 
 // The voxel id inside a pooled brick slot.
@@ -149,7 +170,7 @@ fn pool_part_word(part: u32, at: u32) -> u32 {
 }
 
 fn in_world(p: vec3<i32>) -> bool {
-    return all(p >= vec3(0)) && all(p < world_info.size);
+    return all(p >= world_info.window_lo) && all(p < window_hi());
 }
 
 // The voxel id at p; 0 (air) outside the world.

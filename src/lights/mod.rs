@@ -82,6 +82,9 @@ pub struct LightPool {
     bricks: LightBricks,
     /// The world's size in bricks (what `bricks` spans).
     brick_dims: UVec3,
+    /// The grid's window and where its storage wraps, in bricks (`BrickGrid::window`, `wrap_base`): the light
+    /// bricks are stored as the grid stores its bricks.
+    window_bricks: (IVec3, IVec3),
     alias_stale: bool,
     /// Voxel lights per brick, so edits can skip bricks that have none and can have none.
     voxel_lights_per_brick: HashMap<IVec3, u32>,
@@ -95,7 +98,8 @@ fn brick_light_material(world: &VoxelWorld, b: IVec3) -> Option<Voxel> {
         return None;
     }
     let BrickCell::Homogeneous(m) = world.grid.cell(b) else { return None };
-    let inside = ((b + IVec3::ONE) * BRICK_SIZE).cmple(world.grid.size().as_ivec3()).all();
+    let (lo, hi) = world.grid.window();
+    let inside = (b * BRICK_SIZE).cmpge(lo).all() && ((b + IVec3::ONE) * BRICK_SIZE).cmple(hi).all();
     (inside && world.palette.is_emissive(m)).then_some(m)
 }
 
@@ -157,7 +161,11 @@ pub fn brick_light_at(world: &VoxelWorld, b: IVec3) -> Option<Light> {
 impl LightPool {
     /// Scans the whole world (for loading; edits use `update_region`).
     pub fn from_world(world: &VoxelWorld) -> Self {
-        let mut pool = LightPool { brick_dims: world.grid.brick_dims(), ..Default::default() };
+        let mut pool = LightPool {
+            brick_dims: world.grid.brick_dims(),
+            window_bricks: window_bricks(world),
+            ..Default::default()
+        };
         let grid = &world.grid;
         for (index, &raw) in grid.top_cells().iter().enumerate() {
             if let BrickCell::Homogeneous(_) = BrickCell::decode(raw)
@@ -185,9 +193,10 @@ impl LightPool {
     /// the world.
     pub fn update_region(&mut self, world: &VoxelWorld, min: IVec3, max: IVec3) {
         self.brick_dims = world.grid.brick_dims();
-        let size = world.grid.size().as_ivec3();
-        let lo = (min.min(max) - IVec3::ONE).max(IVec3::ZERO);
-        let hi = (min.max(max) + IVec3::ONE).min(size - IVec3::ONE);
+        self.window_bricks = window_bricks(world);
+        let (window_lo, window_hi) = world.grid.window();
+        let lo = (min.min(max) - IVec3::ONE).max(window_lo);
+        let hi = (min.max(max) + IVec3::ONE).min(window_hi - IVec3::ONE);
         if lo.cmpgt(hi).any() {
             return;
         }
@@ -203,9 +212,44 @@ impl LightPool {
         self.update_voxels(world, lo, hi);
         for b in flipped {
             let brick_lo = b * BRICK_SIZE;
-            let brick_hi = (brick_lo + IVec3::splat(BRICK_SIZE - 1)).min(size - IVec3::ONE);
+            let brick_hi = (brick_lo + IVec3::splat(BRICK_SIZE - 1)).min(window_hi - IVec3::ONE);
             self.update_voxels(world, brick_lo, brick_hi);
         }
+    }
+
+    /// After the grid's window scrolled (`BrickGrid::scroll_window`): frees the slots of the lights that left it
+    /// (their generations move on, so a reservoir holding one drops it) and looks again at the lights on the
+    /// window's sides. The caller then brings the bricks that entered up to date with `update_region`.
+    pub fn follow_window(&mut self, world: &VoxelWorld) {
+        self.window_bricks = window_bricks(world);
+        let (lo, hi) = world.grid.window();
+        let left: Vec<LightKey> = self
+            .by_key
+            .keys()
+            .filter(|key| {
+                let (min, edge) = match **key {
+                    LightKey::Voxel(p) => (p, 1),
+                    LightKey::Brick(b) => (b * BRICK_SIZE, BRICK_SIZE),
+                };
+                min.cmplt(lo).any() || (min + edge).cmpgt(hi).any()
+            })
+            .copied()
+            .collect();
+        for key in left {
+            self.set(key, None);
+        }
+        // A light on the window's new edge sees air beyond it (outside the window is air), as a pool made from the
+        // scrolled world would: its four sides are looked at again.
+        let last = hi - IVec3::ONE;
+        for (a, b) in [
+            (lo, IVec3::new(lo.x, last.y, last.z)),
+            (IVec3::new(last.x, lo.y, lo.z), last),
+            (lo, IVec3::new(last.x, last.y, lo.z)),
+            (IVec3::new(lo.x, lo.y, last.z), last),
+        ] {
+            self.update_region(world, a, b);
+        }
+        self.alias_stale = true;
     }
 
     /// Re-evaluates the voxel lights of every voxel in `[lo, hi]` (inclusive, inside the world). Bricks that hold
@@ -372,9 +416,23 @@ impl LightPool {
         let lights: Vec<(u32, f32)> = self.lights().map(|(slot, l)| (slot, l.power)).collect();
         self.alias = AliasTable::build(&lights);
         self.index = LightIndex::build(&self.alias, |slot| self.cube(slot));
-        self.bricks = LightBricks::build(self.brick_dims, self.lights().map(|(_, l)| l.min));
+        let (window_lo, wrap_base) = self.window_bricks;
+        let dims = self.brick_dims.as_ivec3();
+        // Each light's corner where the grid stores its brick (the identity in a bounded world).
+        let stored = |min: IVec3| {
+            let s = (min >> 3_i32) - wrap_base;
+            let s = IVec3::select(s.cmpge(dims), s - dims, s);
+            debug_assert!((min >> 3_i32).cmpge(window_lo).all(), "a light inside the window");
+            s * BRICK_SIZE
+        };
+        self.bricks = LightBricks::build(self.brick_dims, self.lights().map(|(_, l)| stored(l.min)));
         self.alias_stale = false;
     }
+}
+
+/// The grid's window's lowest brick and the brick its storage wraps from.
+fn window_bricks(world: &VoxelWorld) -> (IVec3, IVec3) {
+    (world.grid.window().0 >> 3_i32, world.grid.wrap_base() >> 3_i32)
 }
 
 /// Whether brick `b` could hold a voxel light: it has an emissive voxel and is not a whole uniform brick (a whole

@@ -71,7 +71,38 @@ pub struct BrickGrid {
     dirty: BTreeSet<u32>,
     /// Which cells of every level hold a solid voxel, kept current on every change (`world::occupancy`).
     occupancy: Occupancy,
+    /// The lowest voxel of the window the grid holds: zero for a bounded world. An endless world's window moves
+    /// it as the player travels (`scroll_window`); voxels are stored at their coordinates modulo the size, so a
+    /// scroll leaves every brick that stays where it is and only the bricks that entered are written.
+    window_lo: IVec3,
+    /// `window_lo` rounded down to a multiple of the size: a coordinate's storage is its offset from here, less
+    /// the size where that reaches past it.
+    wrap_base: IVec3,
 }
+
+/// A wrapping window's edge (x and z) and every scroll's step are multiples of this many voxels: the coarsest
+/// occupancy cell (a region of 128^3), so each level of the hierarchy wraps whole cells.
+pub const WINDOW_STEP: i32 = 1 << super::occupancy::REGION_SHIFT;
+
+/// A window the grid cannot scroll to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BadScroll {
+    pub to: IVec3,
+    pub size: UVec3,
+}
+
+impl std::fmt::Display for BadScroll {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "a {}x{}x{} grid cannot scroll its window to ({}, {}, {}): x and z must be multiples of {WINDOW_STEP} \
+             (the size too) and y must stay 0",
+            self.size.x, self.size.y, self.size.z, self.to.x, self.to.y, self.to.z
+        )
+    }
+}
+
+impl std::error::Error for BadScroll {}
 
 /// An edit or lookup outside the world.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -114,6 +145,8 @@ impl BrickGrid {
             free_slots: Vec::new(),
             dirty: BTreeSet::new(),
             occupancy: Occupancy::new(bricks),
+            window_lo: IVec3::ZERO,
+            wrap_base: IVec3::ZERO,
         }
     }
 
@@ -126,31 +159,132 @@ impl BrickGrid {
         self.bricks
     }
 
+    /// Whether voxel `p` lies in the window the grid holds (`[0, size)` for a bounded world).
+    #[inline]
     pub fn contains(&self, p: IVec3) -> bool {
-        p.cmpge(IVec3::ZERO).all() && p.cmplt(self.size.as_ivec3()).all()
+        let q = p - self.window_lo;
+        q.cmpge(IVec3::ZERO).all() && q.cmplt(self.size.as_ivec3()).all()
     }
 
-    /// Index of the brick cell holding brick coordinate `b` (must be in range).
+    /// The voxels `[lo, hi)` the grid holds: `[0, size)` for a bounded world, wherever an endless world's window
+    /// has scrolled to.
+    pub fn window(&self) -> (IVec3, IVec3) {
+        (self.window_lo, self.window_lo + self.size.as_ivec3())
+    }
+
+    /// The voxel coordinates of storage voxel (0, 0, 0) before the wrap (`wrap_base`), for the GPU's copy.
+    pub fn wrap_base(&self) -> IVec3 {
+        self.wrap_base
+    }
+
+    /// Where brick `b` (inside the window) is stored: its offset from the wrap base, less the grid where that
+    /// reaches past it. The identity in a bounded world.
+    #[inline]
+    fn storage_brick(&self, b: IVec3) -> IVec3 {
+        let s = b - (self.wrap_base >> 3_i32);
+        let dims = self.bricks.as_ivec3();
+        IVec3::select(s.cmpge(dims), s - dims, s)
+    }
+
+    /// Index of the brick cell holding brick coordinate `b` (must be inside the window).
     #[inline]
     pub fn brick_index(&self, b: IVec3) -> usize {
-        (b.x as u32 + self.bricks.x * (b.y as u32 + self.bricks.y * b.z as u32)) as usize
+        let s = self.storage_brick(b);
+        (s.x as u32 + self.bricks.x * (s.y as u32 + self.bricks.y * s.z as u32)) as usize
     }
 
-    /// Brick coordinate of a brick index.
+    /// Brick coordinate (inside the window) of a brick index.
     pub fn brick_coord(&self, index: u32) -> IVec3 {
         let x = index % self.bricks.x;
         let y = (index / self.bricks.x) % self.bricks.y;
         let z = index / (self.bricks.x * self.bricks.y);
-        IVec3::new(x as i32, y as i32, z as i32)
+        let b = IVec3::new(x as i32, y as i32, z as i32) + (self.wrap_base >> 3_i32);
+        IVec3::select(b.cmplt(self.window_lo >> 3_i32), b + self.bricks.as_ivec3(), b)
     }
 
-    /// The decoded top cell of brick coordinate `b`, or `Empty` outside the grid.
+    /// The decoded top cell of brick coordinate `b`, or `Empty` outside the window.
     #[inline]
     pub fn cell(&self, b: IVec3) -> BrickCell {
-        if b.cmplt(IVec3::ZERO).any() || b.cmpge(self.bricks.as_ivec3()).any() {
+        let q = b - (self.window_lo >> 3_i32);
+        if q.cmplt(IVec3::ZERO).any() || q.cmpge(self.bricks.as_ivec3()).any() {
             return BrickCell::Empty;
         }
         BrickCell::decode(self.top[self.brick_index(b)])
+    }
+
+    /// Moves the window to start at voxel `lo` (x and z multiples of `WINDOW_STEP`, y 0; the size's x and z too).
+    /// Every brick inside both windows keeps its voxels and its storage; each brick that entered still holds the
+    /// voxels of the brick that left its storage until the caller writes it (`put_brick`), so the caller writes
+    /// every brick of `entered_boxes` before anything reads them.
+    pub fn scroll_window(&mut self, lo: IVec3) -> Result<(), BadScroll> {
+        let size = self.size.as_ivec3();
+        let step_ok = |v: i32| v.rem_euclid(WINDOW_STEP) == 0;
+        if !(step_ok(lo.x) && step_ok(lo.z) && step_ok(size.x) && step_ok(size.z) && lo.y == 0) {
+            return Err(BadScroll { to: lo, size: self.size });
+        }
+        self.window_lo = lo;
+        self.wrap_base = IVec3::new(lo.x.div_euclid(size.x) * size.x, 0, lo.z.div_euclid(size.z) * size.z);
+        self.occupancy.set_wrap_base(self.wrap_base >> 3_i32);
+        Ok(())
+    }
+
+    /// The boxes of voxels in the window starting at `new_lo` that the window starting at `old_lo` did not hold
+    /// (at most two: the strip entered along x, then the rest along z), for a grid of `size`.
+    pub fn entered_boxes(size: UVec3, old_lo: IVec3, new_lo: IVec3) -> Vec<(IVec3, IVec3)> {
+        let size = size.as_ivec3();
+        let (new_hi, old_hi) = (new_lo + size, old_lo + size);
+        let overlap_lo = new_lo.max(old_lo);
+        let overlap_hi = new_hi.min(old_hi);
+        if overlap_hi.cmple(overlap_lo).any() {
+            return vec![(new_lo, new_hi)];
+        }
+        let mut boxes = Vec::new();
+        // Along x: the columns of the new window outside the old one's x range, every z.
+        if new_lo.x < overlap_lo.x {
+            boxes.push((new_lo, IVec3::new(overlap_lo.x, new_hi.y, new_hi.z)));
+        }
+        if new_hi.x > overlap_hi.x {
+            boxes.push((IVec3::new(overlap_hi.x, new_lo.y, new_lo.z), new_hi));
+        }
+        // Along z: within the overlap's x range only (the corners are in the strips above).
+        if new_lo.z < overlap_lo.z {
+            boxes
+                .push((IVec3::new(overlap_lo.x, new_lo.y, new_lo.z), IVec3::new(overlap_hi.x, new_hi.y, overlap_lo.z)));
+        }
+        if new_hi.z > overlap_hi.z {
+            boxes
+                .push((IVec3::new(overlap_lo.x, new_lo.y, overlap_hi.z), IVec3::new(overlap_hi.x, new_hi.y, new_hi.z)));
+        }
+        boxes
+    }
+
+    /// Makes brick `b` (inside the window) what `source`'s brick `from` is, whatever it held: the way a scroll
+    /// writes the bricks that entered (an empty or uniform brick frees its pool slot, as an edit would).
+    pub fn put_brick(&mut self, b: IVec3, source: &BrickGrid, from: IVec3) {
+        match source.cell(from) {
+            BrickCell::Empty => self.put_uniform(b, AIR),
+            BrickCell::Homogeneous(m) => self.put_uniform(b, m),
+            BrickCell::Pooled(slot) => {
+                let voxels: &[Voxel; BRICK_VOXELS] = source.pool_brick(slot).try_into().expect("a slot is a brick");
+                self.set_brick(b, voxels);
+            }
+        }
+    }
+
+    /// Makes the whole brick `b` one voxel (air: empty).
+    fn put_uniform(&mut self, b: IVec3, voxel: Voxel) {
+        let index = self.brick_index(b);
+        let target = if voxel == AIR { BrickCell::Empty } else { BrickCell::Homogeneous(voxel) };
+        let current = BrickCell::decode(self.top[index]);
+        if current == target {
+            return;
+        }
+        if let BrickCell::Pooled(slot) = current {
+            self.free_slots.push(slot);
+        }
+        self.top[index] = target.encode();
+        self.update_occupancy(index);
+        self.dirty.insert(index as u32);
     }
 
     /// The occupancy masks rays skip empty space with.
@@ -160,10 +294,14 @@ impl BrickGrid {
     }
 
     /// The voxels `[lo, hi)` of the bricks that may hold a solid voxel (`Occupancy::occupied_bricks`), within the
-    /// world; an empty box (`lo == hi`) when none does.
+    /// window; an empty box (`lo == hi` on some axis) when none does.
     pub fn occupied_box(&self) -> (IVec3, IVec3) {
         match self.occupancy.occupied_bricks() {
-            Some((lo, hi)) => (lo * BRICK_SIZE, ((hi + 1) * BRICK_SIZE).min(self.size().as_ivec3())),
+            Some((lo, hi)) => {
+                let (window_lo, window_hi) = self.window();
+                let lo = (lo * BRICK_SIZE).max(window_lo);
+                (lo, ((hi + 1) * BRICK_SIZE).min(window_hi).max(lo))
+            }
             None => (IVec3::ZERO, IVec3::ZERO),
         }
     }

@@ -168,6 +168,10 @@ pub struct Occupancy {
     /// world's solid part through it. It only grows (an edit that empties its edge leaves it as it was), so an
     /// edit stays one brick's work; a world loaded again gets a tight one.
     occupied: Option<(IVec3, IVec3)>,
+    /// The brick coordinates of the storage's brick (0, 0, 0) before the wrap (`BrickGrid::scroll_window`): a
+    /// sector or region is stored at its coordinates less this one's (scaled), less the grid where that reaches
+    /// past it. Zero in a bounded world.
+    wrap_base: IVec3,
 }
 
 impl Occupancy {
@@ -185,7 +189,21 @@ impl Occupancy {
             region_dims,
             region_base,
             occupied: None,
+            wrap_base: IVec3::ZERO,
         }
+    }
+
+    /// Where a scrolled window's storage wraps, in bricks (a multiple of the sizes of sectors and regions).
+    pub(crate) fn set_wrap_base(&mut self, bricks: IVec3) {
+        self.wrap_base = bricks;
+    }
+
+    /// The index of cell `c` of the level `shift` (log2 of its edge in bricks: 2 for sectors, 4 for regions).
+    #[inline]
+    fn wrapped(&self, c: IVec3, dims: UVec3, shift: i32) -> usize {
+        let s = c - (self.wrap_base >> shift);
+        let d = dims.as_ivec3();
+        index(IVec3::select(s.cmpge(d), s - d, s), dims)
     }
 
     /// The box of bricks (lowest, highest, inclusive) that may hold a solid voxel; `None` when none ever did.
@@ -202,13 +220,13 @@ impl Occupancy {
     /// The brick mask of the sector holding voxel `v` (inside the world).
     #[inline]
     pub fn sector(&self, v: IVec3) -> u64 {
-        self.masks[self.sector_base + index(v >> SECTOR_SHIFT, self.sector_dims)]
+        self.masks[self.sector_base + self.wrapped(v >> SECTOR_SHIFT, self.sector_dims, 2)]
     }
 
     /// The sector mask of the region holding voxel `v` (inside the world).
     #[inline]
     pub fn region(&self, v: IVec3) -> u64 {
-        self.masks[self.region_base + index(v >> REGION_SHIFT, self.region_dims)]
+        self.masks[self.region_base + self.wrapped(v >> REGION_SHIFT, self.region_dims, 4)]
     }
 
     pub fn sector_dims(&self) -> UVec3 {
@@ -232,7 +250,11 @@ impl Occupancy {
     /// Indices in `masks` of brick `b`'s (index `i`) own mask, its sector's and its region's: what an edit of the
     /// brick may change.
     pub fn indices_of_brick(&self, i: usize, b: IVec3) -> [usize; 3] {
-        [i, self.sector_base + index(b >> 2, self.sector_dims), self.region_base + index(b >> 4, self.region_dims)]
+        [
+            i,
+            self.sector_base + self.wrapped(b >> 2, self.sector_dims, 2),
+            self.region_base + self.wrapped(b >> 4, self.region_dims, 4),
+        ]
     }
 
     /// Sets brick `b` (index `i`)'s cell mask and the bits above it.

@@ -157,10 +157,11 @@ impl Tally for Counts {
     }
 }
 
-/// Where a ray enters the world: the clipped parameter range and the axis of the face it entered through, or
-/// `None` when it misses the world (or is not finite).
-fn enter_world(size: Vec3, ray: &Ray, max_distance: f32) -> Option<(f32, f32, usize)> {
-    enter_box(Vec3::ZERO, size, ray, max_distance)
+/// Where a ray enters the grid's window: the clipped parameter range and the axis of the face it entered
+/// through, or `None` when it misses the window (or is not finite).
+fn enter_world(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<(f32, f32, usize)> {
+    let (lo, hi) = grid.window();
+    enter_box(lo.as_vec3(), hi.as_vec3(), ray, max_distance)
 }
 
 /// Where a ray enters the box `[lo, hi]` (voxel planes), as `enter_world`.
@@ -206,6 +207,7 @@ pub fn trace_occupancy(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option
 /// within rounding of `origin + dir * t`.
 pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
     let size = grid.size().as_ivec3();
+    let window_hi = grid.window().1;
     // Nothing solid lies outside the occupied box: a ray starts where it enters it and misses where it leaves.
     let (box_lo, box_hi) = grid.occupied_box();
     if box_hi.cmple(box_lo).any() {
@@ -233,7 +235,7 @@ pub fn trace_occupancy_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, t
     let mut entered = if starts_in_brick { CELL_BOX_LEVEL } else { TOP_WALK_LEVEL };
     // Every step crosses at least one voxel boundary.
     let max_steps = size.x + size.y + size.z + 8;
-    let bounds = CellExit { ray, inv, positive, t_end, box_lo, box_hi, last: size - IVec3::ONE };
+    let bounds = CellExit { ray, inv, positive, t_end, box_lo, box_hi, last: window_hi - IVec3::ONE };
     'walk: for _ in 0..max_steps {
         // The level of the coarsest empty cell holding v. A mask's tests are skipped while the ray stays in the
         // child it last proved occupied: a move that left a cell of a sector's size or more crossed a sector's
@@ -349,7 +351,7 @@ struct CellExit<'a> {
     t_end: f32,
     box_lo: IVec3,
     box_hi: IVec3,
-    /// The world's last voxel.
+    /// The window's last voxel.
     last: IVec3,
 }
 
@@ -424,14 +426,16 @@ pub fn trace(grid: &BrickGrid, ray: &Ray, max_distance: f32) -> Option<Hit> {
 
 /// `trace`, telling `tally` its steps (each one load).
 pub fn trace_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut impl Tally) -> Option<Hit> {
-    let (mut t, t_end, mut axis) = enter_world(grid.size().as_vec3(), ray, max_distance)?;
+    let (mut t, t_end, mut axis) = enter_world(grid, ray, max_distance)?;
     let inv = inverse_dir(ray.dir);
     let step = ray.dir.signum().as_ivec3();
     let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
     let brick_edge = BRICK_SIZE as f32;
-    let last_brick = ((grid.size().as_ivec3() - IVec3::ONE) >> 3_i32).max(IVec3::ZERO);
+    let (window_lo, window_hi) = grid.window();
+    let first_brick = window_lo >> 3_i32;
+    let last_brick = ((window_hi - IVec3::ONE) >> 3_i32).max(first_brick);
     let start = ray.at(t);
-    let mut brick = voxel_at(start / brick_edge).clamp(IVec3::ZERO, last_brick);
+    let mut brick = voxel_at(start / brick_edge).clamp(first_brick, last_brick);
     let mut brick_t_max = Vec3::ZERO;
     for a in 0..3 {
         let plane = (brick[a] + positive[a] as i32) as f32 * brick_edge;
@@ -444,7 +448,7 @@ pub fn trace_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut
         match grid.cell(brick) {
             BrickCell::Empty => {}
             BrickCell::Homogeneous(material) => {
-                let voxel = clamp_into_brick(voxel_at(ray.at(t)), brick).min(grid.size().as_ivec3() - 1);
+                let voxel = clamp_into_brick(voxel_at(ray.at(t)), brick).min(window_hi - 1);
                 return Some(Hit { voxel, face: Face::entered(axis, positive[axis]), distance: t, material });
             }
             BrickCell::Pooled(slot) => {
@@ -461,7 +465,7 @@ pub fn trace_counted(grid: &BrickGrid, ray: &Ray, max_distance: f32, tally: &mut
         }
         axis = a;
         brick[a] += step[a];
-        if brick[a] < 0 || brick[a] > last_brick[a] {
+        if brick[a] < first_brick[a] || brick[a] > last_brick[a] {
             return None;
         }
         brick_t_max[a] = cross_t(ray, inv, a, (brick[a] + positive[a] as i32) as f32 * brick_edge);
@@ -485,7 +489,7 @@ fn trace_in_brick(
     let step = ray.dir.signum().as_ivec3();
     let positive = [ray.dir.x > 0.0, ray.dir.y > 0.0, ray.dir.z > 0.0];
     let lo = brick * BRICK_SIZE;
-    let hi = (lo + IVec3::splat(BRICK_SIZE)).min(grid.size().as_ivec3()) - IVec3::ONE;
+    let hi = (lo + IVec3::splat(BRICK_SIZE)).min(grid.window().1) - IVec3::ONE;
     let mut voxel = voxel_at(ray.at(t)).clamp(lo, hi);
     let voxels = grid.pool_brick(slot);
     let mut t_max = Vec3::ZERO;

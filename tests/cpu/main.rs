@@ -24,6 +24,7 @@ mod travel;
 mod traversal_matches_brute_force;
 #[path = "../shared/vox_scene.rs"]
 mod vox_scene;
+mod window_scroll;
 mod world_edits;
 mod world_files;
 mod world_upload;

@@ -158,7 +158,9 @@ fn twins() -> Vec<Twin> {
                 occupied_lo,
                 pool_part_shift,
                 occupied_hi,
-                detail_origin
+                detail_origin,
+                window_lo,
+                wrap_base
             }
         ),
         sized("top_cells", None, word, 1),

@@ -7,7 +7,7 @@
 
 use crate::common;
 
-use bevy::math::{UVec2, UVec3};
+use bevy::math::{IVec2, UVec2, UVec3};
 use common::compare_hits;
 use glowbrick::colour::luminance;
 use glowbrick::headless::HeadlessOptions;
@@ -76,7 +76,18 @@ pub fn gpu_primary_rays_match_cpu_traversal() {
         fov_deg: 60.0,
     };
     let far = window.local_view(&far);
+    // A window scrolled two regions along x: its storage wraps at x = 256, in the middle of the view.
+    let mut scrolled = endless.window(IVec2::new(10, 4), 4, None).unwrap();
+    scrolled.scroll_to(IVec2::new(12, 4), |keys| Ok(endless.regions(keys))).unwrap();
+    assert_eq!(scrolled.world.grid.window().0.x, 128);
+    let across = CameraView {
+        name: "across the wrap".into(),
+        origin: [200.5, 88.0, 160.5],
+        direction: [0.8, -0.45, 0.3],
+        fov_deg: 60.0,
+    };
     let cases = [
+        ("endless window scrolled, wrapping mid-view", scrolled.world, across),
         ("endless world a million voxels out", window.world, far),
         ("test-room inside", room.clone(), room.view(Some("inside")).unwrap().clone()),
         ("test-room top", room.clone(), room.view(Some("top")).unwrap().clone()),

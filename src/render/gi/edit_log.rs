@@ -3,7 +3,7 @@
 
 use crate::render::gpu_types::GiEdit;
 use crate::world::grid::BRICK_SIZE;
-use bevy::math::{IVec3, UVec3};
+use bevy::math::IVec3;
 use std::collections::VecDeque;
 
 /// Edited boxes remembered; older edits force a retrace of everything traced before them.
@@ -29,17 +29,17 @@ impl Default for EditLog {
 
 impl EditLog {
     /// Records this frame's edited bricks under a new epoch; whether anything was recorded.
-    pub fn record(&mut self, bricks: &[UVec3]) -> bool {
+    pub fn record(&mut self, bricks: &[IVec3]) -> bool {
         if bricks.is_empty() {
             return false;
         }
         self.epoch += 1;
         let edge = BRICK_SIZE;
         let boxes: Vec<(IVec3, IVec3)> = if bricks.len() <= BRICKS_LOGGED_APART {
-            bricks.iter().map(|b| (b.as_ivec3() * edge, (b.as_ivec3() + 1) * edge)).collect()
+            bricks.iter().map(|b| (*b * edge, (*b + 1) * edge)).collect()
         } else {
-            let lo = bricks.iter().fold(IVec3::MAX, |a, b| a.min(b.as_ivec3()));
-            let hi = bricks.iter().fold(IVec3::MIN, |a, b| a.max(b.as_ivec3()));
+            let lo = bricks.iter().fold(IVec3::MAX, |a, b| a.min(*b));
+            let hi = bricks.iter().fold(IVec3::MIN, |a, b| a.max(*b));
             vec![(lo * edge, (hi + 1) * edge)]
         };
         for (lo, hi) in boxes {
@@ -86,7 +86,7 @@ mod tests {
         let mut log = EditLog::default();
         assert!(!log.record(&[]), "no edit, no epoch");
         assert_eq!(log.epoch(), 1);
-        assert!(log.record(&[UVec3::new(1, 0, 2), UVec3::new(3, 1, 0)]));
+        assert!(log.record(&[IVec3::new(1, 0, 2), IVec3::new(3, 1, 0)]));
         assert_eq!((log.epoch(), log.count() as usize), (2, 2));
         let first = log.records()[0];
         assert_eq!((first.min, first.max, first.epoch), ([8, 0, 16], [16, 8, 24], 2));
@@ -95,7 +95,7 @@ mod tests {
     #[test]
     fn many_bricks_in_one_frame_become_their_bounding_box() {
         let mut log = EditLog::default();
-        let bricks: Vec<UVec3> = (0..=BRICKS_LOGGED_APART as u32).map(|i| UVec3::new(i, 1, 2)).collect();
+        let bricks: Vec<IVec3> = (0..=BRICKS_LOGGED_APART as i32).map(|i| IVec3::new(i, 1, 2)).collect();
         log.record(&bricks);
         assert_eq!(log.count() as usize, 1);
         let edit = log.records()[0];
@@ -106,11 +106,11 @@ mod tests {
     fn edits_that_fall_off_the_log_are_remembered_as_lost() {
         let mut log = EditLog::default();
         for i in 0..EDIT_LOG as u32 {
-            log.record(&[UVec3::new(i, 0, 0)]);
+            log.record(&[IVec3::new(i as i32, 0, 0)]);
         }
         assert_eq!((log.count() as usize, log.lost_epoch()), (EDIT_LOG, 0));
-        log.record(&[UVec3::ZERO]);
-        log.record(&[UVec3::ONE]);
+        log.record(&[IVec3::ZERO]);
+        log.record(&[IVec3::ONE]);
         // Epochs 2 and 3 (the first two edits) fell off.
         assert_eq!((log.count() as usize, log.lost_epoch(), log.epoch()), (EDIT_LOG, 3, EDIT_LOG as u32 + 3));
         assert_eq!(log.records()[0].epoch, 4);

@@ -73,6 +73,8 @@ pub struct FullWorld {
     pub pool_slots: u32,
     /// `VoxelWorld::detail_origin`.
     pub detail_origin: IVec3,
+    /// The window's lowest voxel and where its storage wraps (`BrickGrid::window`, `BrickGrid::wrap_base`).
+    pub window: (IVec3, IVec3),
 }
 
 /// This frame's changes for the GPU copy of the world.
@@ -90,6 +92,8 @@ pub struct WorldUpload {
     pub materials: Option<Arc<Vec<GpuMaterial>>>,
     /// The box of voxels that may hold a solid one, when an edit may have grown it.
     pub occupied: Option<(IVec3, IVec3)>,
+    /// The window's lowest voxel and where its storage wraps, with every edit (a scroll writes bricks).
+    pub window: Option<(IVec3, IVec3)>,
 }
 
 impl WorldUpload {
@@ -214,6 +218,7 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
             pool: Arc::new(pool),
             pool_slots,
             detail_origin: world.detail_origin,
+            window: (grid.window().0, grid.wrap_base()),
         }));
         state.world_instance = Some(world.instance);
         state.gpu_pool_slots = pool_slots;
@@ -235,6 +240,7 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
         let all = grid.occupancy().masks();
         upload.occupancy = masks.into_iter().map(|i| (i as u32, all[i])).chain(voxel_masks).collect();
         upload.occupied = Some(grid.occupied_box());
+        upload.window = Some((grid.window().0, grid.wrap_base()));
     }
     if replaced || state.palette.as_ref() != Some(&world.palette) {
         upload.materials = Some(Arc::new(gpu_materials(&world.palette)));
@@ -257,6 +263,8 @@ pub struct PendingUploads {
     edited: Vec<u32>,
     /// The occupied box an edit left, when the batch holds no full upload (else it is in `layout`).
     occupied: Option<(IVec3, IVec3)>,
+    /// The window a scroll left, likewise.
+    window: Option<(IVec3, IVec3)>,
     /// Bytes of the uploads a later full upload did not supersede (`WorldUpload::bytes`).
     bytes: u64,
 }
@@ -271,6 +279,7 @@ impl PendingUploads {
             self.pool.whole(full.pool.clone());
             self.edited.clear();
             self.occupied = None;
+            self.window = None;
             self.bytes = 0;
         }
         for &(index, raw) in &upload.top_cells {
@@ -284,6 +293,12 @@ impl PendingUploads {
             match &mut self.layout {
                 Some(layout) => *layout = layout.with_occupied(occupied),
                 None => self.occupied = Some(occupied),
+            }
+        }
+        if let Some(window) = upload.window {
+            match &mut self.layout {
+                Some(layout) => *layout = layout.with_window(window),
+                None => self.window = Some(window),
             }
         }
         for (slot, voxels) in &upload.bricks {
@@ -354,7 +369,7 @@ pub struct GpuWorld {
     /// Brick grid dimensions.
     pub brick_dims: UVec3,
     /// Bricks whose voxels changed this frame (the GI cache invalidates what their edits can reach).
-    pub edited_bricks: Vec<UVec3>,
+    pub edited_bricks: Vec<IVec3>,
     /// The whole world was replaced this frame.
     pub replaced: bool,
 }
@@ -441,6 +456,7 @@ pub fn world_info(full: &FullWorld, object_count: u32) -> WorldInfo {
         ..WorldInfo::default()
     }
     .with_occupied(full.occupied)
+    .with_window(full.window)
 }
 
 /// Brick grid position of a brick index (x fastest).
@@ -518,7 +534,7 @@ fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &
         bind_group,
         uploaded_bytes: batch.bytes,
         brick_dims,
-        edited_bricks: batch.edited.iter().map(|&i| brick_position(i, brick_dims)).collect(),
+        edited_bricks: batch.edited.iter().map(|&i| info.window_brick(brick_position(i, brick_dims))).collect(),
         replaced: true,
     })
 }
@@ -534,7 +550,10 @@ fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &World
     if let Some(occupied) = batch.occupied {
         gpu.info = gpu.info.with_occupied(occupied);
     }
-    if batch.layout.is_some() || batch.occupied.is_some() {
+    if let Some(window) = batch.window {
+        gpu.info = gpu.info.with_window(window);
+    }
+    if batch.layout.is_some() || batch.occupied.is_some() || batch.window.is_some() {
         queue.write_buffer(&gpu.info_buffer, 0, bytemuck::bytes_of(&gpu.info));
     }
     let mut rebind = sync(&mut batch.top_cells, &mut gpu.top_cells, TOP_CELLS, device, queue);
@@ -559,7 +578,8 @@ fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &World
             occupancy: &gpu.occupancy,
         });
     }
-    gpu.edited_bricks = batch.edited.iter().map(|&i| brick_position(i, gpu.brick_dims)).collect();
+    gpu.edited_bricks =
+        batch.edited.iter().map(|&i| gpu.info.window_brick(brick_position(i, gpu.brick_dims))).collect();
     gpu.uploaded_bytes = batch.bytes;
 }
 

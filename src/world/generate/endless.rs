@@ -8,9 +8,9 @@
 //! bounded world finds its one. A village is built once per cell into the ground it stands on and kept as the
 //! voxels it changed (its stamp); each region the stamp reaches takes its part.
 //!
-//! `window` puts regions around a point into one bounded world in the window's own coordinates, for `render
-//! --endless` and `reference --endless`; `world::stream` keeps regions resident around a moving point. Not here
-//! yet (issue 69): a GPU window that scrolls as the player moves, region saves.
+//! `window` puts regions around a point into one grid in the window's own coordinates, for `render --endless` and
+//! `reference --endless`, and `Window::scroll_to` moves it over the world, writing only the regions that entered
+//! (`BrickGrid::scroll_window`); `world::stream` keeps regions resident around a moving point.
 
 use super::columns::Ground;
 use super::land::{self, BLEND, Footprint, Land, VillageSite};
@@ -257,6 +257,52 @@ pub struct Window {
 }
 
 impl Window {
+    /// The region keys whose columns the window holds now, lowest first.
+    pub fn first_region(&self) -> IVec2 {
+        let lo = self.world.grid.window().0;
+        (self.min + IVec2::new(lo.x, lo.z)).div_euclid(IVec2::splat(REGION_EDGE))
+    }
+
+    /// Scrolls the window to the `regions` x `regions` regions around region `centre` (`regions` the window's own
+    /// count, even, so that it moves by whole occupancy regions of 128 voxels). Only the regions that entered are
+    /// asked of `make` (in one call, to make them in parallel) and written; every other brick stays where it is
+    /// (`BrickGrid::scroll_window`). The window's coordinates do not move: a point keeps its coordinates while
+    /// it stays in the window, so histories and caches keyed by position stay valid.
+    pub fn scroll_to(
+        &mut self,
+        centre: IVec2,
+        make: impl FnOnce(&[IVec2]) -> Result<Vec<VoxelWorld>, LoadError>,
+    ) -> Result<(), LoadError> {
+        let grid = &mut self.world.grid;
+        let regions = grid.size().x as i32 / REGION_EDGE;
+        let first = centre - regions / 2;
+        let lo = first * REGION_EDGE - self.min;
+        let (old_lo, _) = grid.window();
+        let new_lo = IVec3::new(lo.x, 0, lo.y);
+        let entered = crate::world::grid::BrickGrid::entered_boxes(grid.size(), old_lo, new_lo);
+        grid.scroll_window(new_lo)
+            .map_err(|e| LoadError { location: "the endless world's window".into(), message: e.to_string() })?;
+        let keys: Vec<IVec2> = entered
+            .iter()
+            .flat_map(|&(lo, hi)| {
+                let (a, b) = (lo.div_euclid(IVec3::splat(REGION_EDGE)), hi.div_euclid(IVec3::splat(REGION_EDGE)));
+                (a.z..b.z).flat_map(move |z| (a.x..b.x).map(move |x| IVec2::new(x, z)))
+            })
+            .collect();
+        let world_keys: Vec<IVec2> = keys.iter().map(|k| *k + self.min.div_euclid(IVec2::splat(REGION_EDGE))).collect();
+        let made = make(&world_keys)?;
+        for (key, region) in keys.iter().zip(&made) {
+            let at = *key * (REGION_EDGE / BRICK_SIZE);
+            let dims = region.grid.brick_dims().as_ivec3();
+            for b in
+                (0..dims.y).flat_map(|y| (0..dims.z).flat_map(move |z| (0..dims.x).map(move |x| IVec3::new(x, y, z))))
+            {
+                self.world.grid.put_brick(IVec3::new(at.x, 0, at.y) + b, &region.grid, b);
+            }
+        }
+        Ok(())
+    }
+
     /// A view given in world coordinates, in the window's.
     pub fn local_view(&self, view: &CameraView) -> CameraView {
         let offset = Vec3::new(self.min.x as f32, 0.0, self.min.y as f32);
@@ -406,6 +452,28 @@ mod tests {
             fov_deg: 60.0,
         };
         assert_eq!(window.local_view(&view).origin, [27.5, 40.0, 36.25]);
+    }
+
+    #[test]
+    fn a_scrolled_window_holds_what_a_window_made_there_holds() {
+        let generator = EndlessGenerator::new(3, 48).unwrap();
+        let mut window = generator.window(IVec2::new(5, -3), 4, None).unwrap();
+        let mut asked = Vec::new();
+        let make = |keys: &[IVec2]| {
+            asked.extend_from_slice(keys);
+            Ok(generator.regions(keys))
+        };
+        // Two regions along x and back along z: the storage now wraps inside the window on both axes.
+        window.scroll_to(IVec2::new(7, -5), make).unwrap();
+        assert_eq!(asked.len(), 4 * 4 - 2 * 2, "only the regions that entered are made");
+        let fresh = generator.window(IVec2::new(7, -5), 4, None).unwrap();
+        assert_eq!(window.first_region(), fresh.first_region());
+        let (lo, hi) = window.world.grid.window();
+        let offset = IVec3::new(window.min.x - fresh.min.x, 0, window.min.y - fresh.min.y);
+        assert!(window.world.grid.read_box(lo, hi) == fresh.world.grid.read_box(lo + offset, hi + offset));
+        assert_eq!(window.world.grid.pooled_bricks(), fresh.world.grid.pooled_bricks());
+        // Half an occupancy region is not a step a window can take.
+        assert!(window.scroll_to(IVec2::new(8, -5), |keys| Ok(generator.regions(keys))).is_err());
     }
 
     #[test]
