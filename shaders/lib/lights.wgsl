@@ -4,7 +4,7 @@
 #define_import_path glowbrick::lights
 
 #import glowbrick::traversal::{trace_scene, INF}
-#import glowbrick::world::{world_info, stored_index}
+#import glowbrick::world::{world_info, stored_index, brick_in_window}
 #import glowbrick::random::{Rng, rng_next, rng_next_u32}
 #import glowbrick::constants::{RAY_OFFSET, PI, LIGHT_FACES_SHIFT, LIGHT_SIZE_MASK, BRICK_SIZE, BRICK_SHIFT, NO_COLUMN, LIGHT_HASH_X,
     LIGHT_HASH_Y, LIGHT_HASH_Z, LIGHT_HASH_MIX_1, LIGHT_HASH_MIX_2, KEY_GENERIC, KEY_LIGHTING, KEY_SHADOWS, KEY_POWER_PICK}
@@ -237,12 +237,10 @@ fn light_at_voxel(p: vec3<i32>) -> u32 {
 
 // Whether brick b holds a light: one whose cube lies in it, so no voxel outside such bricks belongs to a light.
 fn brick_has_light(b: vec3<i32>) -> bool {
-    let dims = world_info.bricks;
-    let q = b - (world_info.window_lo >> vec3(BRICK_SHIFT));
-    if any(q < vec3(0)) || any(q >= dims) {
+    if !brick_in_window(b) {
         return false;
     }
-    let i = stored_index(b, dims, BRICK_SHIFT);
+    let i = stored_index(b, world_info.bricks, BRICK_SHIFT);
     return ((light_index[1u + light_index[0] + (i >> 5u)] >> (i & 31u)) & 1u) == 1u;
 }
 

@@ -268,7 +268,7 @@ fn any_bits(m: vec2<u32>, pattern: vec2<u32>, base: u32) -> bool {
 // The index of the mask of the level-`shift` cell (bricks, sectors, regions) holding voxel v, in its level's part
 // of `occupancy`.
 fn mask_index(v: vec3<i32>, dims: vec3<i32>, shift: u32) -> u32 {
-    return stored_index(v >> vec3(shift), dims, shift - BRICK_SHIFT);
+    return stored_index(v >> vec3(shift), dims, shift);
 }
 
 // traversal=occupancy: one move per step, as `trace_occupancy_counted` in src/world/traversal.rs: the ray is in

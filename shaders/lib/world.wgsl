@@ -28,11 +28,13 @@ struct WorldInfo {
     // The world coordinates of voxel (0, 0, 0): per-voxel detail hashes world coordinates.
     detail_origin: vec3<i32>,
     _pad_detail: u32,
-    // The window's lowest voxel (zero in a bounded world) and the voxel stored first before the wrap: a brick (a
-    // sector, a region) is stored at its offset from wrap_base, less the grid where that reaches past it, so an
-    // endless world's scroll rewrites only the bricks that entered (BrickGrid::scroll_window).
+    // The window's voxels [window_lo, window_hi) ([0, size) in a bounded world) and the voxel stored first before
+    // the wrap: a brick (a sector, a region) is stored at its offset from wrap_base, less the grid where that
+    // reaches past it, so an endless world's scroll rewrites only the bricks that enter (BrickGrid::begin_scroll).
     window_lo: vec3<i32>,
-    _pad_window: u32,
+    _pad_window_lo: u32,
+    window_hi: vec3<i32>,
+    _pad_window_hi: u32,
     wrap_base: vec3<i32>,
     _pad_wrap: u32,
 }
@@ -124,18 +126,23 @@ fn stored_index(c: vec3<i32>, dims: vec3<i32>, shift: u32) -> u32 {
     return u32(w.x + dims.x * (w.y + dims.y * w.z));
 }
 
+// Whether brick `brick` holds a voxel of the window.
+fn brick_in_window(brick: vec3<i32>) -> bool {
+    let lo = world_info.window_lo >> vec3(BRICK_SHIFT);
+    let hi = (world_info.window_hi + vec3(BRICK_SIZE - 1)) >> vec3(BRICK_SHIFT);
+    return all(brick >= lo) && all(brick < hi);
+}
+
 fn brick_cell(brick: vec3<i32>) -> u32 {
-    let b = world_info.bricks;
-    let q = brick - (world_info.window_lo >> vec3(BRICK_SHIFT));
-    if any(q < vec3(0)) || any(q >= b) {
+    if !brick_in_window(brick) {
         return 0u;
     }
-    return top_cells[stored_index(brick, b, BRICK_SHIFT)];
+    return top_cells[stored_index(brick, world_info.bricks, BRICK_SHIFT)];
 }
 
 // The window's voxels are [window_lo, window_hi()).
 fn window_hi() -> vec3<i32> {
-    return world_info.window_lo + world_info.size;
+    return world_info.window_hi;
 }
 
 // The voxel id inside a pooled brick slot.

@@ -1,24 +1,35 @@
 //! `glowbrick bench --travel`: a straight flight across the endless world at the game's top flying speed, in
-//! real time, with the regions around the player streamed by `world::stream` (a window of 17 x 17 regions, 1088
-//! voxels). Reports the time to fill the first window, regions made per second, the longest time the main
-//! thread spent on streaming in one 60 Hz tick, the ticks where a region within the view reach (4 regions,
-//! 256 voxels) was not yet made, the resident regions and the process's resident memory over the trip. The CPU
-//! side only: the GPU upload of the regions that arrive is the scrolling window's, still to come (issue 69).
+//! real time, through the game's window: 16 x 16 regions (1024 voxels) that scroll after the player
+//! (`world::follow`), fed by regions streamed on worker threads `RADIUS` regions around it, with the light pool
+//! following and each tick's GPU upload staged as the game stages it. Reports the time to make the first window,
+//! regions made per second, scrolls, the longest time the main thread spent on the window in one 60 Hz tick
+//! (streaming, scrolling, the light pool and the upload's staging), the upload bytes per tick, the ticks where
+//! the window did not reach the view (4 regions, 256 voxels) ahead, and the process's resident memory over the
+//! trip. No GPU: the bytes are what the renderer would write.
 
 use crate::game::player::TOP_FLYING_SPEED;
+use crate::lights::LightPool;
+use crate::lights::window::WindowLights;
+use crate::render::scene::world::{UploadState, stage_upload};
 use crate::stress::memory::resident_bytes;
+use crate::world::follow::WindowFollower;
 use crate::world::generate::endless::{DEFAULT_HEIGHT, EndlessGenerator, REGION_EDGE};
-use crate::world::stream::RegionStreamer;
-use bevy::math::{DVec2, IVec2};
+use bevy::math::{DVec2, IVec2, Vec3};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// Regions each side of the player's that stay resident.
-const RADIUS: i32 = 8;
+/// Regions each side of the player's that stay resident: a scroll step (2) past the window's half (8), so the
+/// regions a scroll takes in are made before it.
+pub const RADIUS: i32 = 10;
+/// The window's edge in regions: the game's 1024 voxels.
+pub const WINDOW_REGIONS: i32 = 16;
 /// Regions each side of the player's that must be there: the view the player sees.
 const VIEW_REACH: i32 = 4;
 const TICK: Duration = Duration::from_micros(16_667);
+/// A tick's time for writing the regions of a scroll under way, and for lighting the ones a scroll brought in.
+pub const WRITE_BUDGET: Duration = Duration::from_millis(3);
+pub const LIGHT_BUDGET: Duration = Duration::from_millis(2);
 
 #[derive(Clone, Debug)]
 pub struct TravelConfig {
@@ -60,8 +71,14 @@ pub struct TravelReport {
     pub first_window_s: f64,
     pub flight_s: f64,
     pub ticks: u64,
-    /// Ticks where a region within VIEW_REACH of the player was missing.
+    /// Ticks where the window did not hold every region within VIEW_REACH of the player's.
     pub ticks_unfilled: u64,
+    pub scrolls: u64,
+    /// Regions the scrolls wrote into the window.
+    pub regions_scrolled: usize,
+    /// The most bytes one tick's upload would write to the GPU, and all of them over the flight.
+    pub upload_max: u64,
+    pub upload_total: u64,
     /// Regions that arrived during the flight (the first window's not counted).
     pub regions_made: usize,
     pub longest_update_ms: f64,
@@ -82,29 +99,38 @@ pub fn run_travel(config: &TravelConfig) -> Result<TravelReport, String> {
     let generator = Arc::new(EndlessGenerator::new(config.seed, DEFAULT_HEIGHT)?);
     let start_point =
         generator.village_site(IVec2::ZERO).map_or(DVec2::ZERO, |s| DVec2::new(s.centre.0 as f64, s.centre.1 as f64));
-    let mut streamer = RegionStreamer::new(generator, RADIUS, config.workers);
     let mut report = TravelReport { resident_min: usize::MAX, ..Default::default() };
     let begin = Instant::now();
     let first = region_at(start_point);
-    while !streamer.filled(first, RADIUS) {
-        streamer.update(first);
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    let (mut follower, window) = WindowFollower::start(generator, first, WINDOW_REGIONS, RADIUS, config.workers);
+    let (mut world, min) = (window.world, window.min);
+    let mut lights = LightPool::from_world(&world);
+    let mut window_lights = WindowLights::default();
+    let mut uploads = UploadState::default();
+    stage_upload(&mut world, &mut uploads);
     report.first_window_s = begin.elapsed().as_secs_f64();
+    let local = |p: DVec2| Vec3::new((p.x - min.x as f64) as f32, 0.0, (p.y - min.y as f64) as f32);
     let flight = Instant::now();
     let seconds = config.distance / config.speed;
     let mut next_tick = Instant::now();
     loop {
         let t = flight.elapsed().as_secs_f64();
         let at = start_point + config.direction * config.speed * t.min(seconds);
-        let update = Instant::now();
-        let step = streamer.update(region_at(at));
-        report.longest_update_ms = report.longest_update_ms.max(update.elapsed().as_secs_f64() * 1e3);
-        report.regions_made += step.arrived;
+        let tick = Instant::now();
+        let followed = follower.follow(&mut world, local(at), WRITE_BUDGET);
+        window_lights.followed(&mut lights, &world, &followed);
+        window_lights.update(&mut lights, &world, LIGHT_BUDGET);
+        report.scrolls += u64::from(followed.finished.is_some());
+        report.regions_scrolled += followed.regions_written;
+        let bytes = stage_upload(&mut world, &mut uploads).bytes();
+        report.longest_update_ms = report.longest_update_ms.max(tick.elapsed().as_secs_f64() * 1e3);
+        report.upload_max = report.upload_max.max(bytes);
+        report.upload_total += bytes;
+        report.regions_made += followed.stream.arrived;
         report.ticks += 1;
-        report.ticks_unfilled += u64::from(!streamer.filled(region_at(at), VIEW_REACH));
-        report.resident_min = report.resident_min.min(streamer.resident_count());
-        report.resident_max = report.resident_max.max(streamer.resident_count());
+        report.ticks_unfilled += u64::from(!window_reaches(&follower, &world, region_at(at)));
+        report.resident_min = report.resident_min.min(follower.resident_count());
+        report.resident_max = report.resident_max.max(follower.resident_count());
         let rss = resident_bytes().unwrap_or(0);
         if t < 60.0 {
             report.rss_first_minute = report.rss_first_minute.max(rss);
@@ -122,23 +148,33 @@ pub fn run_travel(config: &TravelConfig) -> Result<TravelReport, String> {
     Ok(report)
 }
 
+/// Whether the window holds every region within VIEW_REACH of region `here`.
+fn window_reaches(follower: &WindowFollower, world: &crate::world::VoxelWorld, here: IVec2) -> bool {
+    let first = follower.centre(world) - WINDOW_REGIONS / 2;
+    let last = first + WINDOW_REGIONS - 1;
+    (here - VIEW_REACH).cmpge(first).all() && (here + VIEW_REACH).cmple(last).all()
+}
+
 pub fn travel_markdown(config: &TravelConfig, r: &TravelReport) -> String {
     let mb = |b: u64| b as f64 / 1e6;
-    let edge = (2 * RADIUS + 1) * REGION_EDGE;
+    let edge = WINDOW_REGIONS * REGION_EDGE;
     format!(
         "# Travel: the endless world streamed around a straight flight\n\n\
          Seed {}, from the first village, {:.0} voxels at {:.0} voxels/s in direction ({:.2}, {:.2}), real time \
-         at 60 ticks a second; {} worker threads; regions of {REGION_EDGE} x {DEFAULT_HEIGHT} x {REGION_EDGE} kept \
-         resident {RADIUS} regions each side ({edge} voxels across); the view reach that must be made: {VIEW_REACH} \
-         regions each side. The CPU side only (generation and the resident set): the GPU upload is the scrolling \
-         window's, not built yet.\n\n\
+         at 60 ticks a second; {} worker threads; regions of {REGION_EDGE} x {DEFAULT_HEIGHT} x {REGION_EDGE}; the \
+         game's window of {WINDOW_REGIONS} x {WINDOW_REGIONS} regions ({edge} voxels across) scrolling after the \
+         player, fed by regions made {RADIUS} regions each side of it; the view reach the window must hold: \
+         {VIEW_REACH} regions each side. Main thread: streaming, scrolling, the light pool and staging the GPU \
+         upload (no GPU: the bytes are what the renderer would write).\n\n\
          | measure | value |\n|---|---|\n\
          | first window ({} regions) made in | {:.2} s |\n\
          | flight | {:.1} s, {} ticks |\n\
          | regions made during the flight | {} ({:.1} a second) |\n\
-         | ticks with a region in view reach missing | {} |\n\
-         | longest main-thread streaming update in a tick | {:.2} ms |\n\
-         | resident regions | {} - {} |\n\
+         | scrolls / regions they wrote | {} / {} |\n\
+         | ticks with the view reach outside the window | {} |\n\
+         | longest main-thread time on the window in a tick | {:.2} ms |\n\
+         | GPU upload: most in a tick / mean a tick | {:.2} MB / {:.1} KB |\n\
+         | resident regions (the streamer's) | {} - {} |\n\
          | resident memory: first minute / after / end | {:.0} / {:.0} / {:.0} MB |\n",
         config.seed,
         config.distance,
@@ -146,14 +182,18 @@ pub fn travel_markdown(config: &TravelConfig, r: &TravelReport) -> String {
         config.direction.x,
         config.direction.y,
         config.workers,
-        (2 * RADIUS + 1).pow(2),
+        WINDOW_REGIONS.pow(2),
         r.first_window_s,
         r.flight_s,
         r.ticks,
         r.regions_made,
         r.regions_made as f64 / r.flight_s.max(1e-9),
+        r.scrolls,
+        r.regions_scrolled,
         r.ticks_unfilled,
         r.longest_update_ms,
+        mb(r.upload_max),
+        r.upload_total as f64 / r.ticks.max(1) as f64 / 1e3,
         r.resident_min,
         r.resident_max,
         mb(r.rss_first_minute),

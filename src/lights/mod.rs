@@ -15,6 +15,7 @@ pub mod daylight;
 pub mod index;
 pub mod plugin;
 pub mod summary;
+pub mod window;
 
 pub use alias::{AliasEntry, AliasTable};
 pub use bricks::LightBricks;

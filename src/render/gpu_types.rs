@@ -42,13 +42,30 @@ pub struct WorldInfo {
     /// coordinates, so a window of the endless world shades each voxel as it would anywhere else.
     pub detail_origin: [i32; 3],
     pub _pad_detail: u32,
-    /// The window's lowest voxel (`BrickGrid::window`; zero in a bounded world) and the voxel stored first before
-    /// the wrap (`BrickGrid::wrap_base`): a brick is stored at its offset from `wrap_base`, less the grid where
-    /// that reaches past it, so a scroll rewrites only the bricks that entered.
+    /// The window's voxels `[window_lo, window_hi)` (`BrickGrid::window`; `[0, size)` in a bounded world) and the
+    /// voxel stored first before the wrap (`BrickGrid::wrap_base`): a brick is stored at its offset from
+    /// `wrap_base`, less the grid where that reaches past it, so a scroll rewrites only the bricks that enter.
     pub window_lo: [i32; 3],
-    pub _pad_window: u32,
+    pub _pad_window_lo: u32,
+    pub window_hi: [i32; 3],
+    pub _pad_window_hi: u32,
     pub wrap_base: [i32; 3],
     pub _pad_wrap: u32,
+}
+
+/// A grid's window and where its storage wraps (`BrickGrid::window`, `BrickGrid::wrap_base`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GridWindow {
+    pub lo: bevy::math::IVec3,
+    pub hi: bevy::math::IVec3,
+    pub wrap_base: bevy::math::IVec3,
+}
+
+impl GridWindow {
+    pub fn of(grid: &crate::world::grid::BrickGrid) -> Self {
+        let (lo, hi) = grid.window();
+        GridWindow { lo, hi, wrap_base: grid.wrap_base() }
+    }
 }
 
 /// All zero but the pool's part shift: a pool in one buffer (a shift of 0 would put every slot in a part of its own).
@@ -64,16 +81,14 @@ impl WorldInfo {
         WorldInfo { occupied_lo: lo.to_array(), occupied_hi: hi.to_array(), ..self }
     }
 
-    /// This info with the window starting at `lo`, stored from `wrap_base` (`BrickGrid::window`, `wrap_base`).
-    pub fn with_window(self, (lo, wrap_base): (bevy::math::IVec3, bevy::math::IVec3)) -> Self {
-        WorldInfo { window_lo: lo.to_array(), wrap_base: wrap_base.to_array(), ..self }
-    }
-
-    /// The brick coordinates (inside the window) of the brick stored at `storage` (as `BrickGrid::brick_coord`).
-    pub fn window_brick(&self, storage: bevy::math::UVec3) -> bevy::math::IVec3 {
-        use bevy::math::IVec3;
-        let b: IVec3 = storage.as_ivec3() + (IVec3::from_array(self.wrap_base) >> 3_i32);
-        IVec3::select(b.cmplt(IVec3::from_array(self.window_lo) >> 3_i32), b + IVec3::from_array(self.bricks), b)
+    /// This info with the window `[lo, hi)` stored from `wrap_base` (`BrickGrid::window`, `wrap_base`).
+    pub fn with_window(self, window: GridWindow) -> Self {
+        WorldInfo {
+            window_lo: window.lo.to_array(),
+            window_hi: window.hi.to_array(),
+            wrap_base: window.wrap_base.to_array(),
+            ..self
+        }
     }
 }
 
@@ -305,7 +320,7 @@ pub const GI_EMPTY_WORK: [u32; GI_WORK_WORDS as usize] = {
 };
 
 // The shaders read these structs at exactly these sizes (WGSL alignment rules included).
-const _: () = assert!(size_of::<WorldInfo>() == 144);
+const _: () = assert!(size_of::<WorldInfo>() == 160);
 const _: () = assert!(size_of::<GpuMaterial>() == 32);
 const _: () = assert!(size_of::<GpuObject>() == 48);
 const _: () = assert!(size_of::<GpuLight>() == 32);

@@ -71,11 +71,15 @@ pub struct BrickGrid {
     dirty: BTreeSet<u32>,
     /// Which cells of every level hold a solid voxel, kept current on every change (`world::occupancy`).
     occupancy: Occupancy,
-    /// The lowest voxel of the window the grid holds: zero for a bounded world. An endless world's window moves
-    /// it as the player travels (`scroll_window`); voxels are stored at their coordinates modulo the size, so a
-    /// scroll leaves every brick that stays where it is and only the bricks that entered are written.
-    window_lo: IVec3,
-    /// `window_lo` rounded down to a multiple of the size: a coordinate's storage is its offset from here, less
+    /// The voxels `[lo, hi)` of the window the grid holds, the ones it reads and traces: `[0, size)` for a bounded
+    /// world. An endless world's window moves as the player travels (`scroll_window`); voxels are stored at their
+    /// coordinates modulo the size, so a scroll leaves every brick that stays where it is and writes only the
+    /// bricks that enter.
+    window: (IVec3, IVec3),
+    /// The lowest voxel of the box of `size` the storage holds now: the window itself, or while a scroll is
+    /// under way (`begin_scroll`) the window it goes to, whose entering bricks are written outside the window.
+    ring_lo: IVec3,
+    /// `ring_lo` rounded down to a multiple of the size: a coordinate's storage is its offset from here, less
     /// the size where that reaches past it.
     wrap_base: IVec3,
 }
@@ -145,7 +149,8 @@ impl BrickGrid {
             free_slots: Vec::new(),
             dirty: BTreeSet::new(),
             occupancy: Occupancy::new(bricks),
-            window_lo: IVec3::ZERO,
+            window: (IVec3::ZERO, size.as_ivec3()),
+            ring_lo: IVec3::ZERO,
             wrap_base: IVec3::ZERO,
         }
     }
@@ -162,14 +167,13 @@ impl BrickGrid {
     /// Whether voxel `p` lies in the window the grid holds (`[0, size)` for a bounded world).
     #[inline]
     pub fn contains(&self, p: IVec3) -> bool {
-        let q = p - self.window_lo;
-        q.cmpge(IVec3::ZERO).all() && q.cmplt(self.size.as_ivec3()).all()
+        p.cmpge(self.window.0).all() && p.cmplt(self.window.1).all()
     }
 
     /// The voxels `[lo, hi)` the grid holds: `[0, size)` for a bounded world, wherever an endless world's window
     /// has scrolled to.
     pub fn window(&self) -> (IVec3, IVec3) {
-        (self.window_lo, self.window_lo + self.size.as_ivec3())
+        self.window
     }
 
     /// The voxel coordinates of storage voxel (0, 0, 0) before the wrap (`wrap_base`), for the GPU's copy.
@@ -186,46 +190,67 @@ impl BrickGrid {
         IVec3::select(s.cmpge(dims), s - dims, s)
     }
 
-    /// Index of the brick cell holding brick coordinate `b` (must be inside the window).
+    /// Index of the brick cell holding brick coordinate `b` (must be inside `storage_box`).
     #[inline]
     pub fn brick_index(&self, b: IVec3) -> usize {
         let s = self.storage_brick(b);
         (s.x as u32 + self.bricks.x * (s.y as u32 + self.bricks.y * s.z as u32)) as usize
     }
 
-    /// Brick coordinate (inside the window) of a brick index.
+    /// Brick coordinate (inside `storage_box`) of a brick index.
     pub fn brick_coord(&self, index: u32) -> IVec3 {
         let x = index % self.bricks.x;
         let y = (index / self.bricks.x) % self.bricks.y;
         let z = index / (self.bricks.x * self.bricks.y);
         let b = IVec3::new(x as i32, y as i32, z as i32) + (self.wrap_base >> 3_i32);
-        IVec3::select(b.cmplt(self.window_lo >> 3_i32), b + self.bricks.as_ivec3(), b)
+        IVec3::select(b.cmplt(self.ring_lo >> 3_i32), b + self.bricks.as_ivec3(), b)
     }
 
     /// The decoded top cell of brick coordinate `b`, or `Empty` outside the window.
     #[inline]
     pub fn cell(&self, b: IVec3) -> BrickCell {
-        let q = b - (self.window_lo >> 3_i32);
-        if q.cmplt(IVec3::ZERO).any() || q.cmpge(self.bricks.as_ivec3()).any() {
+        let (lo, hi) = self.window;
+        if b.cmplt(lo >> 3_i32).any() || b.cmpge((hi + BRICK_SIZE - 1) >> 3_i32).any() {
             return BrickCell::Empty;
         }
         BrickCell::decode(self.top[self.brick_index(b)])
     }
 
-    /// Moves the window to start at voxel `lo` (x and z multiples of `WINDOW_STEP`, y 0; the size's x and z too).
-    /// Every brick inside both windows keeps its voxels and its storage; each brick that entered still holds the
-    /// voxels of the brick that left its storage until the caller writes it (`put_brick`), so the caller writes
-    /// every brick of `entered_boxes` before anything reads them.
+    /// Moves the window to start at voxel `lo` (x and z multiples of `WINDOW_STEP`, y 0; the size's x and z too):
+    /// `begin_scroll` and `finish_scroll` at once. The caller writes every brick of `entered_boxes` (`put_brick`)
+    /// before anything reads them.
     pub fn scroll_window(&mut self, lo: IVec3) -> Result<(), BadScroll> {
+        self.begin_scroll(lo)?;
+        self.finish_scroll();
+        Ok(())
+    }
+
+    /// Starts moving the window to start at voxel `lo`: the window shrinks to what the old and new ones share
+    /// (the bricks that leave are no longer read), and the storage is the new window's, so the bricks that enter
+    /// can be written (`put_brick`, over the storage of those that left) a few at a time while the window shows
+    /// only what it already held. Every brick inside both windows keeps its voxels and its storage.
+    pub fn begin_scroll(&mut self, lo: IVec3) -> Result<(), BadScroll> {
         let size = self.size.as_ivec3();
         let step_ok = |v: i32| v.rem_euclid(WINDOW_STEP) == 0;
         if !(step_ok(lo.x) && step_ok(lo.z) && step_ok(size.x) && step_ok(size.z) && lo.y == 0) {
             return Err(BadScroll { to: lo, size: self.size });
         }
-        self.window_lo = lo;
+        let shared_lo = self.window.0.max(lo);
+        self.window = (shared_lo, self.window.1.min(lo + size).max(shared_lo));
+        self.ring_lo = lo;
         self.wrap_base = IVec3::new(lo.x.div_euclid(size.x) * size.x, 0, lo.z.div_euclid(size.z) * size.z);
         self.occupancy.set_wrap_base(self.wrap_base >> 3_i32);
         Ok(())
+    }
+
+    /// Ends a scroll: the window is the whole of what the storage holds.
+    pub fn finish_scroll(&mut self) {
+        self.window = (self.ring_lo, self.ring_lo + self.size.as_ivec3());
+    }
+
+    /// The box of `size` the storage holds: the window, or the one a scroll under way goes to.
+    pub fn storage_box(&self) -> (IVec3, IVec3) {
+        (self.ring_lo, self.ring_lo + self.size.as_ivec3())
     }
 
     /// The boxes of voxels in the window starting at `new_lo` that the window starting at `old_lo` did not hold
@@ -258,8 +283,8 @@ impl BrickGrid {
         boxes
     }
 
-    /// Makes brick `b` (inside the window) what `source`'s brick `from` is, whatever it held: the way a scroll
-    /// writes the bricks that entered (an empty or uniform brick frees its pool slot, as an edit would).
+    /// Makes brick `b` (inside `storage_box`) what `source`'s brick `from` is, whatever it held: the way a scroll
+    /// writes the bricks that enter (an empty or uniform brick frees its pool slot, as an edit would).
     pub fn put_brick(&mut self, b: IVec3, source: &BrickGrid, from: IVec3) {
         match source.cell(from) {
             BrickCell::Empty => self.put_uniform(b, AIR),

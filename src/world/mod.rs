@@ -4,6 +4,7 @@ pub mod camera;
 pub mod cell_map;
 pub mod edit;
 pub mod events;
+pub mod follow;
 pub mod font;
 pub mod format;
 pub mod generate;

@@ -160,6 +160,7 @@ fn twins() -> Vec<Twin> {
                 occupied_hi,
                 detail_origin,
                 window_lo,
+                window_hi,
                 wrap_base
             }
         ),

@@ -236,3 +236,52 @@ fn the_light_pool_follows_the_window() {
         }
     }
 }
+
+/// `WindowFollower` scrolls the window after a moving point once the regions that enter are made, two regions at
+/// a time, and the window it leaves is voxel for voxel the window made at its centre.
+#[test]
+fn the_follower_scrolls_the_window_after_the_player() {
+    use bevy::math::IVec2;
+    use glowbrick::world::follow::{SCROLL_REGIONS, WindowFollower};
+    use glowbrick::world::generate::endless::{EndlessGenerator, REGION_EDGE};
+    use std::sync::Arc;
+
+    let generator = Arc::new(EndlessGenerator::new(4, 48).unwrap());
+    let start = IVec2::new(-3, 7);
+    let (mut follower, window) = WindowFollower::start(generator.clone(), start, 4, 3, 2);
+    let (mut world, min) = (window.world, window.min);
+    assert_eq!(follower.centre(&world), start);
+    // One region on along x and z: no scroll (the step is two).
+    let near = Vec3::new(2.5 * REGION_EDGE as f32 + 3.0, 30.0, 2.5 * REGION_EDGE as f32 + 3.0);
+    let budget = std::time::Duration::from_millis(3);
+    let once = follower.follow(&mut world, near, budget);
+    assert!(once.began.is_none() && once.finished.is_none());
+    // Three regions on along x, one back along z: the window moves two regions along x once they are made.
+    let far = Vec3::new(5.5 * REGION_EDGE as f32, 30.0, 1.5 * REGION_EDGE as f32);
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    let (mut began, mut written, mut ticks) = (None, 0, 0);
+    let scroll = loop {
+        let followed = follower.follow(&mut world, far, budget);
+        began = began.or(followed.began);
+        written += followed.regions_written;
+        if began.is_some() && followed.finished.is_none() {
+            ticks += 1;
+            // Under way: the window is what the old and new ones share, the regions being written outside it.
+            let (lo, hi) = world.grid.window();
+            assert_eq!((hi - lo).x, 2 * REGION_EDGE, "tick {ticks}: the window shrank to the shared part");
+        }
+        if let Some(scroll) = followed.finished {
+            break scroll;
+        }
+        assert!(std::time::Instant::now() < deadline, "the regions to scroll in were never made");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    };
+    assert_eq!(follower.centre(&world), start + IVec2::new(SCROLL_REGIONS, 0));
+    assert_eq!(scroll.keys.len(), 2 * 4, "a strip of two regions by the window's four");
+    assert_eq!(Some(&scroll), began.as_ref(), "the scroll finished is the one begun");
+    assert_eq!(written, 8, "each region written once");
+    let fresh = generator.window(follower.centre(&world), 4, None).unwrap();
+    let (lo, hi) = world.grid.window();
+    let offset = IVec3::new(min.x - fresh.min.x, 0, min.y - fresh.min.y);
+    assert!(world.grid.read_box(lo, hi) == fresh.world.grid.read_box(lo + offset, hi + offset));
+}

@@ -7,7 +7,7 @@ use super::counters::{COUNTER_BINDINGS, GpuCountersBuffer};
 use super::objects::{GpuObjects, OBJECT_BINDINGS};
 use super::staging::{BufferOp, Fit, Mirrored, Staging, sync, upload};
 use super::storage_buffer;
-use crate::render::gpu_types::{GpuMaterial, ONE_POOL_PART, WorldInfo};
+use crate::render::gpu_types::{GpuMaterial, GridWindow, ONE_POOL_PART, WorldInfo};
 use crate::render::interface::{GpuBinding, GroupInterface};
 use crate::world::grid::{BRICK_VOXELS, BrickCell, Voxel};
 use crate::world::occupancy::VOXEL_MASK_WORDS;
@@ -73,8 +73,8 @@ pub struct FullWorld {
     pub pool_slots: u32,
     /// `VoxelWorld::detail_origin`.
     pub detail_origin: IVec3,
-    /// The window's lowest voxel and where its storage wraps (`BrickGrid::window`, `BrickGrid::wrap_base`).
-    pub window: (IVec3, IVec3),
+    /// The window and where its storage wraps.
+    pub window: GridWindow,
 }
 
 /// This frame's changes for the GPU copy of the world.
@@ -92,8 +92,10 @@ pub struct WorldUpload {
     pub materials: Option<Arc<Vec<GpuMaterial>>>,
     /// The box of voxels that may hold a solid one, when an edit may have grown it.
     pub occupied: Option<(IVec3, IVec3)>,
-    /// The window's lowest voxel and where its storage wraps, with every edit (a scroll writes bricks).
-    pub window: Option<(IVec3, IVec3)>,
+    /// The window and where its storage wraps, with every edit (a scroll writes bricks).
+    pub window: Option<GridWindow>,
+    /// The bricks (window coordinates) of `top_cells`, in its order: what the GI cache's edit log is told.
+    pub edited_bricks: Vec<IVec3>,
 }
 
 impl WorldUpload {
@@ -218,7 +220,7 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
             pool: Arc::new(pool),
             pool_slots,
             detail_origin: world.detail_origin,
-            window: (grid.window().0, grid.wrap_base()),
+            window: GridWindow::of(grid),
         }));
         state.world_instance = Some(world.instance);
         state.gpu_pool_slots = pool_slots;
@@ -230,6 +232,7 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
         for index in grid.take_dirty() {
             let raw = grid.top_cells()[index as usize];
             upload.top_cells.push((index, raw));
+            upload.edited_bricks.push(grid.brick_coord(index));
             masks.extend(grid.occupancy().indices_of_brick(index as usize, grid.brick_coord(index)));
             if let BrickCell::Pooled(slot) = BrickCell::decode(raw) {
                 upload.bricks.push((slot, Arc::from(grid.pool_brick(slot))));
@@ -240,7 +243,7 @@ pub fn stage_upload(world: &mut VoxelWorld, state: &mut UploadState) -> WorldUpl
         let all = grid.occupancy().masks();
         upload.occupancy = masks.into_iter().map(|i| (i as u32, all[i])).chain(voxel_masks).collect();
         upload.occupied = Some(grid.occupied_box());
-        upload.window = Some((grid.window().0, grid.wrap_base()));
+        upload.window = Some(GridWindow::of(grid));
     }
     if replaced || state.palette.as_ref() != Some(&world.palette) {
         upload.materials = Some(Arc::new(gpu_materials(&world.palette)));
@@ -259,12 +262,12 @@ pub struct PendingUploads {
     occupancy: Staging<u64>,
     pool: Staging<Voxel>,
     materials: Staging<GpuMaterial>,
-    /// Brick indices whose top cell changed after the latest full upload.
-    edited: Vec<u32>,
+    /// Bricks (window coordinates) whose top cell changed after the latest full upload.
+    edited: Vec<IVec3>,
     /// The occupied box an edit left, when the batch holds no full upload (else it is in `layout`).
     occupied: Option<(IVec3, IVec3)>,
     /// The window a scroll left, likewise.
-    window: Option<(IVec3, IVec3)>,
+    window: Option<GridWindow>,
     /// Bytes of the uploads a later full upload did not supersede (`WorldUpload::bytes`).
     bytes: u64,
 }
@@ -284,8 +287,8 @@ impl PendingUploads {
         }
         for &(index, raw) in &upload.top_cells {
             self.top_cells.range(index as u64, &[raw]);
-            self.edited.push(index);
         }
+        self.edited.extend_from_slice(&upload.edited_bricks);
         for &(index, mask) in &upload.occupancy {
             self.occupancy.range(index as u64, &[mask]);
         }
@@ -459,11 +462,6 @@ pub fn world_info(full: &FullWorld, object_count: u32) -> WorldInfo {
     .with_window(full.window)
 }
 
-/// Brick grid position of a brick index (x fastest).
-fn brick_position(index: u32, dims: UVec3) -> UVec3 {
-    UVec3::new(index % dims.x, index / dims.x % dims.y, index / (dims.x * dims.y))
-}
-
 /// Applies the queued uploads to the GPU buffers (creating them on the first full upload).
 #[allow(clippy::too_many_arguments)]
 pub fn prepare_gpu_world(
@@ -534,7 +532,7 @@ fn create_gpu_world(batch: &mut PendingUploads, binding: &WorldBinding, queue: &
         bind_group,
         uploaded_bytes: batch.bytes,
         brick_dims,
-        edited_bricks: batch.edited.iter().map(|&i| info.window_brick(brick_position(i, brick_dims))).collect(),
+        edited_bricks: std::mem::take(&mut batch.edited),
         replaced: true,
     })
 }
@@ -578,8 +576,7 @@ fn apply_uploads(gpu: &mut GpuWorld, batch: &mut PendingUploads, binding: &World
             occupancy: &gpu.occupancy,
         });
     }
-    gpu.edited_bricks =
-        batch.edited.iter().map(|&i| gpu.info.window_brick(brick_position(i, gpu.brick_dims))).collect();
+    gpu.edited_bricks = std::mem::take(&mut batch.edited);
     gpu.uploaded_bytes = batch.bytes;
 }
 

@@ -16,6 +16,7 @@ use super::columns::Ground;
 use super::land::{self, BLEND, Footprint, Land, VillageSite};
 use super::trees::{MAX_CROWN, plant_trees_in};
 use super::{Blocks, place_column, village};
+use crate::world::follow::ScrollPlan;
 use crate::world::format::LoadError;
 use crate::world::grid::{BRICK_SIZE, BrickCell, Voxel};
 use crate::world::palette::Palette;
@@ -137,10 +138,7 @@ impl EndlessGenerator {
     /// Regions with a file in `save` are read from it instead of made (one clear error for a file that is not
     /// one of this world's regions).
     pub fn window(&self, centre: IVec2, regions: i32, save: Option<&EndlessSave>) -> Result<Window, LoadError> {
-        let first = centre - regions / 2;
-        let keys: Vec<IVec2> = (0..regions).flat_map(|z| (0..regions).map(move |x| first + IVec2::new(x, z))).collect();
-        let edge = (regions * REGION_EDGE) as u32;
-        let mut world = VoxelWorld::new(UVec3::new(edge, self.height as u32, edge), self.palette.clone());
+        let keys = window_keys(centre, regions);
         let made: Vec<VoxelWorld> = keys
             .par_iter()
             .map(|&key| match save.map(|s| s.load_region(key, &self.palette)).transpose()?.flatten() {
@@ -148,14 +146,31 @@ impl EndlessGenerator {
                 None => Ok(self.region(key)),
             })
             .collect::<Result<_, LoadError>>()?;
-        for (key, region) in keys.iter().zip(made) {
+        let by_key: HashMap<IVec2, &VoxelWorld> = keys.iter().copied().zip(&made).collect();
+        Ok(self.window_of(centre, regions, |key| by_key.get(&key).copied()).expect("every key made"))
+    }
+
+    /// The window of `window`, its regions taken from `region` (made elsewhere: `world::follow` takes them from
+    /// the streamer); `None` while one of them is not there.
+    pub fn window_of<'a>(
+        &self,
+        centre: IVec2,
+        regions: i32,
+        region: impl Fn(IVec2) -> Option<&'a VoxelWorld>,
+    ) -> Option<Window> {
+        let keys = window_keys(centre, regions);
+        let sources: Vec<&VoxelWorld> = keys.iter().map(|&key| region(key)).collect::<Option<_>>()?;
+        let first = centre - regions / 2;
+        let edge = (regions * REGION_EDGE) as u32;
+        let mut world = VoxelWorld::new(UVec3::new(edge, self.height as u32, edge), self.palette.clone());
+        for (key, region) in keys.iter().zip(sources) {
             let at = (*key - first) * (REGION_EDGE / BRICK_SIZE);
-            paste(&mut world, &region, IVec3::new(at.x, 0, at.y));
+            paste(&mut world, region, IVec3::new(at.x, 0, at.y));
         }
         world.grid.take_dirty();
         let min = first * REGION_EDGE;
         world.detail_origin = IVec3::new(min.x, 0, min.y);
-        Ok(Window { world, min })
+        Some(Window { world, min })
     }
 
     /// A view from above the first village's plaza, in world coordinates.
@@ -249,6 +264,12 @@ impl EndlessGenerator {
     }
 }
 
+/// The keys of the `regions` x `regions` regions around region `centre`, x fastest.
+fn window_keys(centre: IVec2, regions: i32) -> Vec<IVec2> {
+    let first = centre - regions / 2;
+    (0..regions).flat_map(|z| (0..regions).map(move |x| first + IVec2::new(x, z))).collect()
+}
+
 /// A window of the endless world and where it lies.
 pub struct Window {
     pub world: VoxelWorld,
@@ -263,44 +284,18 @@ impl Window {
         (self.min + IVec2::new(lo.x, lo.z)).div_euclid(IVec2::splat(REGION_EDGE))
     }
 
-    /// Scrolls the window to the `regions` x `regions` regions around region `centre` (`regions` the window's own
-    /// count, even, so that it moves by whole occupancy regions of 128 voxels). Only the regions that entered are
-    /// asked of `make` (in one call, to make them in parallel) and written; every other brick stays where it is
-    /// (`BrickGrid::scroll_window`). The window's coordinates do not move: a point keeps its coordinates while
-    /// it stays in the window, so histories and caches keyed by position stay valid.
+    /// Scrolls the window to the regions around region `centre` (`world::follow::ScrollPlan`): only the regions
+    /// that enter are asked of `make` (in one call, to make them in parallel) and written; every other brick stays
+    /// where it is. Refused, with nothing changed, where the move is not a whole step or `make` fails.
     pub fn scroll_to(
         &mut self,
         centre: IVec2,
         make: impl FnOnce(&[IVec2]) -> Result<Vec<VoxelWorld>, LoadError>,
     ) -> Result<(), LoadError> {
-        let grid = &mut self.world.grid;
-        let regions = grid.size().x as i32 / REGION_EDGE;
-        let first = centre - regions / 2;
-        let lo = first * REGION_EDGE - self.min;
-        let (old_lo, _) = grid.window();
-        let new_lo = IVec3::new(lo.x, 0, lo.y);
-        let entered = crate::world::grid::BrickGrid::entered_boxes(grid.size(), old_lo, new_lo);
-        grid.scroll_window(new_lo)
-            .map_err(|e| LoadError { location: "the endless world's window".into(), message: e.to_string() })?;
-        let keys: Vec<IVec2> = entered
-            .iter()
-            .flat_map(|&(lo, hi)| {
-                let (a, b) = (lo.div_euclid(IVec3::splat(REGION_EDGE)), hi.div_euclid(IVec3::splat(REGION_EDGE)));
-                (a.z..b.z).flat_map(move |z| (a.x..b.x).map(move |x| IVec2::new(x, z)))
-            })
-            .collect();
-        let world_keys: Vec<IVec2> = keys.iter().map(|k| *k + self.min.div_euclid(IVec2::splat(REGION_EDGE))).collect();
-        let made = make(&world_keys)?;
-        for (key, region) in keys.iter().zip(&made) {
-            let at = *key * (REGION_EDGE / BRICK_SIZE);
-            let dims = region.grid.brick_dims().as_ivec3();
-            for b in
-                (0..dims.y).flat_map(|y| (0..dims.z).flat_map(move |z| (0..dims.x).map(move |x| IVec3::new(x, y, z))))
-            {
-                self.world.grid.put_brick(IVec3::new(at.x, 0, at.y) + b, &region.grid, b);
-            }
-        }
-        Ok(())
+        let plan = ScrollPlan::new(&self.world, centre)?;
+        let made = make(&plan.keys)?;
+        let by_key: HashMap<IVec2, &VoxelWorld> = plan.keys.iter().copied().zip(&made).collect();
+        plan.apply(&mut self.world, |key| by_key.get(&key).map(|w| &w.grid))
     }
 
     /// A view given in world coordinates, in the window's.
