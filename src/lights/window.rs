@@ -10,8 +10,8 @@ use bevy::math::IVec3;
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-/// The height of the boxes a finished scroll's regions are lit in: a region lit whole took up to 8 ms where it
-/// holds crystals.
+/// The height of the boxes a finished scroll's regions are lit in: a whole region with crystals is too long a
+/// step for one tick's budget (docs/world.md).
 const SLAB: i32 = 32;
 
 /// The boxes of a finished scroll still to be lit: each region in slabs of `SLAB` voxels' height.
