@@ -22,7 +22,7 @@ pub use bricks::LightBricks;
 pub use index::LightIndex;
 
 use crate::colour::luminance;
-use crate::world::grid::{BRICK_SIZE, BrickCell, Voxel};
+use crate::world::grid::{BRICK_SIZE, BrickCell, Voxel, wrapped_cell};
 use crate::world::{AIR, VoxelWorld};
 use bevy::math::{IVec3, UVec3};
 use bevy::prelude::Resource;
@@ -421,8 +421,7 @@ impl LightPool {
         let dims = self.brick_dims.as_ivec3();
         // Each light's corner where the grid stores its brick (the identity in a bounded world).
         let stored = |min: IVec3| {
-            let s = (min >> 3_i32) - wrap_base;
-            let s = IVec3::select(s.cmpge(dims), s - dims, s);
+            let s = wrapped_cell(min >> 3_i32, wrap_base, dims);
             debug_assert!((min >> 3_i32).cmpge(window_lo).all(), "a light inside the window");
             s * BRICK_SIZE
         };

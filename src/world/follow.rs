@@ -35,18 +35,10 @@ impl ScrollPlan {
         let regions = grid.size().x as i32 / REGION_EDGE;
         let lo = (centre - regions / 2) * REGION_EDGE - min;
         let lo = IVec3::new(lo.x, 0, lo.y);
-        let step_ok = |v: i32| v.rem_euclid(WINDOW_STEP) == 0;
-        if !(step_ok(lo.x) && step_ok(lo.z) && step_ok(grid.size().x as i32) && step_ok(grid.size().z as i32)) {
-            return Err(LoadError {
-                location: "the endless world's window".into(),
-                message: format!(
-                    "cannot scroll a {} window to start at ({}, {}): windows move {WINDOW_STEP} voxels at a time",
-                    grid.size(),
-                    lo.x,
-                    lo.z
-                ),
-            });
-        }
+        BrickGrid::check_scroll(grid.size(), lo).map_err(|e| LoadError {
+            location: "the endless world's window".into(),
+            message: e.to_string(),
+        })?;
         let entered = BrickGrid::entered_boxes(grid.size(), grid.window().0, lo);
         let edge = IVec3::splat(REGION_EDGE);
         let keys = entered

@@ -108,6 +108,15 @@ impl std::fmt::Display for BadScroll {
 
 impl std::error::Error for BadScroll {}
 
+/// Where cell `c` of a level whose storage is `dims` cells and wraps from cell `base` is stored: its offset from
+/// the base, less the storage where that reaches past it. The one wrap rule the grid, its occupancy levels and
+/// the light bricks share; the identity in a bounded world (base 0).
+#[inline]
+pub fn wrapped_cell(c: IVec3, base: IVec3, dims: IVec3) -> IVec3 {
+    let s = c - base;
+    IVec3::select(s.cmpge(dims), s - dims, s)
+}
+
 /// An edit or lookup outside the world.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct OutOfWorld {
@@ -185,9 +194,7 @@ impl BrickGrid {
     /// reaches past it. The identity in a bounded world.
     #[inline]
     fn storage_brick(&self, b: IVec3) -> IVec3 {
-        let s = b - (self.wrap_base >> 3_i32);
-        let dims = self.bricks.as_ivec3();
-        IVec3::select(s.cmpge(dims), s - dims, s)
+        wrapped_cell(b, self.wrap_base >> 3_i32, self.bricks.as_ivec3())
     }
 
     /// Index of the brick cell holding brick coordinate `b` (must be inside `storage_box`).
@@ -230,17 +237,26 @@ impl BrickGrid {
     /// can be written (`put_brick`, over the storage of those that left) a few at a time while the window shows
     /// only what it already held. Every brick inside both windows keeps its voxels and its storage.
     pub fn begin_scroll(&mut self, lo: IVec3) -> Result<(), BadScroll> {
+        Self::check_scroll(self.size, lo)?;
         let size = self.size.as_ivec3();
-        let step_ok = |v: i32| v.rem_euclid(WINDOW_STEP) == 0;
-        if !(step_ok(lo.x) && step_ok(lo.z) && step_ok(size.x) && step_ok(size.z) && lo.y == 0) {
-            return Err(BadScroll { to: lo, size: self.size });
-        }
         let shared_lo = self.window.0.max(lo);
         self.window = (shared_lo, self.window.1.min(lo + size).max(shared_lo));
         self.ring_lo = lo;
         self.wrap_base = IVec3::new(lo.x.div_euclid(size.x) * size.x, 0, lo.z.div_euclid(size.z) * size.z);
         self.occupancy.set_wrap_base(self.wrap_base >> 3_i32);
         Ok(())
+    }
+
+    /// Whether a grid of `size` can scroll its window to start at voxel `lo`: x and z whole steps (the size's
+    /// too), y 0.
+    pub fn check_scroll(size: UVec3, lo: IVec3) -> Result<(), BadScroll> {
+        let step_ok = |v: i32| v.rem_euclid(WINDOW_STEP) == 0;
+        let s = size.as_ivec3();
+        if step_ok(lo.x) && step_ok(lo.z) && step_ok(s.x) && step_ok(s.z) && lo.y == 0 {
+            Ok(())
+        } else {
+            Err(BadScroll { to: lo, size })
+        }
     }
 
     /// Ends a scroll: the window is the whole of what the storage holds.

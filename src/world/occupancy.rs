@@ -201,9 +201,7 @@ impl Occupancy {
     /// The index of cell `c` of the level `shift` (log2 of its edge in bricks: 2 for sectors, 4 for regions).
     #[inline]
     fn wrapped(&self, c: IVec3, dims: UVec3, shift: i32) -> usize {
-        let s = c - (self.wrap_base >> shift);
-        let d = dims.as_ivec3();
-        index(IVec3::select(s.cmpge(d), s - d, s), dims)
+        index(super::grid::wrapped_cell(c, self.wrap_base >> shift, dims.as_ivec3()), dims)
     }
 
     /// The box of bricks (lowest, highest, inclusive) that may hold a solid voxel; `None` when none ever did.
