@@ -9,27 +9,20 @@
 
 use crate::game::player::TOP_FLYING_SPEED;
 use crate::lights::LightPool;
+use crate::lights::window::LIGHT_BUDGET;
 use crate::lights::window::WindowLights;
 use crate::render::scene::world::{UploadState, stage_upload};
 use crate::stress::memory::resident_bytes;
-use crate::world::follow::WindowFollower;
+use crate::world::follow::{STREAM_RADIUS as RADIUS, WINDOW_REGIONS, WRITE_BUDGET, WindowFollower};
 use crate::world::generate::endless::{DEFAULT_HEIGHT, EndlessGenerator, REGION_EDGE};
 use bevy::math::{DVec2, IVec2, Vec3};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// Regions each side of the player's that stay resident: a scroll step (2) past the window's half (8), so the
-/// regions a scroll takes in are made before it.
-pub const RADIUS: i32 = 10;
-/// The window's edge in regions: the game's 1024 voxels.
-pub const WINDOW_REGIONS: i32 = 16;
 /// Regions each side of the player's that must be there: the view the player sees.
 const VIEW_REACH: i32 = 4;
 const TICK: Duration = Duration::from_micros(16_667);
-/// A tick's time for writing the regions of a scroll under way, and for lighting the ones a scroll brought in.
-pub const WRITE_BUDGET: Duration = Duration::from_millis(3);
-pub const LIGHT_BUDGET: Duration = Duration::from_millis(2);
 
 #[derive(Clone, Debug)]
 pub struct TravelConfig {

@@ -1,9 +1,12 @@
 //! `glowbrick play`: open a window on a world (the default command).
 
 use super::args::{GameWorldArgs, SettingArgs};
+use crate::game::endless::{EndlessPlay, stream_workers};
 use crate::game::models::ModelToPlace;
 use crate::settings::RenderSettings;
+use crate::world::generate::endless::DEFAULT_HEIGHT;
 use crate::world::import::vox::parse_vox;
+use crate::world::region_save::EndlessSave;
 use clap::Args;
 use std::path::{Path, PathBuf};
 
@@ -27,7 +30,12 @@ pub struct PlayArgs {
     /// The server's secret, when it has one.
     #[arg(long, requires = "connect")]
     secret: Option<String>,
-    /// Where F5 saves and F9 loads (default: saves/<name of --world>.ron, or saves/world.ron).
+    /// Play the endless world of --seed: its window follows you wherever you go. F5 saves the regions you
+    /// changed into the save folder, F9 and the next start bring them back.
+    #[arg(long, conflicts_with_all = ["world", "scene", "size", "connect", "view"])]
+    endless: bool,
+    /// Where F5 saves and F9 loads (default: saves/<name of --world>.ron, or saves/world.ron; with --endless the
+    /// folder saves/endless-<seed>).
     #[arg(long)]
     save: Option<PathBuf>,
     #[command(flatten)]
@@ -55,10 +63,22 @@ impl PlayArgs {
             };
             let settings = self.settings.settings_over(base)?;
             can_open_a_window()?;
-            crate::game::run_game(crate::net::client::waiting_world(), settings, save, None, Some(join));
+            crate::game::run_game(crate::net::client::waiting_world(), settings, save, None, Some(join), None);
             return Ok(());
         }
         let model = self.model.as_deref().map(load_model).transpose()?;
+        if self.endless {
+            let seed = self.world.seed;
+            let folder = self.save.clone().unwrap_or_else(|| PathBuf::from(format!("saves/endless-{seed}")));
+            let save = EndlessSave::open_or_create(&folder, seed, DEFAULT_HEIGHT)?;
+            let gpu = can_open_a_window()?;
+            let (play, world) = EndlessPlay::open(save, stream_workers())?;
+            let settings = self.settings.settings_over(base.with_world_time(&world))?;
+            crate::render::scene::world::fits_gpu(&world, gpu.max_binding)?;
+            // The settings file sits beside the folder, where every other world keeps it.
+            crate::game::run_game(world, settings, folder, model, None, Some(play));
+            return Ok(());
+        }
         let mut world = source.load().map_err(|e| e.to_string())?;
         if let Some(name) = &self.view {
             // The game starts at the first view: move the named one to the front.
@@ -72,7 +92,7 @@ impl PlayArgs {
         let settings = self.settings.settings_over(base.with_world_time(&world))?;
         let gpu = can_open_a_window()?;
         crate::render::scene::world::fits_gpu(&world, gpu.max_binding)?;
-        crate::game::run_game(world, settings, save, model, None);
+        crate::game::run_game(world, settings, save, model, None, None);
         Ok(())
     }
 }

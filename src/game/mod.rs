@@ -4,6 +4,7 @@
 //! `run_game` adds the window, input mapping and HUD on top.
 
 pub mod dynamic_resolution;
+pub mod endless;
 pub mod frame_pacing;
 pub mod hud;
 pub mod interaction;
@@ -47,18 +48,23 @@ pub fn step_clock(hours: f32, step: f32) -> f32 {
 /// Opens the game window on `world` and runs until the window closes. F5 and F9 use `save_path`; V drops
 /// `model`, when given. With `join`, the game plays on a server instead: `world` shows until the server's
 /// arrives, edits go to the server, and F9, V and the local clock are the server's business (F5 still saves a
-/// copy of the shared world).
+/// copy of the shared world). With `endless`, `world` is its window, which follows the player, and F5 and F9
+/// save and load its regions instead.
 pub fn run_game(
     world: VoxelWorld,
     settings: RenderSettings,
     save_path: PathBuf,
     model: Option<models::ModelToPlace>,
     join: Option<crate::net::client::Join>,
+    endless: Option<endless::EndlessPlay>,
 ) -> AppExit {
     let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
     let mut app = App::new();
     if let Some(model) = model {
         app.insert_resource(model);
+    }
+    if let Some(endless) = endless {
+        app.insert_resource(endless).add_plugins(endless::EndlessPlugin);
     }
     let plugins = DefaultPlugins.set(WindowPlugin {
         primary_window: Some(Window {

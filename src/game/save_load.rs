@@ -28,7 +28,9 @@ pub struct SaveLoadPlugin;
 
 impl Plugin for SaveLoadPlugin {
     fn build(&self, app: &mut App) {
-        app.add_message::<SaveAction>().add_systems(Update, save_or_load);
+        // An endless world saves and loads its regions instead (`game::endless`).
+        app.add_message::<SaveAction>()
+            .add_systems(Update, save_or_load.run_if(not(resource_exists::<super::endless::EndlessPlay>)));
     }
 }
 

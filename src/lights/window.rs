@@ -14,6 +14,9 @@ use std::time::{Duration, Instant};
 /// step for one tick's budget (docs/world.md).
 const SLAB: i32 = 32;
 
+/// A tick's time for lighting the regions a scroll brought in.
+pub const LIGHT_BUDGET: Duration = Duration::from_millis(2);
+
 /// The boxes of a finished scroll still to be lit: each region in slabs of `SLAB` voxels' height.
 #[derive(Default)]
 pub struct WindowLights {

@@ -2,15 +2,27 @@
 //! in the background (`world::stream`), and once the player is a scroll step (two regions, 128 voxels) from the
 //! window's centre and the regions that would enter are made, the window scrolls (`BrickGrid::scroll_window`):
 //! only those regions are written, over the storage of the ones that left.
+//!
+//! The player's edits follow too: a region edited in the window is copied out as it leaves and kept by the
+//! streamer (never made again), and `changed_regions` hands a save every region changed since the last one.
 
 use super::VoxelWorld;
 use super::format::LoadError;
 use super::generate::endless::{EndlessGenerator, REGION_EDGE, Window};
 use super::grid::{BRICK_SIZE, BrickGrid, WINDOW_STEP};
-use super::stream::{RegionStreamer, StreamStep};
-use bevy::math::{IVec2, IVec3, Vec3};
+use super::stream::{MakeRegion, RegionStreamer, StreamStep};
+use bevy::math::{IVec2, IVec3, UVec3, Vec3};
+use std::collections::HashSet;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+
+/// The game's window's edge in regions: 1024 voxels.
+pub const WINDOW_REGIONS: i32 = 16;
+/// Regions each side of the player's that stay resident: a scroll step past the window's half, so the regions a
+/// scroll takes in are made before it.
+pub const STREAM_RADIUS: i32 = WINDOW_REGIONS / 2 + SCROLL_REGIONS;
+/// A tick's time for writing the regions of a scroll under way.
+pub const WRITE_BUDGET: Duration = Duration::from_millis(3);
 
 /// Regions a scroll moves the window by, on an axis: the occupancy hierarchy's coarsest cell.
 pub const SCROLL_REGIONS: i32 = WINDOW_STEP / REGION_EDGE;
@@ -35,10 +47,8 @@ impl ScrollPlan {
         let regions = grid.size().x as i32 / REGION_EDGE;
         let lo = (centre - regions / 2) * REGION_EDGE - min;
         let lo = IVec3::new(lo.x, 0, lo.y);
-        BrickGrid::check_scroll(grid.size(), lo).map_err(|e| LoadError {
-            location: "the endless world's window".into(),
-            message: e.to_string(),
-        })?;
+        BrickGrid::check_scroll(grid.size(), lo)
+            .map_err(|e| LoadError { location: "the endless world's window".into(), message: e.to_string() })?;
         let entered = BrickGrid::entered_boxes(grid.size(), grid.window().0, lo);
         let edge = IVec3::splat(REGION_EDGE);
         let keys = entered
@@ -99,6 +109,10 @@ pub struct WindowFollower {
     min: IVec2,
     /// A scroll under way (`BrickGrid::begin_scroll`): its plan and how many of its regions are written.
     under_way: Option<(ScrollPlan, usize)>,
+    /// Regions edited since they last entered the window: copied out (kept) as they leave.
+    edited_in_window: HashSet<IVec2>,
+    /// Regions changed since the last save.
+    unsaved: HashSet<IVec2>,
 }
 
 /// What `follow` did in one call.
@@ -124,12 +138,35 @@ impl WindowFollower {
         radius: i32,
         workers: usize,
     ) -> (Self, Window) {
-        let mut streamer = RegionStreamer::new(generator.clone(), radius.max(regions / 2), workers);
+        let make: MakeRegion = {
+            let generator = generator.clone();
+            Arc::new(move |key| generator.region(key))
+        };
+        Self::start_with(generator, make, centre, regions, radius, workers)
+    }
+
+    /// `start`, the regions made by `make` (a save folder over the generator, say).
+    pub fn start_with(
+        generator: Arc<EndlessGenerator>,
+        make: MakeRegion,
+        centre: IVec2,
+        regions: i32,
+        radius: i32,
+        workers: usize,
+    ) -> (Self, Window) {
+        let mut streamer = RegionStreamer::with_maker(make, radius.max(regions / 2), workers);
         loop {
             streamer.update(centre);
             if let Some(window) = generator.window_of(centre, regions, |key| streamer.region(key)) {
                 let min = window.min;
-                return (WindowFollower { streamer, min, under_way: None }, window);
+                let follower = WindowFollower {
+                    streamer,
+                    min,
+                    under_way: None,
+                    edited_in_window: HashSet::new(),
+                    unsaved: HashSet::new(),
+                };
+                return (follower, window);
             }
             std::thread::sleep(std::time::Duration::from_millis(5));
         }
@@ -161,8 +198,9 @@ impl WindowFollower {
             if shift != IVec2::ZERO
                 && let Ok(plan) = ScrollPlan::new(world, self.centre(world) + shift)
                 && plan.keys.iter().all(|&key| self.streamer.region(key).is_some())
-                && world.grid.begin_scroll(plan.lo).is_ok()
             {
+                self.keep_leaving_edits(world, plan.lo);
+                world.grid.begin_scroll(plan.lo).expect("ScrollPlan::new checked the step");
                 followed.began = Some(plan.clone());
                 self.under_way = Some((plan, 0));
             }
@@ -188,5 +226,94 @@ impl WindowFollower {
 
     pub fn resident_count(&self) -> usize {
         self.streamer.resident_count()
+    }
+
+    /// The world column of the window's coordinates' column (0, 0).
+    pub fn min(&self) -> IVec2 {
+        self.min
+    }
+
+    /// Takes note of an edit of the window's voxels `lo..=hi` (window coordinates).
+    pub fn note_edit(&mut self, lo: IVec3, hi: IVec3) {
+        let edge = IVec2::splat(REGION_EDGE);
+        let a = (IVec2::new(lo.x, lo.z) + self.min).div_euclid(edge);
+        let b = (IVec2::new(hi.x, hi.z) + self.min).div_euclid(edge);
+        for z in a.y..=b.y {
+            for x in a.x..=b.x {
+                self.edited_in_window.insert(IVec2::new(x, z));
+                self.unsaved.insert(IVec2::new(x, z));
+            }
+        }
+    }
+
+    /// Whether the window (as it shows now) holds region `key` whole.
+    fn holds(&self, world: &VoxelWorld, key: IVec2) -> bool {
+        let (lo, hi) = world.grid.window();
+        let a = key * REGION_EDGE - self.min;
+        let b = a + REGION_EDGE;
+        a.x >= lo.x && a.y >= lo.z && b.x <= hi.x && b.y <= hi.z
+    }
+
+    /// Region `key` as the window holds it now.
+    fn copy_out(&self, world: &VoxelWorld, key: IVec2) -> VoxelWorld {
+        let size = UVec3::new(REGION_EDGE as u32, world.grid.size().y, REGION_EDGE as u32);
+        let mut region = VoxelWorld::new(size, world.palette.clone());
+        let at = IVec3::new(key.x * REGION_EDGE - self.min.x, 0, key.y * REGION_EDGE - self.min.y) / BRICK_SIZE;
+        let dims = region.grid.brick_dims().as_ivec3();
+        for z in 0..dims.z {
+            for y in 0..dims.y {
+                for x in 0..dims.x {
+                    let b = IVec3::new(x, y, z);
+                    region.grid.put_brick(b, &world.grid, at + b);
+                }
+            }
+        }
+        region.grid.take_dirty();
+        region
+    }
+
+    /// Copies the edited regions a scroll to `lo` takes out of the window to the streamer, which keeps them.
+    fn keep_leaving_edits(&mut self, world: &VoxelWorld, lo: IVec3) {
+        let size = world.grid.size().as_ivec3();
+        let stays = |key: IVec2| {
+            let a = key * REGION_EDGE - self.min;
+            a.x >= lo.x && a.y >= lo.z && a.x + REGION_EDGE <= lo.x + size.x && a.y + REGION_EDGE <= lo.z + size.z
+        };
+        let leaving: Vec<IVec2> = self.edited_in_window.iter().copied().filter(|&key| !stays(key)).collect();
+        for key in leaving {
+            self.edited_in_window.remove(&key);
+            if self.holds(world, key) {
+                let region = self.copy_out(world, key);
+                self.streamer.keep(key, region);
+            }
+        }
+    }
+
+    /// Every region changed since the last `saved`, as it is now (from the window where it holds it, else as
+    /// kept), in key order.
+    pub fn changed_regions(&self, world: &VoxelWorld) -> Vec<(IVec2, VoxelWorld)> {
+        let mut keys: Vec<IVec2> = self.unsaved.iter().copied().collect();
+        keys.sort_by_key(|k| (k.y, k.x));
+        keys.into_iter()
+            .filter_map(|key| {
+                if self.holds(world, key) {
+                    Some((key, self.copy_out(world, key)))
+                } else {
+                    self.streamer.region(key).map(|r| (key, r.clone()))
+                }
+            })
+            .collect()
+    }
+
+    /// Marks `keys` saved.
+    pub fn saved(&mut self, keys: &[IVec2]) {
+        for key in keys {
+            self.unsaved.remove(key);
+        }
+    }
+
+    /// Regions changed since the last save.
+    pub fn unsaved_count(&self) -> usize {
+        self.unsaved.len()
     }
 }

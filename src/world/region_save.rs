@@ -2,13 +2,14 @@
 //! and `regions/r.X.Z.ron`, one file per region kept, each an ordinary world file of one region (64 x height x
 //! 64 voxels, the generator's palette), so the world files' parser, its limits and its fuzzer cover them too.
 //! Regions without a file are the generator's. Every file is written atomically, a region's previous file
-//! kept as `.bak`.
+//! kept as `.bak`. `world.ron` also holds where the player stood (a region key and a view from its corner, so a
+//! position a million voxels out is saved as exactly as one at the origin) and the time of day.
 
-use super::VoxelWorld;
 use super::format::{LoadError, load_world, one_line, read_limited, save_with_backup, write_atomically};
 use super::generate::endless::REGION_EDGE;
 use super::palette::Palette;
-use bevy::math::{IVec2, UVec3};
+use super::{CameraView, VoxelWorld};
+use bevy::math::{IVec2, UVec3, Vec3};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -24,7 +25,21 @@ struct EndlessWorldFile {
     version: u32,
     seed: u32,
     height: u32,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    player: Option<SavedPlayer>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    time_of_day: Option<f32>,
 }
+
+/// Where the player stood: a region and a view whose origin is relative to the region's corner.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct SavedPlayer {
+    region: (i32, i32),
+    view: CameraView,
+}
+
+/// How far (voxels, x and z) from its region's corner a saved player's view may stand.
+const PLAYER_REACH: f32 = 4096.0;
 
 /// An endless world's save folder.
 #[derive(Clone, Debug, PartialEq)]
@@ -32,6 +47,9 @@ pub struct EndlessSave {
     pub folder: PathBuf,
     pub seed: u32,
     pub height: u32,
+    /// Where the player stood when last saved: a region key and a view from that region's corner.
+    pub player: Option<(IVec2, CameraView)>,
+    pub time_of_day: Option<f32>,
 }
 
 impl EndlessSave {
@@ -51,11 +69,36 @@ impl EndlessSave {
             return Ok(save);
         }
         std::fs::create_dir_all(folder.join("regions")).map_err(|e| format!("{}: {e}", folder.display()))?;
-        let file = EndlessWorldFile { format: ENDLESS_TAG.into(), version: ENDLESS_VERSION, seed, height };
+        let save = EndlessSave { folder: folder.to_path_buf(), seed, height, player: None, time_of_day: None };
+        save.write_world_file()?;
+        Ok(save)
+    }
+
+    /// Writes `world.ron` (atomically, the previous one kept as `.bak`).
+    pub fn write_world_file(&self) -> Result<(), String> {
+        let file = EndlessWorldFile {
+            format: ENDLESS_TAG.into(),
+            version: ENDLESS_VERSION,
+            seed: self.seed,
+            height: self.height,
+            player: self.player.clone().map(|(key, view)| SavedPlayer { region: (key.x, key.y), view }),
+            time_of_day: self.time_of_day,
+        };
         let text = ron::ser::to_string_pretty(&file, ron::ser::PrettyConfig::new()).map_err(|e| e.to_string())?;
-        let path = folder.join("world.ron");
-        write_atomically(&path, text.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
-        Ok(EndlessSave { folder: folder.to_path_buf(), seed, height })
+        let path = self.folder.join("world.ron");
+        let backup = super::format::backup_path(&path);
+        if path.exists() {
+            let _ = std::fs::copy(&path, &backup);
+        }
+        write_atomically(&path, text.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// The saved player's view in world coordinates.
+    pub fn player_view(&self) -> Option<CameraView> {
+        self.player.as_ref().map(|(key, view)| {
+            let corner = Vec3::new((key.x * REGION_EDGE) as f32, 0.0, (key.y * REGION_EDGE) as f32);
+            CameraView { origin: (corner + Vec3::from(view.origin)).into(), ..view.clone() }
+        })
     }
 
     /// Opens the save in `folder`, validating `world.ron`.
@@ -74,7 +117,31 @@ impl EndlessSave {
         if !(40..=super::grid::MAX_WORLD_EDGE).contains(&file.height) {
             return Err(fail(format!("height {} is outside 40..={}", file.height, super::grid::MAX_WORLD_EDGE)));
         }
-        Ok(EndlessSave { folder: folder.to_path_buf(), seed: file.seed, height: file.height })
+        if let Some(player) = &file.player {
+            let [x, y, z] = player.view.origin;
+            let near = x.abs().max(z.abs()) <= PLAYER_REACH && y.abs() <= PLAYER_REACH;
+            let keys = i32::MAX / REGION_EDGE / 2;
+            let key_ok = player.region.0.abs() <= keys && player.region.1.abs() <= keys;
+            if let Some(problem) = player.view.problem() {
+                return Err(fail(format!("the player's {problem}")));
+            }
+            if !(near && key_ok) {
+                return Err(fail(format!(
+                    "the player stands at {:?} from region {:?}: more than {PLAYER_REACH} voxels from its corner, or a region past the world's end",
+                    player.view.origin, player.region
+                )));
+            }
+        }
+        if let Some(hours) = file.time_of_day.filter(|h| !(h.is_finite() && (0.0..=24.0).contains(h))) {
+            return Err(fail(format!("time of day {hours} is outside 0..=24")));
+        }
+        Ok(EndlessSave {
+            folder: folder.to_path_buf(),
+            seed: file.seed,
+            height: file.height,
+            player: file.player.map(|p| (IVec2::new(p.region.0, p.region.1), p.view)),
+            time_of_day: file.time_of_day,
+        })
     }
 
     pub fn region_path(&self, key: IVec2) -> PathBuf {
@@ -165,6 +232,20 @@ mod tests {
         let beside = generator.region(key + IVec2::X);
         let p = IVec3::new(at.x + REGION_EDGE + 5, 20, at.y + 60);
         assert_eq!(window.world.grid.get(p), beside.grid.get(IVec3::new(5, 20, 60)));
+        // The player and the time of day, a million voxels out, come back exactly.
+        let mut with_player = reopened.clone();
+        let view = CameraView {
+            name: "player".into(),
+            origin: [10.25, 80.5, 3.125],
+            direction: [0.0, 0.0, 1.0],
+            fov_deg: 70.0,
+        };
+        with_player.player = Some((IVec2::new(15_625, -3), view));
+        with_player.time_of_day = Some(18.5);
+        with_player.write_world_file().unwrap();
+        let back = EndlessSave::open(&dir).unwrap();
+        assert_eq!(back, with_player);
+        assert_eq!(back.player_view().unwrap().origin, [1_000_010.25, 80.5, -188.875]);
         // Another seed's world in the same folder is refused.
         let other = EndlessSave::open_or_create(&dir, 7, 48).unwrap_err();
         assert!(other.contains("seed 6") && other.contains("not seed 7"), "{other}");
@@ -203,6 +284,18 @@ mod tests {
             ("(format: \"glowbrick-endless-world\", version: 9, seed: 1, height: 64)", "version 9"),
             ("(format: \"glowbrick-endless-world\", version: 1, seed: 1, height: 99999)", "height 99999"),
             ("\u{0}\u{1}junk", ""),
+            (
+                "(format: \"glowbrick-endless-world\", version: 1, seed: 1, height: 64, player: Some((region: (0, 0), view: (name: \"p\", origin: (1e9, 0.0, 0.0), direction: (1.0, 0.0, 0.0)))))",
+                "more than 4096",
+            ),
+            (
+                "(format: \"glowbrick-endless-world\", version: 1, seed: 1, height: 64, player: Some((region: (0, 0), view: (name: \"p\", origin: (1.0, 0.0, 0.0), direction: (0.0, 0.0, 0.0)))))",
+                "direction",
+            ),
+            (
+                "(format: \"glowbrick-endless-world\", version: 1, seed: 1, height: 64, time_of_day: Some(99.0))",
+                "time of day 99",
+            ),
         ] {
             std::fs::write(dir.join("world.ron"), text).unwrap();
             let e = EndlessSave::open(&dir).unwrap_err().to_string();

@@ -3,7 +3,9 @@
 //! main thread only hands out the wanted list and takes finished regions (`update`), so what it waits on is a
 //! lock and a few map operations, never the generator.
 //!
-//! Today `bench --travel` drives it; the game's scrolling window is to take its regions from it (issue 69).
+//! Regions a player changed are kept (`keep`): they stay resident wherever the point goes and are never made
+//! again, so a region edited, left behind and come back to holds the edits. Where regions come from is the
+//! maker's business (`with_maker`): the generator, or a save folder over it.
 
 use super::VoxelWorld;
 use super::generate::endless::EndlessGenerator;
@@ -22,10 +24,15 @@ struct Queue {
 
 type Shared = Arc<(Mutex<Queue>, Condvar)>;
 
+/// Makes region `key` on a worker thread.
+pub type MakeRegion = Arc<dyn Fn(IVec2) -> VoxelWorld + Send + Sync>;
+
 /// The resident regions around a point, made in the background.
 pub struct RegionStreamer {
     radius: i32,
     resident: HashMap<IVec2, VoxelWorld>,
+    /// Regions changed in play, resident whatever the point's distance (`keep`).
+    kept: HashMap<IVec2, VoxelWorld>,
     /// Handed to a worker or waiting in the queue.
     requested: HashSet<IVec2>,
     queue: Shared,
@@ -43,17 +50,23 @@ pub struct StreamStep {
 impl RegionStreamer {
     /// Keeps the regions within `radius` of the point resident, made by `threads` workers.
     pub fn new(generator: Arc<EndlessGenerator>, radius: i32, threads: usize) -> Self {
+        Self::with_maker(Arc::new(move |key| generator.region(key)), radius, threads)
+    }
+
+    /// Keeps the regions within `radius` of the point resident, each made by `make` on one of `threads` workers.
+    pub fn with_maker(make: MakeRegion, radius: i32, threads: usize) -> Self {
         let queue: Shared = Arc::new((Mutex::new(Queue::default()), Condvar::new()));
         let (done, finished) = channel();
         let workers = (0..threads.max(1))
             .map(|_| {
-                let (queue, done, generator) = (queue.clone(), done.clone(), generator.clone());
-                std::thread::spawn(move || work(&queue, &done, &generator))
+                let (queue, done, make) = (queue.clone(), done.clone(), make.clone());
+                std::thread::spawn(move || work(&queue, &done, &*make))
             })
             .collect();
         RegionStreamer {
             radius: radius.max(0),
             resident: HashMap::new(),
+            kept: HashMap::new(),
             requested: HashSet::new(),
             queue,
             finished,
@@ -69,7 +82,7 @@ impl RegionStreamer {
         let inside = |key: IVec2, reach: i32| (key - centre).abs().max_element() <= reach;
         while let Ok((key, region)) = self.finished.try_recv() {
             self.requested.remove(&key);
-            if inside(key, keep) {
+            if inside(key, keep) && !self.kept.contains_key(&key) {
                 self.resident.insert(key, region);
                 step.arrived += 1;
             }
@@ -80,7 +93,7 @@ impl RegionStreamer {
         let r = self.radius;
         let mut missing: Vec<IVec2> = (-r..=r)
             .flat_map(|z| (-r..=r).map(move |x| centre + IVec2::new(x, z)))
-            .filter(|key| !self.resident.contains_key(key))
+            .filter(|key| !self.resident.contains_key(key) && !self.kept.contains_key(key))
             .collect();
         missing.sort_by_key(|key| (*key - centre).length_squared());
         let (lock, wake) = &*self.queue;
@@ -101,16 +114,32 @@ impl RegionStreamer {
 
     /// Whether every region within `reach` regions of `centre` is resident.
     pub fn filled(&self, centre: IVec2, reach: i32) -> bool {
-        (-reach..=reach).all(|z| (-reach..=reach).all(|x| self.resident.contains_key(&(centre + IVec2::new(x, z)))))
+        (-reach..=reach).all(|z| (-reach..=reach).all(|x| self.region(centre + IVec2::new(x, z)).is_some()))
     }
 
-    /// A resident region.
+    /// A resident region: the kept one where there is one.
     pub fn region(&self, key: IVec2) -> Option<&VoxelWorld> {
-        self.resident.get(&key)
+        self.kept.get(&key).or_else(|| self.resident.get(&key))
+    }
+
+    /// Keeps `region` as region `key` from now on, in place of what was made.
+    pub fn keep(&mut self, key: IVec2, region: VoxelWorld) {
+        self.resident.remove(&key);
+        self.kept.insert(key, region);
+    }
+
+    /// The kept regions.
+    pub fn kept(&self) -> impl Iterator<Item = (IVec2, &VoxelWorld)> {
+        self.kept.iter().map(|(&key, region)| (key, region))
+    }
+
+    /// Forgets every kept region (a save was loaded over them).
+    pub fn forget_kept(&mut self) {
+        self.kept.clear();
     }
 
     pub fn resident_count(&self) -> usize {
-        self.resident.len()
+        self.resident.len() + self.kept.len()
     }
 }
 
@@ -126,7 +155,7 @@ impl Drop for RegionStreamer {
 }
 
 /// A worker: takes the nearest wanted region, makes it, sends it back; sleeps while nothing is wanted.
-fn work(queue: &Shared, done: &Sender<(IVec2, VoxelWorld)>, generator: &EndlessGenerator) {
+fn work(queue: &Shared, done: &Sender<(IVec2, VoxelWorld)>, make: &(dyn Fn(IVec2) -> VoxelWorld + Send + Sync)) {
     let (lock, wake) = &**queue;
     loop {
         let key = {
@@ -141,7 +170,7 @@ fn work(queue: &Shared, done: &Sender<(IVec2, VoxelWorld)>, generator: &EndlessG
                 queue = wake.wait(queue).unwrap_or_else(|e| e.into_inner());
             }
         };
-        if done.send((key, generator.region(key))).is_err() {
+        if done.send((key, make(key))).is_err() {
             return;
         }
     }
@@ -181,5 +210,26 @@ mod tests {
         assert_eq!(step.arrived, 0);
         assert!(streamer.region(IVec2::new(-2, 0)).is_none() && streamer.region(IVec2::new(2, 0)).is_some());
         assert!(streamer.resident_count() <= 35, "{} resident", streamer.resident_count());
+    }
+
+    #[test]
+    fn a_kept_region_stays_whatever_the_point_does_and_is_never_made_again() {
+        let generator = Arc::new(EndlessGenerator::new(2, 48).unwrap());
+        let mut streamer = RegionStreamer::new(generator.clone(), 1, 2);
+        wait_until(&mut streamer, IVec2::ZERO, 1);
+        let key = IVec2::new(1, 0);
+        let mut edited = generator.region(key);
+        edited.grid.set(IVec3::new(3, 40, 5), 7).unwrap();
+        streamer.keep(key, edited);
+        // Far away and back: the region is the edited one, not the generator's made again.
+        wait_until(&mut streamer, IVec2::new(9, 0), 1);
+        assert!(streamer.region(key).is_some(), "kept while the point is far");
+        wait_until(&mut streamer, IVec2::ZERO, 1);
+        std::thread::sleep(Duration::from_millis(50));
+        streamer.update(IVec2::ZERO);
+        assert_eq!(streamer.region(key).unwrap().grid.get(IVec3::new(3, 40, 5)), 7);
+        assert_eq!(streamer.kept().count(), 1);
+        streamer.forget_kept();
+        assert!(streamer.region(key).is_none(), "forgotten, and made again on the next update");
     }
 }

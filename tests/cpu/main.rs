@@ -6,6 +6,7 @@ mod code_shape;
 #[path = "../shared/compose.rs"]
 mod compose;
 mod daylight;
+mod endless_play;
 mod game_building;
 mod generated_world;
 mod hostile_files;

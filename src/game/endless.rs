@@ -1,0 +1,237 @@
+//! Playing the endless world (`glowbrick play --endless`): the window follows the player (`world::follow`), the
+//! light pool follows the window (`lights::window`), and F5 and F9 save and load the regions the player changed
+//! (`world::region_save`) with where the player stands and the time of day.
+//!
+//! Everything in game works in the window's coordinates: its column (0, 0) is a fixed world column for the
+//! whole session, so positions stay small numbers near wherever the player started.
+
+use super::hud::StatusLine;
+use super::player::Player;
+use super::save_load::{SaveAction, player_view};
+use crate::lights::LightPool;
+use crate::lights::window::{LIGHT_BUDGET, WindowLights};
+use crate::world::events::{ApplyEdits, EditApplied};
+use crate::world::follow::{STREAM_RADIUS, WINDOW_REGIONS, WRITE_BUDGET, WindowFollower};
+use crate::world::generate::endless::{EndlessGenerator, REGION_EDGE};
+use crate::world::region_save::EndlessSave;
+use crate::world::stream::MakeRegion;
+use crate::world::{CameraView, VoxelWorld};
+use bevy::prelude::*;
+use std::sync::{Arc, Mutex};
+
+/// The endless world being played: its follower, the lighting of regions a scroll brought in, and its save.
+#[derive(Resource)]
+pub struct EndlessPlay {
+    /// In a mutex only because the streamer's channel may not be shared between threads; one system uses it.
+    follower: Mutex<WindowFollower>,
+    lights: WindowLights,
+    save: EndlessSave,
+    workers: usize,
+}
+
+impl EndlessPlay {
+    /// Opens the endless world of `save` around where its player last stood (else above the first village),
+    /// its regions made by `workers` threads, saved ones read from the folder. Returns the world with the
+    /// player's view (window coordinates) as its first view, and its saved time of day.
+    pub fn open(save: EndlessSave, workers: usize) -> Result<(EndlessPlay, VoxelWorld), String> {
+        let generator = Arc::new(EndlessGenerator::new(save.seed, save.height)?);
+        // Where the player stands, as a region key and an offset from its corner: exact however far out.
+        let (key, offset, view) = match &save.player {
+            Some((key, view)) => (*key, Vec3::from(view.origin), view.clone()),
+            None => {
+                let view = generator.start_view();
+                let [x, _, z] = view.origin;
+                let key = EndlessGenerator::region_of(x.floor() as i32, z.floor() as i32);
+                let corner = Vec3::new((key.x * REGION_EDGE) as f32, 0.0, (key.y * REGION_EDGE) as f32);
+                (key, Vec3::from(view.origin) - corner, view)
+            }
+        };
+        let offset_regions = (Vec2::new(offset.x, offset.z) / REGION_EDGE as f32).floor().as_ivec2();
+        let centre = key + offset_regions;
+        let make = region_maker(generator.clone(), save.clone());
+        let (follower, window) =
+            WindowFollower::start_with(generator, make, centre, WINDOW_REGIONS, STREAM_RADIUS, workers);
+        let corner = (key * REGION_EDGE - window.min).as_vec2();
+        let origin = Vec3::new(corner.x, 0.0, corner.y) + offset;
+        let mut world = window.world;
+        world.views = vec![CameraView { origin: origin.into(), ..view }];
+        world.time_of_day = save.time_of_day;
+        let play = EndlessPlay { follower: Mutex::new(follower), lights: WindowLights::default(), save, workers };
+        Ok((play, world))
+    }
+
+    /// The save folder.
+    pub fn folder(&self) -> &std::path::Path {
+        &self.save.folder
+    }
+
+    /// The world column of the window's coordinates' column (0, 0).
+    pub fn window_min(&self) -> IVec2 {
+        self.follower.lock().unwrap_or_else(|e| e.into_inner()).min()
+    }
+
+    /// Boxes a finished scroll brought in that are still to be lit.
+    pub fn lights_waiting(&self) -> usize {
+        self.lights.waiting()
+    }
+
+    fn follower(&mut self) -> &mut WindowFollower {
+        self.follower.get_mut().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// One worker thread a core but the one the game's main thread needs.
+pub fn stream_workers() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get().saturating_sub(1).max(1))
+}
+
+/// Makes a region from the save folder where it holds one, else from the generator. A saved region that cannot
+/// be read is reported and the generator's is played instead; its file is left as it is (an F5 after an edit
+/// there writes over it, keeping it as `.bak`).
+fn region_maker(generator: Arc<EndlessGenerator>, save: EndlessSave) -> MakeRegion {
+    Arc::new(move |key| match save.load_region(key, generator.palette()) {
+        Ok(Some(region)) => region,
+        Ok(None) => generator.region(key),
+        Err(e) => {
+            warn!("{e}; playing the generator's region {key} instead");
+            generator.region(key)
+        }
+    })
+}
+
+pub struct EndlessPlugin;
+
+impl Plugin for EndlessPlugin {
+    fn build(&self, app: &mut App) {
+        app.add_systems(
+            Update,
+            (note_edits, follow_player, save_or_load_regions)
+                .chain()
+                .after(ApplyEdits)
+                .run_if(resource_exists::<EndlessPlay>)
+                .run_if(resource_exists::<VoxelWorld>),
+        );
+    }
+}
+
+/// Which regions the player's edits changed.
+fn note_edits(mut edits: MessageReader<EditApplied>, mut play: ResMut<EndlessPlay>) {
+    for edit in edits.read().filter(|e| e.changed > 0) {
+        play.follower().note_edit(edit.min, edit.max);
+    }
+}
+
+/// Streams and scrolls after the player, and lights what a scroll brought in, within the tick's budgets.
+fn follow_player(
+    mut play: ResMut<EndlessPlay>,
+    mut world: ResMut<VoxelWorld>,
+    mut pool: ResMut<LightPool>,
+    camera: Query<&Transform, With<Player>>,
+) {
+    let Ok(transform) = camera.single() else { return };
+    let play = &mut *play;
+    // Only a tick that wrote something tells the systems watching the world that it changed.
+    let followed = play.follower().follow(world.bypass_change_detection(), transform.translation, WRITE_BUDGET);
+    let wrote = followed.began.is_some() || followed.regions_written > 0 || followed.finished.is_some();
+    play.lights.followed(&mut pool, &world, &followed);
+    if play.lights.waiting() > 0 {
+        play.lights.update(&mut pool, &world, LIGHT_BUDGET);
+    }
+    if wrote {
+        world.set_changed();
+    }
+}
+
+/// F5 writes the regions changed since the last save, where the player stands and the time of day; F9 reopens
+/// the save (the player's unsaved changes are dropped, as F9 drops them in a bounded world).
+#[allow(clippy::too_many_arguments)]
+fn save_or_load_regions(
+    mut actions: MessageReader<SaveAction>,
+    mut play: ResMut<EndlessPlay>,
+    mut world: ResMut<VoxelWorld>,
+    mut camera: Query<(&mut Transform, &mut Player, &Projection)>,
+    mut settings: Option<ResMut<crate::settings::RenderSettings>>,
+    mut status: ResMut<StatusLine>,
+) {
+    for action in actions.read() {
+        match action {
+            SaveAction::Save => {
+                let start = std::time::Instant::now();
+                let hours = settings.as_ref().map(|s| s.time);
+                let view = camera.single().ok().map(|(transform, _, projection)| {
+                    let fov = match projection {
+                        Projection::Perspective(p) => p.fov.to_degrees(),
+                        _ => 60.0,
+                    };
+                    player_view(transform, fov)
+                });
+                match save_regions(&mut play, &world, view, hours) {
+                    Ok((count, bytes)) => status.show(format!(
+                        "saved {} ({count} changed region{}, {:.2} MB, in {:.2} s)",
+                        play.save.folder.display(),
+                        if count == 1 { "" } else { "s" },
+                        bytes as f64 / 1e6,
+                        start.elapsed().as_secs_f64()
+                    )),
+                    Err(e) => status.show(format!("could not save {}: {e}", play.save.folder.display())),
+                }
+            }
+            SaveAction::Load => {
+                let start = std::time::Instant::now();
+                let reopened = EndlessSave::open(&play.save.folder)
+                    .map_err(|e| e.to_string())
+                    .and_then(|save| EndlessPlay::open(save, play.workers));
+                match reopened {
+                    Ok((reopened, loaded)) => {
+                        if let (Some(view), Ok((mut transform, mut player, _))) =
+                            (loaded.view(None), camera.single_mut())
+                        {
+                            *transform = crate::world::view_transform(view);
+                            *player = Player { walking: player.walking, ..Player::looking(view) };
+                        }
+                        if let (Some(settings), Some(hours)) = (settings.as_mut(), loaded.time_of_day) {
+                            settings.time = hours;
+                        }
+                        *play = reopened;
+                        *world = loaded;
+                        status.show(format!(
+                            "loaded {} in {:.2} s",
+                            play.save.folder.display(),
+                            start.elapsed().as_secs_f64()
+                        ));
+                    }
+                    Err(e) => status.show(format!("load failed, world unchanged: {e}")),
+                }
+            }
+        }
+    }
+}
+
+/// Writes every region changed since the last save and `world.ron` (the player's `view`, window coordinates, and
+/// the time); returns how many regions and the bytes of their files.
+pub fn save_regions(
+    play: &mut EndlessPlay,
+    world: &VoxelWorld,
+    view: Option<CameraView>,
+    hours: Option<f32>,
+) -> Result<(usize, u64), String> {
+    let follower = play.follower();
+    let changed = follower.changed_regions(world);
+    let mut bytes = 0;
+    for (key, region) in &changed {
+        play.save.save_region(*key, region)?;
+        bytes += std::fs::metadata(play.save.region_path(*key)).map_or(0, |m| m.len());
+    }
+    let keys: Vec<IVec2> = changed.iter().map(|(key, _)| *key).collect();
+    let follower = play.follower();
+    follower.saved(&keys);
+    if let Some(view) = view {
+        let key = follower.region_at(Vec3::from(view.origin));
+        let corner = (key * REGION_EDGE - follower.min()).as_vec2();
+        let offset = Vec3::from(view.origin) - Vec3::new(corner.x, 0.0, corner.y);
+        play.save.player = Some((key, CameraView { origin: offset.into(), ..view }));
+    }
+    play.save.time_of_day = hours.or(play.save.time_of_day);
+    play.save.write_world_file()?;
+    Ok((changed.len(), bytes))
+}
