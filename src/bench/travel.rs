@@ -11,7 +11,7 @@ use crate::game::player::TOP_FLYING_SPEED;
 use crate::lights::LightPool;
 use crate::lights::window::LIGHT_BUDGET;
 use crate::lights::window::WindowLights;
-use crate::render::scene::world::{UploadState, stage_upload};
+use crate::render::scene::world::{UploadState, stage_upload, world_gpu_bytes};
 use crate::stress::memory::resident_bytes;
 use crate::world::follow::{STREAM_RADIUS as RADIUS, WINDOW_REGIONS, WRITE_BUDGET, WindowFollower};
 use crate::world::generate::endless::{DEFAULT_HEIGHT, EndlessGenerator, REGION_EDGE};
@@ -75,6 +75,10 @@ pub struct TravelReport {
     /// Regions that arrived during the flight (the first window's not counted).
     pub regions_made: usize,
     pub longest_update_ms: f64,
+    /// Of the longest tick, the time the main thread ran (the rest it waited for a core).
+    pub longest_update_on_cpu_ms: f64,
+    /// The longest of each part of a tick: following (streaming, scrolling), lighting, staging the upload.
+    pub longest_parts_ms: [f64; 3],
     pub resident_min: usize,
     pub resident_max: usize,
     /// Process resident bytes: the most in the flight's first minute (or all of it, if shorter), the most
@@ -82,6 +86,9 @@ pub struct TravelReport {
     pub rss_first_minute: u64,
     pub rss_after: u64,
     pub rss_end: u64,
+    /// The grid's GPU bytes (`world_gpu_bytes`) likewise.
+    pub gpu_first_minute: u64,
+    pub gpu_after: u64,
 }
 
 fn region_at(p: DVec2) -> IVec2 {
@@ -110,13 +117,25 @@ pub fn run_travel(config: &TravelConfig) -> Result<TravelReport, String> {
         let t = flight.elapsed().as_secs_f64();
         let at = start_point + config.direction * config.speed * t.min(seconds);
         let tick = Instant::now();
+        let cpu_at_tick = thread_cpu_ms().unwrap_or(0.0);
         let followed = follower.follow(&mut world, local(at), WRITE_BUDGET);
+        let followed_at = Instant::now();
         window_lights.followed(&mut lights, &world, &followed);
         window_lights.update(&mut lights, &world, LIGHT_BUDGET);
+        let lit_at = Instant::now();
         report.scrolls += u64::from(followed.finished.is_some());
         report.regions_scrolled += followed.regions_written;
         let bytes = stage_upload(&mut world, &mut uploads).bytes();
-        report.longest_update_ms = report.longest_update_ms.max(tick.elapsed().as_secs_f64() * 1e3);
+        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+        let parts = [ms(tick, followed_at), ms(followed_at, lit_at), ms(lit_at, Instant::now())];
+        for (longest, part) in report.longest_parts_ms.iter_mut().zip(parts) {
+            *longest = longest.max(part);
+        }
+        let tick_ms = tick.elapsed().as_secs_f64() * 1e3;
+        if tick_ms > report.longest_update_ms {
+            report.longest_update_ms = tick_ms;
+            report.longest_update_on_cpu_ms = thread_cpu_ms().map_or(f64::NAN, |end| end - cpu_at_tick);
+        }
         report.upload_max = report.upload_max.max(bytes);
         report.upload_total += bytes;
         report.regions_made += followed.stream.arrived;
@@ -125,10 +144,13 @@ pub fn run_travel(config: &TravelConfig) -> Result<TravelReport, String> {
         report.resident_min = report.resident_min.min(follower.resident_count());
         report.resident_max = report.resident_max.max(follower.resident_count());
         let rss = resident_bytes().unwrap_or(0);
+        let gpu = world_gpu_bytes(&world);
         if t < 60.0 {
             report.rss_first_minute = report.rss_first_minute.max(rss);
+            report.gpu_first_minute = report.gpu_first_minute.max(gpu);
         } else {
             report.rss_after = report.rss_after.max(rss);
+            report.gpu_after = report.gpu_after.max(gpu);
         }
         report.rss_end = rss;
         if t >= seconds {
@@ -148,6 +170,28 @@ fn window_reaches(follower: &WindowFollower, world: &crate::world::VoxelWorld, h
     (here - VIEW_REACH).cmpge(first).all() && (here + VIEW_REACH).cmple(last).all()
 }
 
+/// The time the calling thread has run, in ms (`CLOCK_THREAD_CPUTIME_ID`; Linux only, else `None`).
+fn thread_cpu_ms() -> Option<f64> {
+    #[cfg(all(target_os = "linux", target_env = "gnu", target_pointer_width = "64"))]
+    {
+        #[repr(C)]
+        struct Timespec {
+            seconds: i64,
+            nanoseconds: i64,
+        }
+        unsafe extern "C" {
+            fn clock_gettime(clock: i32, time: *mut Timespec) -> i32;
+        }
+        const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
+        let mut time = Timespec { seconds: 0, nanoseconds: 0 };
+        // SAFETY: `time` is a valid, writable timespec for the call's duration.
+        let ok = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut time) } == 0;
+        ok.then(|| time.seconds as f64 * 1e3 + time.nanoseconds as f64 / 1e6)
+    }
+    #[cfg(not(all(target_os = "linux", target_env = "gnu", target_pointer_width = "64")))]
+    None
+}
+
 pub fn travel_markdown(config: &TravelConfig, r: &TravelReport) -> String {
     let mb = |b: u64| b as f64 / 1e6;
     let edge = WINDOW_REGIONS * REGION_EDGE;
@@ -165,10 +209,12 @@ pub fn travel_markdown(config: &TravelConfig, r: &TravelReport) -> String {
          | regions made during the flight | {} ({:.1} a second) |\n\
          | scrolls / regions they wrote | {} / {} |\n\
          | ticks with the view reach outside the window | {} |\n\
-         | longest main-thread time on the window in a tick | {:.2} ms |\n\
+         | longest main-thread time on the window in a tick (of it on a core) | {:.2} ms ({:.2} ms) |\n\
+         | longest following / lighting / staging the upload | {:.2} / {:.2} / {:.2} ms |\n\
          | GPU upload: most in a tick / mean a tick | {:.2} MB / {:.1} KB |\n\
          | resident regions (the streamer's) | {} - {} |\n\
-         | resident memory: first minute / after / end | {:.0} / {:.0} / {:.0} MB |\n",
+         | resident memory: first minute / after / end | {:.0} / {:.0} / {:.0} MB |\n\
+         | the grid's GPU bytes: first minute / after | {:.1} / {:.1} MB |\n",
         config.seed,
         config.distance,
         config.speed,
@@ -185,6 +231,10 @@ pub fn travel_markdown(config: &TravelConfig, r: &TravelReport) -> String {
         r.regions_scrolled,
         r.ticks_unfilled,
         r.longest_update_ms,
+        r.longest_update_on_cpu_ms,
+        r.longest_parts_ms[0],
+        r.longest_parts_ms[1],
+        r.longest_parts_ms[2],
         mb(r.upload_max),
         r.upload_total as f64 / r.ticks.max(1) as f64 / 1e3,
         r.resident_min,
@@ -192,6 +242,8 @@ pub fn travel_markdown(config: &TravelConfig, r: &TravelReport) -> String {
         mb(r.rss_first_minute),
         mb(r.rss_after),
         mb(r.rss_end),
+        mb(r.gpu_first_minute),
+        mb(r.gpu_after),
     )
 }
 

@@ -45,15 +45,21 @@ pub struct GameWorldArgs {
     /// Seed of the generated world.
     #[arg(long, default_value_t = 1, conflicts_with_all = ["world", "scene"])]
     pub seed: u32,
-    /// Size of the generated world in voxels, X,Y,Z.
-    #[arg(long, default_value = DEFAULT_SIZE, value_parser = parse_size, conflicts_with_all = ["world", "scene"])]
-    pub size: UVec3,
+    /// Size of the generated world in voxels, X,Y,Z (default 1024,192,1024).
+    #[arg(long, value_parser = parse_size, conflicts_with_all = ["world", "scene"])]
+    pub size: Option<UVec3>,
 }
 
 impl GameWorldArgs {
     /// Without --world or --scene the generator's world, --new or not (clap refuses --new with either).
     pub fn source(&self) -> WorldSource {
-        self.world.source().unwrap_or(WorldSource::Generated { seed: self.seed, size: self.size })
+        let size = self.size.unwrap_or_else(|| parse_size(DEFAULT_SIZE).expect("the default size parses"));
+        self.world.source().unwrap_or(WorldSource::Generated { seed: self.seed, size })
+    }
+
+    /// Whether nothing names a bounded world: no --world, --scene, --new or --size.
+    pub fn names_no_bounded_world(&self) -> bool {
+        self.world.source().is_none() && !self.new && self.size.is_none()
     }
 
     /// The save path when none is given: `saves/<name of --world>.ron`, or `saves/<fallback>.ron`.

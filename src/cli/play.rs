@@ -30,9 +30,10 @@ pub struct PlayArgs {
     /// The server's secret, when it has one.
     #[arg(long, requires = "connect")]
     secret: Option<String>,
-    /// Play the endless world of --seed: its window follows you wherever you go. F5 saves the regions you
-    /// changed into the save folder, F9 and the next start bring them back.
-    #[arg(long, conflicts_with_all = ["world", "scene", "size", "connect", "view"])]
+    /// Play the endless world of --seed (the default when no --world, --scene, --new or --size is given): its
+    /// window follows you wherever you go. F5 saves the regions you changed into the save folder, F9 and the
+    /// next start bring them back.
+    #[arg(long, conflicts_with_all = ["world", "scene", "new", "size", "connect", "view"])]
     endless: bool,
     /// Where F5 saves and F9 loads (default: saves/<name of --world>.ron, or saves/world.ron; with --endless the
     /// folder saves/endless-<seed>).
@@ -67,7 +68,7 @@ impl PlayArgs {
             return Ok(());
         }
         let model = self.model.as_deref().map(load_model).transpose()?;
-        if self.endless {
+        if self.endless || (self.world.names_no_bounded_world() && self.view.is_none()) {
             let seed = self.world.seed;
             let folder = self.save.clone().unwrap_or_else(|| PathBuf::from(format!("saves/endless-{seed}")));
             let save = EndlessSave::open_or_create(&folder, seed, DEFAULT_HEIGHT)?;

@@ -137,6 +137,10 @@ fn follow_player(
     if play.lights.waiting() > 0 {
         play.lights.update(&mut pool, &world, LIGHT_BUDGET);
     }
+    if let Some(plan) = &followed.finished {
+        let lo = IVec2::new(plan.lo.x, plan.lo.z) + play.window_min();
+        info!("the window moved: it starts at world column {lo}, {} regions came in", plan.keys.len());
+    }
     if wrote {
         world.set_changed();
     }

@@ -222,6 +222,15 @@ impl LightPool {
     /// (their generations move on, so a reservoir holding one drops it) and looks again at the lights on the
     /// window's sides. The caller then brings the bricks that entered up to date with `update_region`.
     pub fn follow_window(&mut self, world: &VoxelWorld) {
+        self.drop_outside_window(world);
+        for (a, b) in window_sides(world) {
+            self.update_region(world, a, b);
+        }
+    }
+
+    /// The first half of `follow_window`: frees the lights outside `world`'s window. The caller looks at the
+    /// window's sides (`window_sides`) again before the pool is compared with one made from the world.
+    pub fn drop_outside_window(&mut self, world: &VoxelWorld) {
         self.window_bricks = window_bricks(world);
         let (lo, hi) = world.grid.window();
         let left: Vec<LightKey> = self
@@ -238,17 +247,6 @@ impl LightPool {
             .collect();
         for key in left {
             self.set(key, None);
-        }
-        // A light on the window's new edge sees air beyond it (outside the window is air), as a pool made from the
-        // scrolled world would: its four sides are looked at again.
-        let last = hi - IVec3::ONE;
-        for (a, b) in [
-            (lo, IVec3::new(lo.x, last.y, last.z)),
-            (IVec3::new(last.x, lo.y, lo.z), last),
-            (lo, IVec3::new(last.x, last.y, lo.z)),
-            (IVec3::new(lo.x, lo.y, last.z), last),
-        ] {
-            self.update_region(world, a, b);
         }
         self.alias_stale = true;
     }
@@ -428,6 +426,20 @@ impl LightPool {
         self.bricks = LightBricks::build(self.brick_dims, self.lights().map(|(_, l)| stored(l.min)));
         self.alias_stale = false;
     }
+}
+
+/// The four sides of `world`'s window (inclusive boxes one voxel thick). A light on the window's edge sees air
+/// beyond it (outside the window is air), as a pool made from the scrolled world would: after a scroll they are
+/// looked at again.
+pub fn window_sides(world: &VoxelWorld) -> [(IVec3, IVec3); 4] {
+    let (lo, hi) = world.grid.window();
+    let last = hi - IVec3::ONE;
+    [
+        (lo, IVec3::new(lo.x, last.y, last.z)),
+        (IVec3::new(last.x, lo.y, lo.z), last),
+        (lo, IVec3::new(last.x, last.y, lo.z)),
+        (IVec3::new(lo.x, lo.y, last.z), last),
+    ]
 }
 
 /// The grid's window's lowest brick and the brick its storage wraps from.

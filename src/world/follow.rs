@@ -219,6 +219,9 @@ impl WindowFollower {
         }
         if *written == plan.keys.len() {
             world.grid.finish_scroll();
+            // The regions the streamer dropped were freed on its workers' arenas, which glibc keeps otherwise;
+            // trimming them takes milliseconds, so not on this thread.
+            std::thread::spawn(crate::alloc_watch::return_freed_memory);
             followed.finished = self.under_way.take().map(|(plan, _)| plan);
         }
         followed

@@ -104,10 +104,14 @@ impl EndlessSave {
     /// Opens the save in `folder`, validating `world.ron`.
     pub fn open(folder: &Path) -> Result<Self, LoadError> {
         let path = folder.join("world.ron");
-        let location = path.display().to_string();
-        let fail = |message: String| LoadError { location: location.clone(), message };
         let text = read_limited(&path, MAX_WORLD_FILE_BYTES)?;
-        let file: EndlessWorldFile = ron::from_str(&text).map_err(|e| fail(one_line(&e.to_string())))?;
+        Self::parse(&text, folder, &path.display().to_string())
+    }
+
+    /// The save whose `world.ron` reads `text` (`location` names it in errors), in `folder`.
+    pub fn parse(text: &str, folder: &Path, location: &str) -> Result<Self, LoadError> {
+        let fail = |message: String| LoadError { location: location.to_string(), message };
+        let file: EndlessWorldFile = ron::from_str(text).map_err(|e| fail(one_line(&e.to_string())))?;
         if file.format != ENDLESS_TAG {
             return Err(fail(format!("not an endless world (format {:?}, expected {ENDLESS_TAG:?})", file.format)));
         }

@@ -60,7 +60,10 @@ impl RegionStreamer {
         let workers = (0..threads.max(1))
             .map(|_| {
                 let (queue, done, make) = (queue.clone(), done.clone(), make.clone());
-                std::thread::spawn(move || work(&queue, &done, &*make))
+                std::thread::spawn(move || {
+                    yield_to_the_game();
+                    work(&queue, &done, &*make)
+                })
             })
             .collect();
         RegionStreamer {
@@ -150,6 +153,23 @@ impl Drop for RegionStreamer {
         wake.notify_all();
         for worker in self.workers.drain(..) {
             let _ = worker.join();
+        }
+    }
+}
+
+/// Lowers the calling thread's scheduling priority (Linux: nice 10), so that where the workers and the game share
+/// too few cores, the game's frame is not the one kept waiting. Elsewhere it does nothing.
+fn yield_to_the_game() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        unsafe extern "C" {
+            fn gettid() -> i32;
+            fn setpriority(which: i32, who: u32, prio: i32) -> i32;
+        }
+        const PRIO_PROCESS: i32 = 0;
+        // SAFETY: both take and return plain integers; on Linux a thread id names one thread for setpriority.
+        unsafe {
+            setpriority(PRIO_PROCESS, gettid() as u32, 10);
         }
     }
 }

@@ -156,6 +156,15 @@ pub fn required_binding(world: &VoxelWorld) -> (&'static str, u64) {
         .expect("three buffers")
 }
 
+/// Bytes the GPU holds for `world`'s grid after a full upload: the brick pool (with its headroom), the
+/// occupancy and voxel masks and the top grid.
+pub fn world_gpu_bytes(world: &VoxelWorld) -> u64 {
+    let grid = &world.grid;
+    let slots = u64::from(gpu_pool_slots(grid.pool_capacity()));
+    let masks = (grid.occupancy().masks().len() as u64 + slots * VOXEL_MASK_WORDS as u64) * 8;
+    slots * SLOT_BYTES + masks + grid.top_cells().len() as u64 * 4
+}
+
 /// Whether a GPU that binds at most `max_binding` bytes per storage buffer can hold `world`; the error says which
 /// buffer is too large and by how much. (Past the limit wgpu's validation stops the renderer, and the game with it.)
 pub fn fits_gpu(world: &VoxelWorld, max_binding: u64) -> Result<(), String> {

@@ -81,6 +81,14 @@ fn all_settings() -> String {
     format!("{{{}}}", pairs.join(", "))
 }
 
+/// A `world.ron` of an endless world with every field: a player a million voxels out and a time of day.
+fn endless_world_file() -> Vec<u8> {
+    let text = "(format: \"glowbrick-endless-world\", version: 1, seed: 7, height: 192, player: Some((region: \
+                (15625, -3), view: (name: \"player\", origin: (10.25, 80.5, 3.125), direction: (0.0, -0.5, 1.0), \
+                fov_deg: 70.0))), time_of_day: Some(18.5))";
+    text.as_bytes().to_vec()
+}
+
 /// The seeds of `target` and the files left out (with why).
 pub fn seeds(target: Target) -> Result<(Vec<Seed>, Vec<String>), String> {
     let root = root();
@@ -106,6 +114,9 @@ pub fn seeds(target: Target) -> Result<(Vec<Seed>, Vec<String>), String> {
         Target::Settings => {
             files(&root.join("assets/settings"), "ron", &mut paths);
             seeds.push(Seed { name: "every key at its default".into(), bytes: all_settings().into_bytes() });
+        }
+        Target::Endless => {
+            seeds.push(Seed { name: "an endless world's world.ron".into(), bytes: endless_world_file() })
         }
     }
     for path in paths {

@@ -20,6 +20,7 @@ use crate::world::format::{parse_world, text_from_bytes};
 use crate::world::grid::MAX_WORLD_EDGE;
 use crate::world::import::{vox, vx};
 use crate::world::recipe::parse_recipe;
+use crate::world::region_save::EndlessSave;
 use corpus::Seed;
 use mutate::{Kind, mutate};
 use std::path::{Path, PathBuf};
@@ -43,10 +44,13 @@ pub enum Target {
     Vx,
     Vox,
     Settings,
+    /// An endless world's `world.ron`.
+    Endless,
 }
 
 impl Target {
-    pub const ALL: [Target; 5] = [Target::World, Target::Recipe, Target::Vx, Target::Vox, Target::Settings];
+    pub const ALL: [Target; 6] =
+        [Target::World, Target::Recipe, Target::Vx, Target::Vox, Target::Settings, Target::Endless];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -55,6 +59,7 @@ impl Target {
             Target::Vx => "vx",
             Target::Vox => "vox",
             Target::Settings => "settings",
+            Target::Endless => "endless",
         }
     }
 
@@ -115,6 +120,10 @@ impl Target {
             Target::Settings => {
                 RenderSettings::default().with_ron(&text()?, &location)?;
                 Ok("settings".into())
+            }
+            Target::Endless => {
+                let save = EndlessSave::parse(&text()?, Path::new("fuzz"), &location).map_err(|e| e.to_string())?;
+                Ok(format!("the endless world of seed {}, {} high", save.seed, save.height))
             }
         }
     }
