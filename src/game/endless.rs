@@ -8,11 +8,14 @@
 use super::hud::StatusLine;
 use super::player::Player;
 use super::save_load::{SaveAction, player_view};
+use crate::dynamic::DynamicObject;
+use crate::dynamic::saved::saved_objects;
 use crate::lights::LightPool;
 use crate::lights::window::{LIGHT_BUDGET, WindowLights};
 use crate::world::events::{ApplyEdits, EditApplied};
 use crate::world::follow::{STREAM_RADIUS, WINDOW_REGIONS, WRITE_BUDGET, WindowFollower};
 use crate::world::generate::endless::{EndlessGenerator, REGION_EDGE};
+use crate::world::objects::SavedObject;
 use crate::world::region_save::EndlessSave;
 use crate::world::stream::MakeRegion;
 use crate::world::{CameraView, VoxelWorld};
@@ -56,6 +59,18 @@ impl EndlessPlay {
         let mut world = window.world;
         world.views = vec![CameraView { origin: origin.into(), ..view }];
         world.time_of_day = save.time_of_day;
+        // A save that has a player has its objects, none or some; a new world gets the default ones.
+        let region_corner = |key: IVec2| (key * REGION_EDGE - window.min).as_vec2();
+        world.objects = save.player.is_some().then(|| {
+            save.objects
+                .iter()
+                .map(|(key, object)| {
+                    let corner = region_corner(*key);
+                    let (x, y, z) = object.anchor;
+                    SavedObject { anchor: (x + corner.x, y, z + corner.y), ..object.clone() }
+                })
+                .collect()
+        });
         let play = EndlessPlay { follower: Mutex::new(follower), lights: WindowLights::default(), save, workers };
         Ok((play, world))
     }
@@ -156,6 +171,8 @@ fn save_or_load_regions(
     mut camera: Query<(&mut Transform, &mut Player, &Projection)>,
     mut settings: Option<ResMut<crate::settings::RenderSettings>>,
     mut status: ResMut<StatusLine>,
+    mut commands: Commands,
+    objects: Query<(Entity, &DynamicObject)>,
 ) {
     for action in actions.read() {
         match action {
@@ -169,7 +186,8 @@ fn save_or_load_regions(
                     };
                     player_view(transform, fov)
                 });
-                match save_regions(&mut play, &world, view, hours) {
+                let live = saved_objects(objects.iter().map(|(_, o)| o));
+                match save_regions(&mut play, &world, view, hours, &live) {
                     Ok((count, bytes)) => status.show(format!(
                         "saved {} ({count} changed region{}, {:.2} MB, in {:.2} s)",
                         play.save.folder.display(),
@@ -196,6 +214,11 @@ fn save_or_load_regions(
                         if let (Some(settings), Some(hours)) = (settings.as_mut(), loaded.time_of_day) {
                             settings.time = hours;
                         }
+                        let saved = loaded.objects.clone().unwrap_or_default();
+                        objects.iter().for_each(|(entity, _)| commands.entity(entity).despawn());
+                        commands.queue(move |app_world: &mut World| {
+                            super::objects::spawn_saved_or_report(app_world, &saved)
+                        });
                         *play = reopened;
                         *world = loaded;
                         status.show(format!(
@@ -211,13 +234,14 @@ fn save_or_load_regions(
     }
 }
 
-/// Writes every region changed since the last save and `world.ron` (the player's `view`, window coordinates, and
-/// the time); returns how many regions and the bytes of their files.
+/// Writes every region changed since the last save and `world.ron` (the player's `view` and the moving `objects`,
+/// window coordinates, and the time); returns how many regions and the bytes of their files.
 pub fn save_regions(
     play: &mut EndlessPlay,
     world: &VoxelWorld,
     view: Option<CameraView>,
     hours: Option<f32>,
+    objects: &[SavedObject],
 ) -> Result<(usize, u64), String> {
     let follower = play.follower();
     let changed = follower.changed_regions(world);
@@ -229,12 +253,26 @@ pub fn save_regions(
     let keys: Vec<IVec2> = changed.iter().map(|(key, _)| *key).collect();
     let follower = play.follower();
     follower.saved(&keys);
-    if let Some(view) = view {
-        let key = follower.region_at(Vec3::from(view.origin));
-        let corner = (key * REGION_EDGE - follower.min()).as_vec2();
-        let offset = Vec3::from(view.origin) - Vec3::new(corner.x, 0.0, corner.y);
-        play.save.player = Some((key, CameraView { origin: offset.into(), ..view }));
-    }
+    // A region key and an offset from its corner: exact however far out.
+    let (min, region_at) = (follower.min(), |p: Vec3| follower.region_at(p));
+    let from_corner = |p: Vec3| {
+        let key = region_at(p);
+        let corner = (key * REGION_EDGE - min).as_vec2();
+        (key, p - Vec3::new(corner.x, 0.0, corner.y))
+    };
+    let player = view.map(|view| {
+        let (key, offset) = from_corner(Vec3::from(view.origin));
+        (key, CameraView { origin: offset.into(), ..view })
+    });
+    let objects: Vec<(IVec2, SavedObject)> = objects
+        .iter()
+        .map(|object| {
+            let (key, offset) = from_corner(Vec3::from(object.anchor));
+            (key, SavedObject { anchor: offset.into(), ..object.clone() })
+        })
+        .collect();
+    play.save.player = player.or(play.save.player.take());
+    play.save.objects = objects;
     play.save.time_of_day = hours.or(play.save.time_of_day);
     play.save.write_world_file()?;
     Ok((changed.len(), bytes))

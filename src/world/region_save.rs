@@ -7,6 +7,7 @@
 
 use super::format::{LoadError, load_world, one_line, read_limited, save_with_backup, write_atomically};
 use super::generate::endless::REGION_EDGE;
+use super::objects::{MAX_SAVED_OBJECTS, SavedObject};
 use super::palette::Palette;
 use super::{CameraView, VoxelWorld};
 use bevy::math::{IVec2, UVec3, Vec3};
@@ -29,6 +30,15 @@ struct EndlessWorldFile {
     player: Option<SavedPlayer>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     time_of_day: Option<f32>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    objects: Vec<SavedObjectAt>,
+}
+
+/// A moving object, its anchor relative to a region's corner.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct SavedObjectAt {
+    region: (i32, i32),
+    object: SavedObject,
 }
 
 /// Where the player stood: a region and a view whose origin is relative to the region's corner.
@@ -50,6 +60,8 @@ pub struct EndlessSave {
     /// Where the player stood when last saved: a region key and a view from that region's corner.
     pub player: Option<(IVec2, CameraView)>,
     pub time_of_day: Option<f32>,
+    /// The moving objects: a region key each and the object, its anchor from that region's corner.
+    pub objects: Vec<(IVec2, SavedObject)>,
 }
 
 impl EndlessSave {
@@ -69,7 +81,14 @@ impl EndlessSave {
             return Ok(save);
         }
         std::fs::create_dir_all(folder.join("regions")).map_err(|e| format!("{}: {e}", folder.display()))?;
-        let save = EndlessSave { folder: folder.to_path_buf(), seed, height, player: None, time_of_day: None };
+        let save = EndlessSave {
+            folder: folder.to_path_buf(),
+            seed,
+            height,
+            player: None,
+            time_of_day: None,
+            objects: Vec::new(),
+        };
         save.write_world_file()?;
         Ok(save)
     }
@@ -83,6 +102,11 @@ impl EndlessSave {
             height: self.height,
             player: self.player.clone().map(|(key, view)| SavedPlayer { region: (key.x, key.y), view }),
             time_of_day: self.time_of_day,
+            objects: self
+                .objects
+                .iter()
+                .map(|(key, object)| SavedObjectAt { region: (key.x, key.y), object: object.clone() })
+                .collect(),
         };
         let text = ron::ser::to_string_pretty(&file, ron::ser::PrettyConfig::new()).map_err(|e| e.to_string())?;
         let path = self.folder.join("world.ron");
@@ -121,11 +145,22 @@ impl EndlessSave {
         if !(40..=super::grid::MAX_WORLD_EDGE).contains(&file.height) {
             return Err(fail(format!("height {} is outside 40..={}", file.height, super::grid::MAX_WORLD_EDGE)));
         }
+        let keys = i32::MAX / REGION_EDGE / 2;
+        let key_ok = |(x, z): (i32, i32)| x.abs() <= keys && z.abs() <= keys;
+        if file.objects.len() > MAX_SAVED_OBJECTS {
+            return Err(fail(format!("{} objects, the most a world holds is {MAX_SAVED_OBJECTS}", file.objects.len())));
+        }
+        let region_size = Vec3::new(REGION_EDGE as f32, file.height as f32, REGION_EDGE as f32);
+        for (i, at) in file.objects.iter().enumerate() {
+            if !key_ok(at.region) {
+                return Err(fail(format!("object {i}: region {:?} is past the world's end", at.region)));
+            }
+            at.object.check(region_size).map_err(|e| fail(format!("object {i}: {e}")))?;
+        }
         if let Some(player) = &file.player {
             let [x, y, z] = player.view.origin;
             let near = x.abs().max(z.abs()) <= PLAYER_REACH && y.abs() <= PLAYER_REACH;
-            let keys = i32::MAX / REGION_EDGE / 2;
-            let key_ok = player.region.0.abs() <= keys && player.region.1.abs() <= keys;
+            let key_ok = key_ok(player.region);
             if let Some(problem) = player.view.problem() {
                 return Err(fail(format!("the player's {problem}")));
             }
@@ -145,6 +180,7 @@ impl EndlessSave {
             height: file.height,
             player: file.player.map(|p| (IVec2::new(p.region.0, p.region.1), p.view)),
             time_of_day: file.time_of_day,
+            objects: file.objects.into_iter().map(|at| (IVec2::new(at.region.0, at.region.1), at.object)).collect(),
         })
     }
 
@@ -246,6 +282,13 @@ mod tests {
         };
         with_player.player = Some((IVec2::new(15_625, -3), view));
         with_player.time_of_day = Some(18.5);
+        let lantern = SavedObject {
+            model: "lantern".into(),
+            motion: crate::world::objects::SavedMotion::Drift { radius: 5.0, period: 12.0 },
+            anchor: (3.5, 70.0, 60.25),
+            age: 4.0,
+        };
+        with_player.objects = vec![(IVec2::new(15_625, -2), lantern)];
         with_player.write_world_file().unwrap();
         let back = EndlessSave::open(&dir).unwrap();
         assert_eq!(back, with_player);
@@ -299,6 +342,10 @@ mod tests {
             (
                 "(format: \"glowbrick-endless-world\", version: 1, seed: 1, height: 64, time_of_day: Some(99.0))",
                 "time of day 99",
+            ),
+            (
+                "(format: \"glowbrick-endless-world\", version: 1, seed: 1, height: 64, objects: [(region: (0, 0), object: (model: \"dragon\", motion: Still, anchor: (1.0, 2.0, 3.0), age: 0.0))])",
+                "object 0: model 'dragon'",
             ),
         ] {
             std::fs::write(dir.join("world.ron"), text).unwrap();

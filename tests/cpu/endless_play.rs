@@ -150,3 +150,34 @@ fn an_edit_survives_leaving_the_window_f5_saves_only_its_region_and_f9_and_a_res
     assert_eq!(restarted.grid.get(at_restart), lamp);
     let _ = std::fs::remove_dir_all(&folder);
 }
+
+#[test]
+fn moving_objects_and_the_player_come_back_where_they_were_saved() {
+    use glowbrick::game::endless::save_regions;
+    use glowbrick::world::objects::{SavedMotion, SavedObject};
+    let folder = scratch("objects");
+    let save = EndlessSave::open_or_create(&folder, SEED, HEIGHT).unwrap();
+    let (mut play, world) = EndlessPlay::open(save, 2).unwrap();
+    assert_eq!(world.objects, None, "a new endless world gets the default objects");
+    let view = world.view(None).unwrap().clone();
+    let lantern = |anchor| SavedObject {
+        model: "lantern".into(),
+        motion: SavedMotion::Drift { radius: 5.0, period: 12.0 },
+        anchor,
+        age: 3.0,
+    };
+    let at = (view.origin[0] + 7.25, 50.5, view.origin[2] - 130.0);
+    let min = play.window_min();
+    let (regions, _) = save_regions(&mut play, &world, Some(view.clone()), Some(19.0), &[lantern(at)]).unwrap();
+    assert_eq!(regions, 0, "nothing was edited");
+    drop(play);
+    let (play, reopened) = EndlessPlay::open(EndlessSave::open(&folder).unwrap(), 2).unwrap();
+    assert_eq!(play.window_min(), min, "the same window around the same player");
+    assert_eq!(reopened.time_of_day, Some(19.0));
+    let back = Vec3::from(reopened.view(None).unwrap().origin);
+    assert!((back - Vec3::from(view.origin)).length() < 1e-3, "{back} vs {:?}", view.origin);
+    let objects = reopened.objects.clone().expect("the saved objects");
+    assert_eq!(objects.len(), 1);
+    assert_eq!(objects[0], lantern(at));
+    let _ = std::fs::remove_dir_all(&folder);
+}
