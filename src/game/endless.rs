@@ -118,7 +118,7 @@ pub struct EndlessPlugin;
 
 impl Plugin for EndlessPlugin {
     fn build(&self, app: &mut App) {
-        app.add_systems(
+        app.add_systems(Startup, say_where_saves_go.run_if(resource_exists::<EndlessPlay>)).add_systems(
             Update,
             (note_edits, follow_player, save_or_load_regions)
                 .chain()
@@ -127,6 +127,15 @@ impl Plugin for EndlessPlugin {
                 .run_if(resource_exists::<VoxelWorld>),
         );
     }
+}
+
+/// Tells the player which world this is and where F5 writes.
+fn say_where_saves_go(play: Res<EndlessPlay>, mut status: ResMut<StatusLine>) {
+    status.show(format!(
+        "the endless world of seed {}: F5 saves the regions you change into {}",
+        play.save.seed,
+        play.save.folder.display()
+    ));
 }
 
 /// Which regions the player's edits changed.
