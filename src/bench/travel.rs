@@ -13,7 +13,7 @@ use crate::lights::window::LIGHT_BUDGET;
 use crate::lights::window::WindowLights;
 use crate::render::scene::world::{UploadState, stage_upload, world_gpu_bytes};
 use crate::stress::memory::resident_bytes;
-use crate::world::follow::{STREAM_RADIUS as RADIUS, WINDOW_REGIONS, WRITE_BUDGET, WindowFollower};
+use crate::world::follow::{STREAM_RADIUS as RADIUS, WINDOW_REGIONS, WRITE_BUDGET, WindowFollower, stream_workers};
 use crate::world::generate::endless::{DEFAULT_HEIGHT, EndlessGenerator, REGION_EDGE};
 use bevy::math::{DVec2, IVec2, Vec3};
 use std::path::Path;
@@ -44,7 +44,7 @@ impl TravelConfig {
             distance: 10_000.0,
             speed: TOP_FLYING_SPEED as f64,
             direction: DVec2::X,
-            workers: workers(),
+            workers: stream_workers(),
         }
     }
 
@@ -52,11 +52,6 @@ impl TravelConfig {
     pub fn quick() -> Self {
         TravelConfig { distance: 320.0, direction: DVec2::ONE.normalize(), ..Self::full() }
     }
-}
-
-/// One worker a core, leaving none idle: the main thread mostly sleeps between ticks.
-fn workers() -> usize {
-    std::thread::available_parallelism().map_or(2, |n| n.get())
 }
 
 #[derive(Clone, Debug, Default)]

@@ -1,9 +1,10 @@
 //! `glowbrick play`: open a window on a world (the default command).
 
 use super::args::{GameWorldArgs, SettingArgs};
-use crate::game::endless::{EndlessPlay, stream_workers};
+use crate::game::endless::EndlessPlay;
 use crate::game::models::ModelToPlace;
 use crate::settings::RenderSettings;
+use crate::world::follow::stream_workers;
 use crate::world::generate::endless::DEFAULT_HEIGHT;
 use crate::world::import::vox::parse_vox;
 use crate::world::region_save::EndlessSave;
@@ -69,6 +70,11 @@ impl PlayArgs {
         }
         let model = self.model.as_deref().map(load_model).transpose()?;
         if self.endless || (self.world.names_no_bounded_world() && self.view.is_none()) {
+            if self.model.is_some() {
+                return Err("--model places a model's own colours, which the endless world's region files do not \
+                            hold yet: open a bounded world for it (--new, --world or --scene)"
+                    .into());
+            }
             let seed = self.world.seed;
             let folder = self.save.clone().unwrap_or_else(|| PathBuf::from(format!("saves/endless-{seed}")));
             let save = EndlessSave::open_or_create(&folder, seed, DEFAULT_HEIGHT)?;

@@ -60,7 +60,8 @@ impl EndlessPlay {
         world.views = vec![CameraView { origin: origin.into(), ..view }];
         world.time_of_day = save.time_of_day;
         // A save that has a player has its objects, none or some; a new world gets the default ones.
-        let region_corner = |key: IVec2| (key * REGION_EDGE - window.min).as_vec2();
+        // In i64: a crafted save may put an object and the player at the two ends of the world.
+        let region_corner = |key: IVec2| (key.as_i64vec2() * REGION_EDGE as i64 - window.min.as_i64vec2()).as_vec2();
         world.objects = save.player.is_some().then(|| {
             save.objects
                 .iter()
@@ -93,11 +94,6 @@ impl EndlessPlay {
     fn follower(&mut self) -> &mut WindowFollower {
         self.follower.get_mut().unwrap_or_else(|e| e.into_inner())
     }
-}
-
-/// One worker thread a core but the one the game's main thread needs.
-pub fn stream_workers() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get().saturating_sub(1).max(1))
 }
 
 /// Makes a region from the save folder where it holds one, else from the generator. A saved region that cannot
@@ -139,9 +135,9 @@ fn say_where_saves_go(play: Res<EndlessPlay>, mut status: ResMut<StatusLine>) {
 }
 
 /// Which regions the player's edits changed.
-fn note_edits(mut edits: MessageReader<EditApplied>, mut play: ResMut<EndlessPlay>) {
+fn note_edits(mut edits: MessageReader<EditApplied>, mut play: ResMut<EndlessPlay>, world: Res<VoxelWorld>) {
     for edit in edits.read().filter(|e| e.changed > 0) {
-        play.follower().note_edit(edit.min, edit.max);
+        play.follower().note_edit(&world, edit.min, edit.max);
     }
 }
 
@@ -223,11 +219,13 @@ fn save_or_load_regions(
                         if let (Some(settings), Some(hours)) = (settings.as_mut(), loaded.time_of_day) {
                             settings.time = hours;
                         }
-                        let saved = loaded.objects.clone().unwrap_or_default();
-                        objects.iter().for_each(|(entity, _)| commands.entity(entity).despawn());
-                        commands.queue(move |app_world: &mut World| {
-                            super::objects::spawn_saved_or_report(app_world, &saved)
-                        });
+                        // A save never written with F5 has no objects of its own: the live ones stay.
+                        if let Some(saved) = loaded.objects.clone() {
+                            objects.iter().for_each(|(entity, _)| commands.entity(entity).despawn());
+                            commands.queue(move |app_world: &mut World| {
+                                super::objects::spawn_saved_or_report(app_world, &saved)
+                            });
+                        }
                         *play = reopened;
                         *world = loaded;
                         status.show(format!(
@@ -241,6 +239,18 @@ fn save_or_load_regions(
             }
         }
     }
+}
+
+/// The player's view as the loader accepts it: its height within the reach a save allows.
+fn fit_player(view: CameraView) -> CameraView {
+    let [x, y, z] = view.origin;
+    let reach = crate::world::region_save::PLAYER_REACH;
+    CameraView { origin: [x, y.clamp(-reach, reach), z], ..view }
+}
+
+/// Whether the loader accepts `object` (anchored from a region's corner) in a world `height` voxels high.
+fn object_fits(object: &SavedObject, height: u32) -> bool {
+    crate::world::region_save::check_object(object, height).is_ok()
 }
 
 /// Writes every region changed since the last save and `world.ron` (the player's `view` and the moving `objects`,
@@ -280,8 +290,10 @@ pub fn save_regions(
             (key, SavedObject { anchor: offset.into(), ..object.clone() })
         })
         .collect();
-    play.save.player = player.or(play.save.player.take());
-    play.save.objects = objects;
+    play.save.player = player.map(|(key, view)| (key, fit_player(view))).or(play.save.player.take());
+    // The loader refuses an object it could not have made (flown far above the world, say): leave it out.
+    let height = play.save.height;
+    play.save.objects = objects.into_iter().filter(|(_, object)| object_fits(object, height)).collect();
     play.save.time_of_day = hours.or(play.save.time_of_day);
     play.save.write_world_file()?;
     Ok((changed.len(), bytes))

@@ -63,6 +63,8 @@ pub fn run_game(
     if let Some(model) = model {
         app.insert_resource(model);
     }
+    // V places a model's own colours in the grid; an endless world's region files hold the generator's palette.
+    let models_placeable = endless.is_none();
     if let Some(endless) = endless {
         app.insert_resource(endless).add_plugins(endless::EndlessPlugin);
     }
@@ -118,7 +120,10 @@ pub fn run_game(
                 .add_systems(Update, save_key_only);
         }
         None => {
-            app.add_systems(Update, (save_load::save_load_keys, models::model_key, clock_keys));
+            app.add_systems(Update, (save_load::save_load_keys, clock_keys));
+            if models_placeable {
+                app.add_systems(Update, models::model_key);
+            }
         }
     }
     app.run()

@@ -24,6 +24,12 @@ pub const STREAM_RADIUS: i32 = WINDOW_REGIONS / 2 + SCROLL_REGIONS;
 /// A tick's time for writing the regions of a scroll under way.
 pub const WRITE_BUDGET: Duration = Duration::from_millis(3);
 
+/// The region workers the game and the travel bench run: one a core. They run below the game's priority
+/// (`world::stream`), so they take what the frame leaves; at top speed on 2 cores the flight needs both.
+pub fn stream_workers() -> usize {
+    std::thread::available_parallelism().map_or(2, |n| n.get())
+}
+
 /// Regions a scroll moves the window by, on an axis: the occupancy hierarchy's coarsest cell.
 pub const SCROLL_REGIONS: i32 = WINDOW_STEP / REGION_EDGE;
 
@@ -113,6 +119,8 @@ pub struct WindowFollower {
     edited_in_window: HashSet<IVec2>,
     /// Regions changed since the last save.
     unsaved: HashSet<IVec2>,
+    /// The generator's palette's length: the window's palette starts with it.
+    generator_materials: usize,
 }
 
 /// What `follow` did in one call.
@@ -165,6 +173,7 @@ impl WindowFollower {
                     under_way: None,
                     edited_in_window: HashSet::new(),
                     unsaved: HashSet::new(),
+                    generator_materials: window.world.palette.materials.len(),
                 };
                 return (follower, window);
             }
@@ -236,8 +245,14 @@ impl WindowFollower {
         self.min
     }
 
-    /// Takes note of an edit of the window's voxels `lo..=hi` (window coordinates).
-    pub fn note_edit(&mut self, lo: IVec3, hi: IVec3) {
+    /// Takes note of an edit of the window's voxels `lo..=hi` (window coordinates; clipped to the window, which
+    /// is all an edit changes).
+    pub fn note_edit(&mut self, world: &VoxelWorld, lo: IVec3, hi: IVec3) {
+        let (window_lo, window_hi) = world.grid.window();
+        let (lo, hi) = (lo.max(window_lo), hi.min(window_hi - IVec3::ONE));
+        if lo.cmpgt(hi).any() {
+            return;
+        }
         let edge = IVec2::splat(REGION_EDGE);
         let a = (IVec2::new(lo.x, lo.z) + self.min).div_euclid(edge);
         let b = (IVec2::new(hi.x, hi.z) + self.min).div_euclid(edge);
@@ -257,10 +272,14 @@ impl WindowFollower {
         a.x >= lo.x && a.y >= lo.z && b.x <= hi.x && b.y <= hi.z
     }
 
-    /// Region `key` as the window holds it now.
+    /// Region `key` as the window holds it now, with the generator's palette: what the game adds to the palette
+    /// later (moving objects' materials) is never in the grid, and a region file must hold the palette the
+    /// generator's regions have to load.
     fn copy_out(&self, world: &VoxelWorld, key: IVec2) -> VoxelWorld {
         let size = UVec3::new(REGION_EDGE as u32, world.grid.size().y, REGION_EDGE as u32);
-        let mut region = VoxelWorld::new(size, world.palette.clone());
+        let mut palette = world.palette.clone();
+        palette.materials.truncate(self.generator_materials);
+        let mut region = VoxelWorld::new(size, palette);
         let at = IVec3::new(key.x * REGION_EDGE - self.min.x, 0, key.y * REGION_EDGE - self.min.y) / BRICK_SIZE;
         let dims = region.grid.brick_dims().as_ivec3();
         for z in 0..dims.z {

@@ -49,7 +49,7 @@ struct SavedPlayer {
 }
 
 /// How far (voxels, x and z) from its region's corner a saved player's view may stand.
-const PLAYER_REACH: f32 = 4096.0;
+pub const PLAYER_REACH: f32 = 4096.0;
 
 /// An endless world's save folder.
 #[derive(Clone, Debug, PartialEq)]
@@ -150,12 +150,11 @@ impl EndlessSave {
         if file.objects.len() > MAX_SAVED_OBJECTS {
             return Err(fail(format!("{} objects, the most a world holds is {MAX_SAVED_OBJECTS}", file.objects.len())));
         }
-        let region_size = Vec3::new(REGION_EDGE as f32, file.height as f32, REGION_EDGE as f32);
         for (i, at) in file.objects.iter().enumerate() {
             if !key_ok(at.region) {
                 return Err(fail(format!("object {i}: region {:?} is past the world's end", at.region)));
             }
-            at.object.check(region_size).map_err(|e| fail(format!("object {i}: {e}")))?;
+            check_object(&at.object, file.height).map_err(|e| fail(format!("object {i}: {e}")))?;
         }
         if let Some(player) = &file.player {
             let [x, y, z] = player.view.origin;
@@ -224,6 +223,11 @@ impl EndlessSave {
         let Ok(entries) = std::fs::read_dir(self.folder.join("regions")) else { return Vec::new() };
         entries.filter_map(|e| region_key(&e.ok()?.file_name().to_string_lossy())).collect()
     }
+}
+
+/// The first problem with a saved object anchored from a region's corner, in a world `height` voxels high.
+pub fn check_object(object: &SavedObject, height: u32) -> Result<(), String> {
+    object.check(Vec3::new(REGION_EDGE as f32, height as f32, REGION_EDGE as f32))
 }
 
 /// The key in a region file's name, `r.X.Z.ron`.
