@@ -2,6 +2,7 @@
 //! survives its region leaving the window and coming back, F5 writes only the changed region, and F9 and a
 //! restart bring the edit and the player back.
 
+use super::game_building::{spawn_player, world};
 use bevy::prelude::*;
 use glowbrick::game::GameLogicPlugin;
 use glowbrick::game::endless::{EndlessPlay, EndlessPlugin};
@@ -35,17 +36,8 @@ fn game(folder: &std::path::Path) -> App {
         .insert_resource(world)
         .insert_resource(play)
         .insert_resource(SavePath(folder.to_path_buf()));
-    app.world_mut().spawn((
-        glowbrick::world::view_transform(&view),
-        Player::looking(&view),
-        Projection::Perspective(PerspectiveProjection::default()),
-    ));
-    app.update();
+    spawn_player(&mut app, &view);
     app
-}
-
-fn world(app: &App) -> &VoxelWorld {
-    app.world().resource::<VoxelWorld>()
 }
 
 fn player_at(app: &mut App) -> Vec3 {

@@ -29,16 +29,21 @@ fn game(eye: Vec3, dir: Vec3, save: PathBuf) -> App {
         .insert_resource(load_scene("test-room").unwrap())
         .insert_resource(SavePath(save));
     let view = CameraView { name: "test".into(), origin: eye.into(), direction: dir.into(), fov_deg: 60.0 };
-    app.world_mut().spawn((
-        glowbrick::world::view_transform(&view),
-        Player::looking(&view),
-        Projection::Perspective(PerspectiveProjection::default()),
-    ));
-    app.update();
+    spawn_player(&mut app, &view);
     app
 }
 
-fn world(app: &App) -> &VoxelWorld {
+/// Puts the player's camera at `view` and runs one frame (the headless games of every test module).
+pub(crate) fn spawn_player(app: &mut App, view: &CameraView) {
+    app.world_mut().spawn((
+        glowbrick::world::view_transform(view),
+        Player::looking(view),
+        Projection::Perspective(PerspectiveProjection::default()),
+    ));
+    app.update();
+}
+
+pub(crate) fn world(app: &App) -> &VoxelWorld {
     app.world().resource::<VoxelWorld>()
 }
 
