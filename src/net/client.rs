@@ -116,7 +116,9 @@ impl Plugin for NetClientPlugin {
                     // Before the server's edits: materials the game added for its requests (since the last frame's
                     // forwarding) leave the palette first, so the server's materials land at the server's ids.
                     forward_requests,
-                    take_world_and_edits.in_set(ApplyEdits),
+                    take_world_and_edits
+                        .in_set(ApplyEdits)
+                        .run_if(not(resource_exists::<super::endless_client::EndlessClient>)),
                     (take_clock, take_players, take_refusals, take_notices, take_welcome_back),
                     (take_server_time, follow_server_clock),
                     rejoin_when_lost.run_if(resource_exists::<Join>),
@@ -283,8 +285,21 @@ fn forward_requests(
     mut requests: MessageReader<EditRequest>,
     mut asks: MessageWriter<EditAsk>,
     world: Option<ResMut<VoxelWorld>>,
+    endless: Option<Res<super::endless_client::EndlessClient>>,
 ) {
     if requests.is_empty() {
+        return;
+    }
+    // An endless world's edits travel in world coordinates, once its window is made.
+    if let Some(endless) = endless {
+        let Some(offset) = endless.offset() else {
+            requests.clear();
+            return;
+        };
+        for request in requests.read() {
+            let edit = NetEdit::from(&request.edit.moved(offset));
+            asks.write(EditAsk::plain(edit, request.undoable));
+        }
         return;
     }
     let mut own = Vec::new();
@@ -431,6 +446,8 @@ fn rejoin_when_lost(
             commands.remove_resource::<bevy_replicon_renet::netcode::NetcodeClientTransport>();
             commands.insert_resource(renet);
             commands.insert_resource(transport);
+            // An endless world's window is made again around the player once the server welcomes it back.
+            commands.remove_resource::<super::endless_client::EndlessClient>();
             client.restart_join();
         }
         Err(e) => warn!("cannot dial {} again: {e}", join.server),

@@ -9,6 +9,8 @@
 
 pub mod client;
 pub mod console;
+pub mod endless_client;
+pub mod endless_server;
 pub mod materials;
 pub mod protocol;
 pub mod server;
@@ -48,6 +50,20 @@ pub fn server_app(mut world: VoxelWorld, rules: server::ServerRules) -> App {
     app
 }
 
+/// A server of the endless world `world` without window or GPU: no world file and no light pool, only the
+/// regions it must hold (`endless_server`). Call `transport::listen` on it, then `update` it.
+pub fn endless_server_app(world: endless_server::EndlessWorld, rules: server::ServerRules, hours: f32) -> App {
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, StatesPlugin, NetworkingPlugin))
+        .insert_resource(rules)
+        .add_plugins((server::NetServerPlugin, endless_server::EndlessServerPlugin))
+        .insert_resource(world)
+        .insert_resource(server::WorldClock(hours));
+    app.finish();
+    app.cleanup();
+    app
+}
+
 /// Adds the materials the world's objects' models need to its palette before anyone joins: a client resolving
 /// them itself would grow its palette where the server's did not, and the next material the server adds would
 /// take a different id there. A model that cannot be resolved is left to each client's warning.
@@ -60,14 +76,14 @@ fn resolve_object_models(world: &mut VoxelWorld) {
     }
 }
 
-/// A client without window or GPU (tests, the bench): it receives the world and keeps its grid and light pool in
-/// step with the server's; `extra` adds plugins of the layers above (the game's undo). Call `transport::dial` on
+/// A client without window or GPU (tests, the bench): it receives the world (or, joining an endless server, makes
+/// its window) and keeps its grid and light pool in step with the server's; `extra` adds plugins of the layers above (the game's undo). Call `transport::dial` on
 /// it.
 pub fn headless_client_app<M>(name: &str, extra: impl bevy::app::Plugins<M>) -> App {
     let mut app = App::new();
     app.add_plugins((MinimalPlugins, StatesPlugin, NetworkingPlugin))
         .insert_resource(client::NetClient::named(name))
-        .add_plugins((WorldEditPlugin, LightsPlugin, client::NetClientPlugin))
+        .add_plugins((WorldEditPlugin, LightsPlugin, client::NetClientPlugin, endless_client::EndlessClientPlugin))
         .add_plugins(extra);
     app.finish();
     app.cleanup();

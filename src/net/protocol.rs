@@ -137,7 +137,47 @@ pub struct Pose {
     pub yaw: f32,
 }
 
+/// Asks for region `key` (a world key) of the endless world: the sender holds it from now until it lets it go,
+/// and hears every edit that touches it meanwhile. `ticket` comes back with the reply.
+#[derive(Message, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RegionAsk {
+    pub key: [i32; 2],
+    pub ticket: u32,
+}
+
+/// The sender no longer holds region `key`, asked for with `ticket` (each message kind has its own channel, so a
+/// later ask for the same region may overtake this: the ticket tells them apart).
+#[derive(Message, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RegionLetGo {
+    pub key: [i32; 2],
+    pub ticket: u32,
+}
+
 // --- server to client ---
+
+/// The receiver joined an endless world: it makes every region nobody changed itself, from `seed` and `height`,
+/// and asks the server for the rest (`RegionAsk`). Its edits and poses travel in world coordinates. `player` is
+/// the receiver's id; `seq` the number of the last edit.
+#[derive(Message, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EndlessWelcome {
+    pub seed: u32,
+    pub height: u32,
+    pub seq: u64,
+    pub player: u64,
+    pub hours: f32,
+}
+
+/// Region `key` as it was after edit `seq`, for ask `ticket`. `count` 0: nobody has changed it, the receiver
+/// makes it from the seed; else piece `index` of `count` of the deflated region file.
+#[derive(Message, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RegionPiece {
+    pub key: [i32; 2],
+    pub ticket: u32,
+    pub seq: u64,
+    pub index: u32,
+    pub count: u32,
+    pub bytes: Vec<u8>,
+}
 
 /// One piece of the world as it was after edit `seq` (a deflated RON world file, cut in pieces). `player` is the
 /// receiver's id, so it can tell its own edits among the broadcasts.
@@ -231,6 +271,8 @@ pub fn register_messages(app: &mut App) {
         .add_client_message::<Pose>(Channel::Unreliable)
         .add_client_message::<SpawnAsk>(Channel::Ordered)
         .add_client_message::<HistoryAsk>(Channel::Ordered)
+        .add_client_message::<RegionAsk>(Channel::Ordered)
+        .add_client_message::<RegionLetGo>(Channel::Ordered)
         .add_server_message::<WorldPiece>(Channel::Ordered)
         .add_server_message::<EditDone>(Channel::Ordered)
         .add_server_message::<Refused>(Channel::Ordered)
@@ -238,6 +280,8 @@ pub fn register_messages(app: &mut App) {
         .add_server_message::<Players>(Channel::Ordered)
         .add_server_message::<Notice>(Channel::Ordered)
         .add_server_message::<WelcomeBack>(Channel::Ordered)
+        .add_server_message::<EndlessWelcome>(Channel::Ordered)
+        .add_server_message::<RegionPiece>(Channel::Ordered)
         .add_server_message::<ServerTime>(Channel::Unreliable);
 }
 

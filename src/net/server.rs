@@ -77,9 +77,9 @@ pub struct Peer {
     pub name: String,
     pub pose: Option<Pose>,
     /// Edits it may still make now (refilled at `edits_per_second` up to `edit_burst`).
-    tokens: f32,
+    pub(crate) tokens: f32,
     /// Seconds until it may be told of another refusal (a flood gets one reply a second, not one per message).
-    quiet: f32,
+    pub(crate) quiet: f32,
     /// Number of the last edit when it was authorized: the world it is sent is at least this recent.
     joined_at: u64,
     /// Whether its hello has arrived (its world is sent only then, so a banned name gets nothing).
@@ -131,7 +131,7 @@ impl Histories {
         self.players.get(&name.to_lowercase()).map_or(0, |p| p.stacks.undo_len())
     }
 
-    fn record(&mut self, name: &str, edit: Edit, before: Arc<[crate::world::Voxel]>) {
+    pub(crate) fn record(&mut self, name: &str, edit: Edit, before: Arc<[crate::world::Voxel]>) {
         let (min, max) = edit.bounds();
         let stacks = &mut self.of(name).stacks;
         let held = stacks.voxels();
@@ -142,7 +142,7 @@ impl Histories {
     }
 
     /// Takes back or applies again `name`'s latest batch: the edit to apply.
-    fn step(&mut self, name: &str, redo: bool) -> Option<Edit> {
+    pub(crate) fn step(&mut self, name: &str, redo: bool) -> Option<Edit> {
         let stacks = &mut self.players.get_mut(&name.to_lowercase())?.stacks;
         let held = stacks.voxels();
         let edit = if redo { stacks.redo() } else { stacks.undo() };
@@ -215,7 +215,7 @@ struct Sending {
 /// A client waiting for the world. It hears every edit after number `since` (it was authorized then), so any
 /// world as of `since` or later will do: it applies the edits after the world's own number.
 #[derive(Component)]
-struct WantsWorld {
+pub(crate) struct WantsWorld {
     since: u64,
 }
 
@@ -281,21 +281,30 @@ impl Plugin for NetServerPlugin {
                 Update,
                 (
                     (refill_tokens, take_hellos, take_poses, take_clock_asks),
-                    (apply_edit_asks, apply_history_asks, apply_spawn_asks).chain().in_set(ApplyEdits),
+                    // A bounded world's; an endless world's server has its own (`endless_server`).
+                    (apply_edit_asks, apply_history_asks, apply_spawn_asks)
+                        .chain()
+                        .in_set(ApplyEdits)
+                        .run_if(resource_exists::<VoxelWorld>),
                     (
-                        advance_objects,
-                        start_sending_world,
-                        send_world_pieces,
+                        (advance_objects, start_sending_world, send_world_pieces)
+                            .chain()
+                            .run_if(resource_exists::<VoxelWorld>),
                         send_players,
                         send_server_time,
-                        save_on_schedule,
+                        save_on_schedule.run_if(resource_exists::<VoxelWorld>),
                     )
                         .chain(),
                 )
-                    .chain(),
+                    .chain()
+                    .in_set(NetServerSystems),
             );
     }
 }
+
+/// Every system of `NetServerPlugin`: an endless world's server runs its own after them.
+#[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct NetServerSystems;
 
 pub fn player_id(client: ClientId) -> u64 {
     client.entity().map_or(0, Entity::to_bits)
@@ -513,7 +522,7 @@ fn apply_edit_asks(
 }
 
 /// Tells a client why its request was refused, at most once a second.
-fn refuse(
+pub(crate) fn refuse(
     stats: &mut ServerStats,
     peer: &mut Peer,
     client: ClientId,

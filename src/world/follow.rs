@@ -123,6 +123,54 @@ pub struct WindowFollower {
     generator_materials: usize,
 }
 
+/// A window being started: its first regions are being made. `poll` hands over the window and its follower
+/// once they are, without waiting (a client whose regions come from its server keeps its tick going meanwhile).
+pub struct WindowStart {
+    generator: Arc<EndlessGenerator>,
+    streamer: RegionStreamer,
+    centre: IVec2,
+    regions: i32,
+}
+
+impl WindowStart {
+    /// Starts making a window of `regions` x `regions` regions around region `centre`, its follower keeping
+    /// regions `radius` regions around the point, made by `make` on `workers` threads.
+    pub fn new(
+        generator: Arc<EndlessGenerator>,
+        make: MakeRegion,
+        centre: IVec2,
+        regions: i32,
+        radius: i32,
+        workers: usize,
+    ) -> Self {
+        let streamer = RegionStreamer::with_maker(make, radius.max(regions / 2), workers);
+        WindowStart { generator, streamer, centre, regions }
+    }
+
+    /// The window and its follower once every region of the window is made (the window is made of the
+    /// streamer's regions, so none is made twice); else itself, to poll again.
+    pub fn poll(mut self) -> Result<(WindowFollower, Window), Self> {
+        self.streamer.update(self.centre);
+        let Some(window) = self.generator.window_of(self.centre, self.regions, |key| self.streamer.region(key)) else {
+            return Err(self);
+        };
+        let follower = WindowFollower {
+            streamer: self.streamer,
+            min: window.min,
+            under_way: None,
+            edited_in_window: HashSet::new(),
+            unsaved: HashSet::new(),
+            generator_materials: window.world.palette.materials.len(),
+        };
+        Ok((follower, window))
+    }
+
+    /// Regions of the window made so far, of `regions` squared.
+    pub fn made(&self) -> usize {
+        self.streamer.resident_count()
+    }
+}
+
 /// What `follow` did in one call.
 #[derive(Clone, Debug, Default)]
 pub struct Followed {
@@ -162,26 +210,17 @@ impl WindowFollower {
         radius: i32,
         workers: usize,
     ) -> (Self, Window) {
-        let mut streamer = RegionStreamer::with_maker(make, radius.max(regions / 2), workers);
+        let mut start = WindowStart::new(generator, make, centre, regions, radius, workers);
         loop {
-            streamer.update(centre);
-            if let Some(window) = generator.window_of(centre, regions, |key| streamer.region(key)) {
-                let min = window.min;
-                let follower = WindowFollower {
-                    streamer,
-                    min,
-                    under_way: None,
-                    edited_in_window: HashSet::new(),
-                    unsaved: HashSet::new(),
-                    generator_materials: window.world.palette.materials.len(),
-                };
-                return (follower, window);
+            match start.poll() {
+                Ok(ready) => return ready,
+                Err(waiting) => start = waiting,
             }
             std::thread::sleep(std::time::Duration::from_millis(5));
         }
     }
 
-    /// The world key of the region holding `at` (window coordinates).
+    /// The world key of the region holding `at`    /// The world key of the region holding `at` (window coordinates).
     pub fn region_at(&self, at: Vec3) -> IVec2 {
         let p = at.floor().as_ivec3();
         EndlessGenerator::region_of(p.x + self.min.x, p.z + self.min.y)
@@ -265,7 +304,7 @@ impl WindowFollower {
     }
 
     /// Whether the window (as it shows now) holds region `key` whole.
-    fn holds(&self, world: &VoxelWorld, key: IVec2) -> bool {
+    pub fn holds(&self, world: &VoxelWorld, key: IVec2) -> bool {
         let (lo, hi) = world.grid.window();
         let a = key * REGION_EDGE - self.min;
         let b = a + REGION_EDGE;

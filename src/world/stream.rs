@@ -41,10 +41,13 @@ pub struct RegionStreamer {
 }
 
 /// What one `update` did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct StreamStep {
     pub arrived: usize,
     pub dropped: usize,
+    /// The regions no longer wanted: dropped, or made after they stopped being wanted (a client tells its server
+    /// it no longer holds them).
+    pub let_go: Vec<IVec2>,
 }
 
 impl RegionStreamer {
@@ -88,10 +91,18 @@ impl RegionStreamer {
             if inside(key, keep) && !self.kept.contains_key(&key) {
                 self.resident.insert(key, region);
                 step.arrived += 1;
+            } else if !self.kept.contains_key(&key) {
+                step.let_go.push(key);
             }
         }
         let before = self.resident.len();
-        self.resident.retain(|&key, _| inside(key, keep));
+        self.resident.retain(|&key, _| {
+            let stays = inside(key, keep);
+            if !stays {
+                step.let_go.push(key);
+            }
+            stays
+        });
         step.dropped = before - self.resident.len();
         let r = self.radius;
         let mut missing: Vec<IVec2> = (-r..=r)

@@ -14,6 +14,7 @@ mod imports;
 mod layers;
 mod light_pool;
 mod net;
+mod net_endless;
 mod reference_converges;
 mod save_survives_kill;
 mod saved_objects;
