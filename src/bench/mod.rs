@@ -24,6 +24,7 @@ pub mod gi_indirect;
 pub mod gi_scale;
 pub mod motion;
 pub mod net;
+pub mod net_endless;
 pub mod plot;
 pub mod rays;
 pub mod reaction;

@@ -4,6 +4,7 @@
 //! the wire per edit and per client, and the time from an edit sent by one client to its arrival at another.
 //! Clients and server share this machine's cores, so the numbers are a floor for a real server.
 
+use super::net_endless::{EndlessNetConfig, endless_report, run_endless_net};
 use crate::net::client::NetClient;
 use crate::net::protocol::{Change, EditDone, NetEdit};
 use crate::net::server::{ServerRules, ServerStats};
@@ -26,6 +27,8 @@ pub struct NetBenchConfig {
     /// Seconds of steady editing per client count.
     pub seconds: f32,
     pub world_size: UVec3,
+    /// The flight through the endless world.
+    pub endless: EndlessNetConfig,
 }
 
 impl NetBenchConfig {
@@ -35,6 +38,7 @@ impl NetBenchConfig {
             edits_per_client: 5.0,
             seconds: 10.0,
             world_size: UVec3::new(256, 96, 256),
+            endless: EndlessNetConfig::full(),
         }
     }
 
@@ -44,6 +48,7 @@ impl NetBenchConfig {
             edits_per_client: 5.0,
             seconds: 2.0,
             world_size: UVec3::new(64, 48, 64),
+            endless: EndlessNetConfig::quick(),
         }
     }
 }
@@ -82,7 +87,16 @@ pub fn run_net_bench(config: &NetBenchConfig, out: &Path) -> Result<String, Stri
     }
     let place = payload_bytes(&Edit::Place { at: IVec3::new(500, 90, 500), material: 7 });
     let fill = payload_bytes(&Edit::FillBox { min: IVec3::ZERO, max: IVec3::splat(63), material: 7 });
-    let md = report(&rows, config, place, fill);
+    let mut md = report(&rows, config, place, fill);
+    println!("flying through the endless world...");
+    let flight = run_endless_net(&config.endless)?;
+    md += &endless_report(&flight, &config.endless);
+    if flight.identical_regions != flight.compared_regions || flight.compared_regions == 0 {
+        return Err(format!(
+            "the flyer holds {} of the builder's regions, {} identical: the endless world's clients disagree",
+            flight.compared_regions, flight.identical_regions
+        ));
+    }
     std::fs::write(out.join("net.md"), &md).map_err(|e| e.to_string())?;
     std::fs::write(out.join("net.csv"), csv(&rows)).map_err(|e| e.to_string())?;
     Ok(md)

@@ -6,6 +6,7 @@
 
 use super::play::resolve;
 use crate::net::client::{Join, NetClient};
+use crate::net::endless_client::EndlessClient;
 use crate::net::protocol::Pose;
 use crate::net::state_hash::state_line;
 use crate::net::{headless_client_app, transport};
@@ -73,7 +74,9 @@ impl BotArgs {
                     return Err(format!("{name}: no world from {server} after {} s", self.join_timeout));
                 }
             } else {
-                if building.is_none() {
+                let endless = app.world().contains_resource::<EndlessClient>();
+                // The endless world's server takes neither a colour of one's own nor moving objects yet.
+                if building.is_none() && !endless {
                     bring_colour_and_lantern(&mut app, &name);
                 }
                 let since = *building.get_or_insert_with(Instant::now);
@@ -85,7 +88,16 @@ impl BotArgs {
                         app.world_mut().write_message(EditRequest::player(edit));
                     }
                     let pose = circle_pose(app.world().resource::<VoxelWorld>(), seconds);
-                    app.world_mut().write_message(pose);
+                    match app.world_mut().get_resource_mut::<EndlessClient>() {
+                        // Its window follows the bot, and tells the server where it is in world coordinates.
+                        Some(mut endless) => {
+                            endless.at = pose.position.into();
+                            endless.yaw = pose.yaw;
+                        }
+                        None => {
+                            app.world_mut().write_message(pose);
+                        }
+                    }
                 } else {
                     let seq = app.world().resource::<NetClient>().seq;
                     if seq != last_seq.0 {

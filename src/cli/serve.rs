@@ -7,10 +7,13 @@
 
 use super::args::GameWorldArgs;
 use crate::net::console::{BanList, ConsoleCommand, HELP, parse_command};
+use crate::net::endless_server::{EndlessStats, EndlessWorld};
 use crate::net::server::{Bans, ServerRules, ServerStats, WorldClock, run_console_command};
-use crate::net::{server_app, transport};
+use crate::net::{endless_server_app, server_app, transport};
 use crate::world::VoxelWorld;
 use crate::world::format::save_with_backup;
+use crate::world::generate::endless::DEFAULT_HEIGHT;
+use crate::world::region_save::EndlessSave;
 use bevy::app::App;
 use bevy_replicon_renet::RenetServer;
 use clap::Args;
@@ -52,6 +55,11 @@ pub struct ServeArgs {
     /// Stop (and save) after this many seconds (scripts and tests; default: run until `quit`).
     #[arg(long)]
     seconds: Option<f64>,
+    /// Serve the endless world of --seed: players stream their own surroundings wherever they go, and the server
+    /// keeps the regions around them and the ones they changed (saved into the folder --save, by default
+    /// saves/server-endless-<seed>).
+    #[arg(long, conflicts_with_all = ["world", "scene", "new", "size"])]
+    endless: bool,
 }
 
 /// Server ticks per second.
@@ -72,31 +80,13 @@ impl ServeArgs {
         {
             return Err(format!("--time {t} must be within 0..24 hours"));
         }
-        let source = self.world.source();
-        let save = self.save.clone().unwrap_or_else(|| self.world.default_save("server"));
-        if let Some(folder) = save.parent().filter(|p| !p.as_os_str().is_empty()) {
-            std::fs::create_dir_all(folder).map_err(|e| format!("cannot create {}: {e}", folder.display()))?;
-        }
-        let mut world = source.load().map_err(|e| e.to_string())?;
-        if let Some(hours) = self.time {
-            world.time_of_day = Some(hours % 24.0);
-        }
-        let summary = format!("{}x{}x{} voxels", world.grid.size().x, world.grid.size().y, world.grid.size().z);
-        let rules = ServerRules {
-            edits_per_second: self.edits_per_second,
-            edit_burst: self.edits_per_second * 4.0,
-            save_path: Some(save.clone()),
-            save_every: Duration::from_secs(self.save_every),
-            ..Default::default()
-        };
-        let bans_path = BanList::path_beside(&save);
-        let bans = BanList::load(&bans_path)?;
         let stop = stop_signals()?;
-        let mut app = server_app(world, rules);
+        let (mut app, summary, save, bans_path) = if self.endless { self.endless_app()? } else { self.bounded_app()? };
+        let bans = BanList::load(&bans_path)?;
         app.insert_resource(Bans { list: bans, path: Some(bans_path.clone()) });
         let bind = SocketAddr::new(self.bind, self.port);
         let local = transport::listen(&mut app, bind, self.secret.as_deref(), self.max_players as usize)?;
-        println!("serving a world of {summary} on {local} (up to {} players)", self.max_players);
+        println!("serving {summary} on {local} (up to {} players)", self.max_players);
         match &self.secret {
             Some(_) => {
                 println!("players need the secret to join: glowbrick play --connect HOST:{} --secret ...", local.port())
@@ -140,7 +130,12 @@ impl ServeArgs {
         app.world_mut().resource_mut::<RenetServer>().disconnect_all();
         app.update();
         println!("{}; {}", report(&mut app), ticks.take());
-        println!("{}", state_line(&app));
+        if !self.endless {
+            println!("{}", state_line(&app));
+        }
+        if self.endless {
+            return save_endless_before_stopping(&mut app);
+        }
         crate::net::server::finish_saving(app.world_mut());
         let hours = app.world().resource::<WorldClock>().0;
         let mut world = app.world_mut().resource_mut::<VoxelWorld>();
@@ -150,6 +145,56 @@ impl ServeArgs {
         println!("saved {}", save.display());
         Ok(())
     }
+
+    fn rules(&self, save: &std::path::Path) -> ServerRules {
+        ServerRules {
+            edits_per_second: self.edits_per_second,
+            edit_burst: self.edits_per_second * 4.0,
+            save_path: Some(save.to_path_buf()),
+            save_every: Duration::from_secs(self.save_every),
+            ..Default::default()
+        }
+    }
+
+    /// A bounded world's server: the app, what it serves, where it saves and where its bans are kept.
+    fn bounded_app(&self) -> Result<(App, String, PathBuf, PathBuf), String> {
+        let source = self.world.source();
+        let save = self.save.clone().unwrap_or_else(|| self.world.default_save("server"));
+        if let Some(folder) = save.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(folder).map_err(|e| format!("cannot create {}: {e}", folder.display()))?;
+        }
+        let mut world = source.load().map_err(|e| e.to_string())?;
+        if let Some(hours) = self.time {
+            world.time_of_day = Some(hours % 24.0);
+        }
+        let summary =
+            format!("a world of {}x{}x{} voxels", world.grid.size().x, world.grid.size().y, world.grid.size().z);
+        let bans = BanList::path_beside(&save);
+        Ok((server_app(world, self.rules(&save)), summary, save, bans))
+    }
+
+    /// The endless world's server (`net::endless_server`), its save a folder of changed regions.
+    fn endless_app(&self) -> Result<(App, String, PathBuf, PathBuf), String> {
+        let seed = self.world.seed;
+        let folder = self.save.clone().unwrap_or_else(|| PathBuf::from(format!("saves/server-endless-{seed}")));
+        let save = EndlessSave::open_or_create(&folder, seed, DEFAULT_HEIGHT)?;
+        let hours = self.time.or(save.time_of_day).unwrap_or(12.0) % 24.0;
+        let world = EndlessWorld::new(seed, DEFAULT_HEIGHT, Some(save))?;
+        let summary = format!("the endless world of seed {seed} ({} changed regions saved)", world.counts().1);
+        let bans = folder.join("bans.ron");
+        Ok((endless_server_app(world, self.rules(&folder), hours), summary, folder, bans))
+    }
+}
+
+/// The endless server's last save: the regions changed since its last one, and the time of day.
+fn save_endless_before_stopping(app: &mut App) -> Result<(), String> {
+    crate::net::endless_server::finish_endless_saving(app.world_mut());
+    let hours = app.world().resource::<WorldClock>().0;
+    let mut world = app.world_mut().resource_mut::<EndlessWorld>();
+    let folder = world.folder().map(|f| f.display().to_string()).unwrap_or_default();
+    let written = world.save_now(hours).map_err(|e| format!("could not save {folder}: {e}"))?;
+    println!("saved {folder} ({written} changed regions)");
+    Ok(())
 }
 
 /// The server's ticks (one `update` each) since the last report.
@@ -189,13 +234,19 @@ fn state_line(app: &App) -> String {
 fn report(app: &mut App) -> String {
     let players = app.world_mut().query::<&crate::net::server::Peer>().iter(app.world()).count();
     let stats = app.world().resource::<ServerStats>();
+    let sent = match (app.world().get_resource::<EndlessWorld>(), app.world().get_resource::<EndlessStats>()) {
+        (Some(world), Some(endless)) => {
+            let (in_memory, changed) = world.counts();
+            format!(
+                "{:.1} MB of changed regions sent; {in_memory} regions in memory, {changed} changed",
+                endless.region_bytes_sent as f64 / 1e6
+            )
+        }
+        _ => format!("{:.1} MB of world sent", stats.world_bytes_sent as f64 / 1e6),
+    };
     format!(
-        "{players} players; {} edits applied, {} refused; {} joins ({:.1} MB of world sent); {} saves",
-        stats.seq,
-        stats.refused,
-        stats.joins,
-        stats.world_bytes_sent as f64 / 1e6,
-        stats.saves
+        "{players} players; {} edits applied, {} refused; {} joins ({sent}); {} saves",
+        stats.seq, stats.refused, stats.joins, stats.saves
     )
 }
 

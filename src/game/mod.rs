@@ -115,6 +115,7 @@ pub fn run_game(
                 .add_plugins((
                     crate::net::NetworkingPlugin,
                     crate::net::client::NetClientPlugin,
+                    crate::net::endless_client::EndlessClientPlugin,
                     together::TogetherPlugin,
                 ))
                 .add_systems(Update, save_key_only);
@@ -130,9 +131,20 @@ pub fn run_game(
 }
 
 /// F5 saves a copy of the shared world (on a server, F9 would load a world the others do not have).
-fn save_key_only(keys: Res<ButtonInput<KeyCode>>, mut actions: MessageWriter<save_load::SaveAction>) {
+/// F5 in a joined game saves a copy of a bounded world; an endless world is saved by its server.
+fn save_key_only(
+    keys: Res<ButtonInput<KeyCode>>,
+    mut actions: MessageWriter<save_load::SaveAction>,
+    endless: Option<Res<crate::net::endless_client::EndlessClient>>,
+    mut status: ResMut<hud::StatusLine>,
+) {
     if keys.just_pressed(KeyCode::F5) {
-        actions.write(save_load::SaveAction::Save);
+        match endless {
+            Some(_) => status.show("the server saves the endless world: every change is kept there".into()),
+            None => {
+                actions.write(save_load::SaveAction::Save);
+            }
+        }
     }
 }
 

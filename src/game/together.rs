@@ -7,6 +7,7 @@ use super::player::Player;
 use crate::dynamic::{DynamicObject, Motion, ObjectClock, spawn_object};
 use crate::net::client::Join;
 use crate::net::client::NetClient;
+use crate::net::endless_client::EndlessClient;
 use crate::net::protocol::{ClockAsk, Pose};
 use crate::world::VoxelWorld;
 use bevy::prelude::*;
@@ -26,7 +27,16 @@ impl Plugin for TogetherPlugin {
     fn build(&self, app: &mut App) {
         app.add_systems(Startup, (spawn_panel, connect_on_startup)).add_systems(
             Update,
-            (send_pose, show_refusals, enter_arrived_world, clock_keys, draw_figures, update_panel, say_when_lost),
+            (
+                send_pose,
+                endless_window_follows_camera,
+                show_refusals,
+                enter_arrived_world,
+                clock_keys,
+                draw_figures,
+                update_panel,
+                say_when_lost,
+            ),
         );
     }
 }
@@ -53,6 +63,7 @@ fn enter_arrived_world(
     mut camera: Query<(&mut Transform, &mut Player)>,
     mut settings: ResMut<crate::settings::RenderSettings>,
     mut status: ResMut<StatusLine>,
+    endless: Option<Res<EndlessClient>>,
 ) {
     // The waiting world is the first one seen; the next is the server's.
     if *seen == Some(world.instance) {
@@ -60,6 +71,19 @@ fn enter_arrived_world(
     }
     *seen = Some(world.instance);
     if !client.loaded {
+        return;
+    }
+    // An endless world's window is made around where the player starts (again after a lost connection: its
+    // coordinates are new), and its first view is there.
+    if let Some(endless) = endless {
+        let view = world.view(None).cloned().unwrap_or_else(|| world.overview());
+        if let Ok((mut transform, mut player)) = camera.single_mut() {
+            *transform = crate::world::view_transform(&view);
+            *player = Player { walking: player.walking, ..Player::looking(&view) };
+        }
+        settings.time = world.time_of_day.unwrap_or(settings.time);
+        *joined_before = true;
+        status.show(format!("joined the endless world of seed {}: edits near you are shared", endless.seed()));
         return;
     }
     if std::mem::replace(&mut *joined_before, true) {
@@ -173,6 +197,7 @@ fn draw_figures(
 
 fn update_panel(
     client: Res<NetClient>,
+    endless: Option<Res<EndlessClient>>,
     camera: Query<&Transform, With<Player>>,
     state: Res<State<ClientState>>,
     mut text: Query<&mut Text, With<PlayersText>>,
@@ -180,8 +205,11 @@ fn update_panel(
     let Ok(mut text) = text.single_mut() else { return };
     let here = camera.single().map(|t| t.translation).unwrap_or_default();
     let shown = if !client.loaded {
-        match state.get() {
-            ClientState::Connected => format!("receiving the world: {:.0}%", client.progress() * 100.0),
+        match (state.get(), endless.as_deref()) {
+            (ClientState::Connected, Some(endless)) => {
+                format!("making the world around you: {} regions", endless.held_count())
+            }
+            (ClientState::Connected, None) => format!("receiving the world: {:.0}%", client.progress() * 100.0),
             _ => "connecting...".to_string(),
         }
     } else {
@@ -247,15 +275,27 @@ fn send_pose(
     client: Res<NetClient>,
     camera: Query<&Transform, With<Player>>,
     mut poses: MessageWriter<Pose>,
+    endless: Option<Res<EndlessClient>>,
 ) {
     *since += time.delta_secs();
-    if *since < 0.1 || !client.loaded {
+    // An endless world's client sends its pose in world coordinates itself.
+    if *since < 0.1 || !client.loaded || endless.is_some() {
         return;
     }
     *since = 0.0;
     if let Ok(transform) = camera.single() {
         let forward = transform.forward();
         poses.write(Pose { position: transform.translation.into(), yaw: forward.x.atan2(forward.z) });
+    }
+}
+
+/// In an endless world, the window follows the camera (and the server hears where it is from there).
+fn endless_window_follows_camera(camera: Query<&Transform, With<Player>>, endless: Option<ResMut<EndlessClient>>) {
+    let (Some(mut endless), Ok(transform)) = (endless, camera.single()) else { return };
+    if endless.started() {
+        let forward = transform.forward();
+        endless.at = transform.translation;
+        endless.yaw = forward.x.atan2(forward.z);
     }
 }
 

@@ -25,7 +25,7 @@ pub struct NetClient {
     pub loaded: bool,
     /// Number of the last server edit applied.
     pub seq: u64,
-    /// Everyone playing, as last heard.
+    /// Everyone playing, as last heard (in an endless world, positions in the window's coordinates).
     pub players: Vec<PlayerInfo>,
     /// Requests the server refused, and the last reason.
     pub refusals: u64,
@@ -353,9 +353,19 @@ fn take_clock(
     }
 }
 
-fn take_players(mut lists: MessageReader<Players>, mut client: ResMut<NetClient>) {
+/// Everyone's poses, in this client's coordinates: an endless world's window's, once it is made.
+fn take_players(
+    mut lists: MessageReader<Players>,
+    mut client: ResMut<NetClient>,
+    endless: Option<Res<super::endless_client::EndlessClient>>,
+) {
     if let Some(list) = lists.read().last() {
         client.players = list.players.clone();
+        if let Some(offset) = endless.and_then(|e| e.offset()) {
+            for pose in client.players.iter_mut().filter_map(|p| p.pose.as_mut()) {
+                pose.position = (Vec3::from(pose.position) - offset.as_vec3()).into();
+            }
+        }
     }
 }
 

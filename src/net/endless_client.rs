@@ -135,6 +135,9 @@ pub struct EndlessClient {
     /// Where the player is (window coordinates) and which way it looks: the window follows it.
     pub at: Vec3,
     pub yaw: f32,
+    /// Which way the player looks at the start, and the server's time of day then.
+    look: Vec3,
+    hours: Option<f32>,
     /// The world column of the window's column (0, 0), once the window is made.
     min: Option<IVec2>,
     /// Regions asked for and not let go, with their asks' tickets.
@@ -171,6 +174,8 @@ impl EndlessClient {
             generator,
             at: start,
             yaw: 0.0,
+            look: Vec3::new(0.0, -0.3, 1.0),
+            hours: None,
             min: None,
             held: HashMap::new(),
             edits: HashMap::new(),
@@ -246,23 +251,27 @@ fn take_endless_welcome(
     mut back: MessageReader<WelcomeBack>,
     mut client: ResMut<NetClient>,
     config: Res<EndlessWindowConfig>,
-    mut returned: Local<Option<Vec3>>,
+    mut returned: Local<Option<Pose>>,
     renet: Option<ResMut<bevy_replicon_renet::RenetClient>>,
 ) {
     if let Some(back) = back.read().last() {
-        *returned = Some(Vec3::from(back.pose.position)).filter(|p| p.is_finite());
+        *returned = Some(back.pose).filter(|p| Vec3::from(p.position).is_finite() && p.yaw.is_finite());
     }
     let Some(welcome) = welcomes.read().last() else { return };
     client.me = Some(welcome.player);
     client.seq = welcome.seq;
     let generator = EndlessGenerator::new(welcome.seed, welcome.height);
-    let start = match (config.start, returned.take(), &generator) {
-        (Some(start), _, _) | (None, Some(start), _) => start,
-        (None, None, Ok(generator)) => Vec3::from(generator.start_view().origin),
-        (None, None, Err(_)) => Vec3::ZERO,
+    let village = generator.ok().map(|g| g.start_view());
+    let (start, look) = match (config.start, returned.take(), village) {
+        (Some(start), _, _) => (start, Vec3::new(0.0, -0.3, 1.0)),
+        (None, Some(back), _) => (back.position.into(), Vec3::new(back.yaw.sin(), -0.3, back.yaw.cos())),
+        (None, None, Some(view)) => (Vec3::from(view.origin), Vec3::from(view.direction)),
+        (None, None, None) => (Vec3::ZERO, Vec3::Z),
     };
     match EndlessClient::start(welcome.seed, welcome.height, start, &config) {
-        Ok(endless) => {
+        Ok(mut endless) => {
+            endless.look = look;
+            endless.hours = Some(welcome.hours);
             info!("joined the endless world of seed {}: making the window around {start}", welcome.seed);
             commands.insert_resource(endless);
         }
@@ -407,9 +416,10 @@ fn follow_endless_window(
                 world.views = vec![CameraView {
                     name: "joined".into(),
                     origin: origin.into(),
-                    direction: [endless.yaw.sin(), -0.3, endless.yaw.cos()],
+                    direction: endless.look.into(),
                     fov_deg: 60.0,
                 }];
+                world.time_of_day = endless.hours;
                 endless.at = origin;
                 endless.min = Some(window.min);
                 client.loaded = true;
