@@ -123,18 +123,8 @@ pub fn run_endless_net(config: &EndlessNetConfig) -> Result<EndlessNetRun, Strin
     let away = home + Vec3::X * config.distance;
     let mut builder = client(addr, "builder", 1, home, config)?;
     let mut flyer = client(addr, "flyer", 2, away, config)?;
-    let mut run = EndlessNetRun::default();
-    let start = Instant::now();
-    while !(started(&builder) && started(&flyer)) {
-        if start.elapsed() > Duration::from_secs(600) {
-            return Err("the two clients' windows were not made in 600 s".into());
-        }
-        server.update();
-        builder.update();
-        flyer.update();
-        std::thread::sleep(Duration::from_millis(1));
-    }
-    run.join_seconds = start.elapsed().as_secs_f64();
+    let join_seconds = join_both(&mut server, &mut builder, &mut flyer)?;
+    let mut run = EndlessNetRun { join_seconds, ..Default::default() };
 
     // The builder toggles voxels of a column high above its window's middle: every edit changes one.
     let builder_offset = endless(&builder).offset().unwrap();
@@ -199,25 +189,46 @@ pub fn run_endless_net(config: &EndlessNetConfig) -> Result<EndlessNetRun, Strin
     run.changed_region_bytes = stats.region_bytes_sent - stats_before.region_bytes_sent;
     run.edits_sent = stats.edits_sent - stats_before.edits_sent;
     run.edits_applied = server.world().resource::<ServerStats>().seq - seq_before;
-    // Arrived: the builder's column's region is the same in both windows.
+    let key = EndlessGenerator::region_of(column.x + builder_offset.x, column.z + builder_offset.z);
+    (run.compared_regions, run.identical_regions) =
+        compare_on_arrival(&mut server, &mut builder, &mut flyer, key, config.height);
+    Ok(run)
+}
+
+/// Runs the server and both clients until both windows are made; the seconds it took.
+fn join_both(server: &mut App, builder: &mut App, flyer: &mut App) -> Result<f64, String> {
+    let start = Instant::now();
+    while !(started(builder) && started(flyer)) {
+        if start.elapsed() > Duration::from_secs(600) {
+            return Err("the two clients' windows were not made in 600 s".into());
+        }
+        server.update();
+        builder.update();
+        flyer.update();
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    Ok(start.elapsed().as_secs_f64())
+}
+
+/// Once the last edits have arrived, the regions around `key` that both clients hold: how many, and how many of
+/// them are the same in both windows.
+fn compare_on_arrival(server: &mut App, builder: &mut App, flyer: &mut App, key: IVec2, height: u32) -> (usize, usize) {
     for _ in 0..120 {
         server.update();
         builder.update();
         flyer.update();
     }
-    let key = EndlessGenerator::region_of(column.x + builder_offset.x, column.z + builder_offset.z);
+    let (mut compared, mut identical) = (0, 0);
     for dz in -1..=1 {
         for dx in -1..=1 {
             let key = key + IVec2::new(dx, dz);
-            if let (Some(a), Some(b)) =
-                (region_held(&builder, key, config.height), region_held(&flyer, key, config.height))
-            {
-                run.compared_regions += 1;
-                run.identical_regions += (a == b) as usize;
+            if let (Some(a), Some(b)) = (region_held(builder, key, height), region_held(flyer, key, height)) {
+                compared += 1;
+                identical += (a == b) as usize;
             }
         }
     }
-    Ok(run)
+    (compared, identical)
 }
 
 /// The run as a section of net.md.
