@@ -19,7 +19,7 @@
 #import glowbrick::random::{Rng, pcg}
 #import glowbrick::traversal::{count_rays, face_normal}
 #import glowbrick::constants::COUNT_RAYS_UPSCALE
-#import glowbrick::gi::cache::{gi_on, gi_touch_surface, camera_level}
+#import glowbrick::gi::cache::{gi_on, gi_touch_surface, gi_incoming, camera_level}
 #import glowbrick::constants::{LIGHTING_FULL, UPSCALE_HISTORY}
 #import glowbrick::denoise::common::{ALBEDO_FLOOR, same_plane}
 
@@ -55,7 +55,9 @@ fn render_light(index: u32, s: Surface) -> vec3<f32> {
 }
 
 // What the render pixels around an output pixel say of its light: their weighted mean (the spatial estimate)
-// and the one on its plane whose point lies nearest (and how far, in output pixels).
+// and the one on its plane whose point lies nearest (and how far, in output pixels). Where none of the 5x5 lies
+// on its plane (a face narrower than a render pixel: the thin strip of a cube's underside or side seen past its
+// edge), the GI cache's light at its own voxel face instead of other faces' light.
 struct Gathered {
     light: vec3<f32>,
     weight: f32,
@@ -78,6 +80,7 @@ fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
     var nearest_distance = 1e9;
     var disk_least = 1.0;
     var disk_most = 0.0;
+    var on_plane = 0.0;
     for (var cell = 0; cell < 9; cell++) {
         let r = centre + vec2(cell % 3 - 1, cell / 3 - 1);
         if any(r < vec2(0)) || any(r >= vec2<i32>(render_size())) {
@@ -99,6 +102,7 @@ fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
         let apart = abs(offset) * ratio;
         let tent = max(vec2(1.0) - apart / TENT_RADIUS, vec2(0.0));
         let w = tent.x * tent.y + 1e-3;
+        on_plane += w;
         sum += w * light;
         weights += w;
         count += 1.0;
@@ -119,22 +123,36 @@ fn gather(pixel: vec2<u32>, s: Surface) -> Gathered {
         let apart = (vec2<f32>(render_pixel_source(vec2<u32>(r))) - vec2<f32>(pixel)) * ratio;
         let likeness = select(select(1e-6, 1e-3, sr.face == s.face && sr.object == s.object), 1.0, same_plane(s, sr));
         let w = likeness / (1.0 + dot(apart, apart));
+        on_plane += select(0.0, w, same_plane(s, sr));
         let light = render_light(ri, sr);
         sum += w * light;
         weights += w;
         count += 1.0;
     }
-    return Gathered(sum / max(weights, 1e-20), weights, nearest, nearest_distance, disk_least, disk_most);
+    var light = sum / max(weights, 1e-20);
+    if on_plane == 0.0 && gi_on() {
+        // Touched here, the entry is made and kept by the cache as the render pixels' are.
+        let level = camera_level(pixel_footprint(s.point), s.object);
+        gi_touch_surface(s.point, s.face, s.object, level);
+        light = gi_incoming(s.point, s.face, s.object, level) * frame.exposure;
+        // An estimate, where the render pixels around may all have seen the sky.
+        weights = max(weights, 1.0);
+    }
+    return Gathered(light, weights, nearest, nearest_distance, disk_least, disk_most);
 }
 
 // The disk's visibility history blends a new sample at 1 / (1 + its samples), up to this many (a penumbra's
-// shade settles within a few frames; a moving shadow's edge re-traces where the render pixels disagree).
+// shade settles within a few frames; a moving shadow's edge re-traces until the history reaches the render
+// pixels' verdict).
 const MAX_DISK_SAMPLES: f32 = 16.0;
+// Where the render pixels agree and the history does not yet, it weighs at most this many samples: a shadow that
+// moved away fades in a few frames rather than 16's dozens, at a little more noise in penumbrae.
+const AGREEING_DISK_SAMPLES: f32 = 4.0;
 
 // The disk's light at an output pixel's surface, over its albedo (exposed), and its visibility history. Where the
-// render pixels on its plane around it all saw the disk, or all did not, theirs; otherwise (a shadow edge or a
-// penumbra passes, or no render pixel lies on the plane) one shadow ray of its own toward a point of the disk,
-// blended into its history reprojected from last frame.
+// render pixels on its plane around it all saw the disk, or all did not, theirs, once its history has settled on
+// it; otherwise (a shadow edge or a penumbra passes, or no render pixel lies on the plane) one shadow ray of its
+// own toward a point of the disk, blended into its history reprojected from last frame.
 fn disk_light(pixel: vec2<u32>, s: Surface, g: Gathered, previous: vec3<i32>) -> vec3<f32> {
     let n = face_normal(s.face);
     if lighting_mode() != LIGHTING_FULL || !disk_faces(n) {
@@ -143,14 +161,18 @@ fn disk_light(pixel: vec2<u32>, s: Surface, g: Gathered, previous: vec3<i32>) ->
     }
     var seen = g.disk_least;
     var samples = 0.0;
-    if g.disk_least != g.disk_most || g.disk_least < 0.0 {
+    var history = vec2(0.0);
+    if previous.z == 1 {
+        history = prev_gbuffer[disk_texel(vec2<u32>(previous.xy))].xy;
+    }
+    // In a penumbra the render pixels' single samples often agree by chance: a history that has not settled on
+    // their verdict keeps tracing (dropping it there restarted the pixel from one 0-or-1 sample).
+    let agree = g.disk_least == g.disk_most && g.disk_least >= 0.0;
+    let settled = history.y == 0.0 || abs(history.x - g.disk_least) < 1.0 / MAX_DISK_SAMPLES;
+    if !agree || !settled {
         var rng = Rng(pcg(pixel.x + output_size().x * pixel.y) ^ pcg(frame.frame * 0x9E3779B9u + 11u));
         seen = disk_visible(s.point, n, disk_direction(&rng));
-        var history = vec2(0.0);
-        if previous.z == 1 {
-            history = prev_gbuffer[disk_texel(vec2<u32>(previous.xy))].xy;
-        }
-        samples = min(history.y + 1.0, MAX_DISK_SAMPLES);
+        samples = min(select(history.y, min(history.y, AGREEING_DISK_SAMPLES - 1.0), agree) + 1.0, MAX_DISK_SAMPLES);
         seen = mix(history.x, seen, 1.0 / samples);
     }
     gbuffer[disk_texel(pixel)] = vec4(seen, samples, 0.0, 0.0);

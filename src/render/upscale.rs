@@ -9,8 +9,10 @@
 //!    output's rays and over frames every output pixel is lit by one of its own; it touches the GI cache's
 //!    entries there (where the shading reads them), which the primary pass then leaves alone.
 //! 2. `main` (output pixels, last): demodulated light gathered from render pixels on the output pixel's own
-//!    voxel-face plane (bilinear on the plane), on raw frames accumulated over frames at the output's resolution
-//!    (reprojected, TAAU's weights by each sample's distance); plus the sun's (or moon's) disk lit at the output
+//!    voxel-face plane (bilinear on the plane), or, where no render pixel of the 5x5 lies on it (a face narrower
+//!    than a render pixel, seen past an edge), the GI cache's entry of its own voxel face, touched there; on raw
+//!    frames accumulated over frames at the output's resolution (reprojected, TAAU's weights by each sample's
+//!    distance); plus the sun's (or moon's) disk lit at the output
 //!    pixel itself: the shading pass leaves the disk out below scale 1 and hands on its sample's visibility, and
 //!    where the render pixels on the plane around an output pixel disagree (a shadow edge, a penumbra) the output
 //!    pixel traces a shadow ray of its own, blended into a visibility history at the output's resolution, so a

@@ -153,6 +153,7 @@ fn tests() -> Vec<(&'static str, fn())> {
         upscale: [
             at_half_scale_a_frame_is_about_as_close_to_the_reference_and_keeps_the_mean,
             the_sky_of_an_upscaled_frame_is_the_native_frames,
+            a_face_narrower_than_a_render_pixel_takes_its_own_light,
             at_half_scale_the_lighting_passes_trace_under_a_ray_per_output_pixel,
         ],
         wgsl_twins: [
