@@ -5,7 +5,8 @@
 //   hit points of the output's own rays, and touches the GI cache's entry there (the primary pass does not).
 // - `main` (output pixels, last): the render pixels' demodulated light (the denoiser's filtered light, or the
 //   noisy frame over its albedo) gathered from those on the output pixel's own voxel-face plane (voxel faces are
-//   flat: an exact edge stop), on raw frames accumulated into the output's history reprojected from last frame
+//   flat: an exact edge stop; a face with none nearby, narrower than a render pixel, takes the GI cache's entry
+//   of its own voxel face), on raw frames accumulated into the output's history reprojected from last frame
 //   (under the denoiser, whose light has a history of its own, not); plus the sun's (or moon's) disk at the
 //   output pixel itself: its visibility where the render pixels around it on its plane agree, one shadow ray of
 //   its own where they do not (a shadow edge); then remodulated by the output pixel's own albedo and emission,
