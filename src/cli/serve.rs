@@ -130,12 +130,10 @@ impl ServeArgs {
         app.world_mut().resource_mut::<RenetServer>().disconnect_all();
         app.update();
         println!("{}; {}", report(&mut app), ticks.take());
-        if !self.endless {
-            println!("{}", state_line(&app));
-        }
         if self.endless {
             return save_endless_before_stopping(&mut app);
         }
+        println!("{}", state_line(&app));
         crate::net::server::finish_saving(app.world_mut());
         let hours = app.world().resource::<WorldClock>().0;
         let mut world = app.world_mut().resource_mut::<VoxelWorld>();

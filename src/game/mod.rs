@@ -130,8 +130,8 @@ pub fn run_game(
     app.run()
 }
 
-/// F5 saves a copy of the shared world (on a server, F9 would load a world the others do not have).
-/// F5 in a joined game saves a copy of a bounded world; an endless world is saved by its server.
+/// F5 in a joined game saves a copy of a bounded shared world (F9 would load a world the others do not have); an
+/// endless world is saved by its server.
 fn save_key_only(
     keys: Res<ButtonInput<KeyCode>>,
     mut actions: MessageWriter<save_load::SaveAction>,

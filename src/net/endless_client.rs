@@ -174,7 +174,7 @@ impl EndlessClient {
             generator,
             at: start,
             yaw: 0.0,
-            look: Vec3::new(0.0, -0.3, 1.0),
+            look: look_along(0.0),
             hours: None,
             min: None,
             held: HashMap::new(),
@@ -244,6 +244,11 @@ impl Plugin for EndlessClientPlugin {
     }
 }
 
+/// A view's direction facing `yaw`, a little down.
+fn look_along(yaw: f32) -> Vec3 {
+    Vec3::new(yaw.sin(), -0.3, yaw.cos())
+}
+
 /// An endless welcome starts the window around where the player starts.
 fn take_endless_welcome(
     mut commands: Commands,
@@ -263,8 +268,8 @@ fn take_endless_welcome(
     let generator = EndlessGenerator::new(welcome.seed, welcome.height);
     let village = generator.ok().map(|g| g.start_view());
     let (start, look) = match (config.start, returned.take(), village) {
-        (Some(start), _, _) => (start, Vec3::new(0.0, -0.3, 1.0)),
-        (None, Some(back), _) => (back.position.into(), Vec3::new(back.yaw.sin(), -0.3, back.yaw.cos())),
+        (Some(start), _, _) => (start, look_along(0.0)),
+        (None, Some(back), _) => (back.position.into(), look_along(back.yaw)),
         (None, None, Some(view)) => (Vec3::from(view.origin), Vec3::from(view.direction)),
         (None, None, None) => (Vec3::ZERO, Vec3::Z),
     };
